@@ -1,0 +1,47 @@
+# The two commands of the README: `make demo` and `make test` do all set-up from nothing.
+PYTHON ?= python3
+VENV ?= .venv
+PY := $(VENV)/bin/python
+BUILD ?= build/cpp
+JOBS ?= 2
+OUT ?= out
+
+.PHONY: all demo test test-cpp test-python install system-deps venv sanitize clean
+
+all: test
+
+system-deps:
+	bash scripts/system-deps.sh
+
+$(VENV)/bin/python:
+	$(PYTHON) -m venv $(VENV)
+
+venv: system-deps $(VENV)/bin/python
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q "scikit-build-core>=0.8" "pybind11>=2.11"
+
+# The package is rebuilt incrementally in build/<wheel tag> on every install.
+install: venv
+	$(PY) -m pip install -q --no-build-isolation ".[test]"
+
+test-cpp: system-deps
+	cmake -S . -B $(BUILD) -DMPMPP_BUILD_TESTS=ON -DCMAKE_BUILD_TYPE=Release
+	cmake --build $(BUILD) -j $(JOBS)
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# pytest exits 5 when it collects no test; that is not a failure of the suite.
+test-python: install
+	$(PY) -m pytest -q tests/python || [ $$? -eq 5 ]
+
+test: test-cpp test-python
+
+demo: install
+	$(VENV)/bin/mpmpp demo siso --out $(OUT)/demo-siso
+
+sanitize: system-deps
+	cmake -S . -B build/sanitize -DMPMPP_BUILD_TESTS=ON -DMPMPP_SANITIZE=ON -DCMAKE_BUILD_TYPE=Debug
+	cmake --build build/sanitize -j $(JOBS)
+	cd build/sanitize && ctest --output-on-failure
+
+clean:
+	rm -rf build $(VENV) $(OUT)

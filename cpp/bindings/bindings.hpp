@@ -1,0 +1,7 @@
+#pragma once
+// One binding file per concept; module.cpp calls each in dependency order.
+#include <pybind11/pybind11.h>
+
+namespace mpmpp::bindings {
+void bind_transfer_function(pybind11::module_& m);
+}  // namespace mpmpp::bindings

@@ -1,0 +1,7 @@
+#include "bindings.hpp"
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "mpmpp C++/Eigen engine";
+  m.attr("__version__") = MPMPP_VERSION;
+  mpmpp::bindings::bind_transfer_function(m);
+}

@@ -1,0 +1,42 @@
+#include "mpmpp/transfer_function.hpp"
+
+#include <pybind11/eigen.h>
+#include <pybind11/operators.h>
+
+#include "bindings.hpp"
+
+namespace py = pybind11;
+
+namespace mpmpp::bindings {
+
+void bind_transfer_function(py::module_& m) {
+  py::class_<TransferFunction>(m, "TransferFunction",
+                               "G(q) = q^-delay num(q^-1) / den(q^-1), den normalised to den[0] = 1")
+      .def(py::init<>())
+      .def(py::init<Eigen::VectorXd, Eigen::VectorXd, int>(), py::arg("num"), py::arg("den"),
+           py::arg("delay") = 0)
+      .def_static("from_foptd", &TransferFunction::from_foptd, py::arg("gain"),
+                  py::arg("time_constant_s"), py::arg("dead_time_s"), py::arg("sample_time_s"))
+      .def_property_readonly("num", &TransferFunction::num)
+      .def_property_readonly("den", &TransferFunction::den)
+      .def_property_readonly("delay", &TransferFunction::delay)
+      .def("filter", &TransferFunction::filter, py::arg("x"))
+      .def("impulse", &TransferFunction::impulse, py::arg("n"))
+      .def("step", &TransferFunction::step, py::arg("n"))
+      .def("dc_gain", &TransferFunction::dc_gain)
+      .def("poles", &TransferFunction::poles)
+      .def("zeros", &TransferFunction::zeros)
+      .def("is_stable", &TransferFunction::is_stable)
+      .def("is_minimum_phase", &TransferFunction::is_minimum_phase)
+      .def("series", &TransferFunction::series)
+      .def("parallel", &TransferFunction::parallel)
+      .def("inverse", &TransferFunction::inverse)
+      .def(py::self == py::self)
+      .def("__repr__", [](const TransferFunction& g) {
+        return "TransferFunction(num=" + py::repr(py::cast(g.num())).cast<std::string>() +
+               ", den=" + py::repr(py::cast(g.den())).cast<std::string>() +
+               ", delay=" + std::to_string(g.delay()) + ")";
+      });
+}
+
+}  // namespace mpmpp::bindings

@@ -1,0 +1,162 @@
+#include "mpmpp/transfer_function.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "mpmpp/error.hpp"
+
+namespace mpmpp {
+
+namespace {
+
+// Drop zero coefficients at the front and back; what remains has the same roots
+// in z apart from the origin, which for a q^-1 polynomial is only a pure delay.
+Eigen::VectorXd trim_zeros(const Eigen::Ref<const Eigen::VectorXd>& c) {
+  Eigen::Index first = 0, last = c.size() - 1;
+  while (first <= last && c[first] == 0.0) ++first;
+  while (last >= first && c[last] == 0.0) --last;
+  if (first > last) return Eigen::VectorXd();
+  return c.segment(first, last - first + 1);
+}
+
+bool all_inside_unit_circle(const Eigen::VectorXcd& roots) {
+  for (Eigen::Index i = 0; i < roots.size(); ++i)
+    if (std::abs(roots[i]) >= 1.0) return false;
+  return true;
+}
+
+}  // namespace
+
+Eigen::VectorXd poly_multiply(const Eigen::Ref<const Eigen::VectorXd>& a,
+                              const Eigen::Ref<const Eigen::VectorXd>& b) {
+  if (a.size() == 0 || b.size() == 0) return Eigen::VectorXd();
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
+  for (Eigen::Index i = 0; i < a.size(); ++i) c.segment(i, b.size()) += a[i] * b;
+  return c;
+}
+
+Eigen::VectorXcd poly_roots(const Eigen::Ref<const Eigen::VectorXd>& c) {
+  const Eigen::VectorXd p = trim_zeros(c);
+  const Eigen::Index n = p.size() - 1;
+  if (n <= 0) return Eigen::VectorXcd();
+  // Companion matrix of z^n + (p1/p0) z^(n-1) + ... + pn/p0.
+  Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(n, n);
+  companion.row(0) = -p.tail(n).transpose() / p[0];
+  if (n > 1) companion.bottomLeftCorner(n - 1, n - 1).setIdentity();
+  return companion.eigenvalues();
+}
+
+TransferFunction::TransferFunction()
+    : num_(Eigen::VectorXd::Ones(1)), den_(Eigen::VectorXd::Ones(1)), delay_(0) {}
+
+TransferFunction::TransferFunction(Eigen::VectorXd num, Eigen::VectorXd den, int delay)
+    : num_(std::move(num)), den_(std::move(den)), delay_(delay) {
+  if (num_.size() == 0) throw InputError("num must have at least one coefficient");
+  if (den_.size() == 0) throw InputError("den must have at least one coefficient");
+  if (!num_.allFinite()) throw InputError("num has a non-finite coefficient");
+  if (!den_.allFinite()) throw InputError("den has a non-finite coefficient");
+  if (den_[0] == 0.0) throw InputError("den[0] must be non-zero");
+  if (delay_ < 0) throw InputError("delay must be >= 0, got " + std::to_string(delay_));
+  num_ /= den_[0];
+  den_ /= den_[0];
+}
+
+TransferFunction TransferFunction::from_foptd(double gain, double time_constant_s,
+                                              double dead_time_s, double sample_time_s) {
+  if (!(sample_time_s > 0.0) || !std::isfinite(sample_time_s))
+    throw InputError("sample_time_s must be > 0");
+  if (!std::isfinite(gain)) throw InputError("gain must be finite");
+  if (!(time_constant_s >= 0.0) || !std::isfinite(time_constant_s))
+    throw InputError("time_constant_s must be >= 0");
+  if (!(dead_time_s >= 0.0) || !std::isfinite(dead_time_s))
+    throw InputError("dead_time_s must be >= 0");
+  const double samples = dead_time_s / sample_time_s;
+  // Snap to an integer when the dead time is a multiple of Ts up to rounding.
+  double whole = std::floor(samples + 1e-9);
+  double frac = samples - whole;
+  if (frac < 1e-9) frac = 0.0;
+  const int d = static_cast<int>(whole);
+  if (time_constant_s == 0.0) {
+    if (frac == 0.0) return TransferFunction(Eigen::VectorXd::Constant(1, gain), Eigen::VectorXd::Ones(1), d);
+    return TransferFunction(Eigen::VectorXd::Constant(1, gain), Eigen::VectorXd::Ones(1), d + 1);
+  }
+  const double a = std::exp(-sample_time_s / time_constant_s);
+  Eigen::VectorXd den(2);
+  den << 1.0, -a;
+  if (frac == 0.0) return TransferFunction(Eigen::VectorXd::Constant(1, gain * (1.0 - a)), den, d + 1);
+  // Modified z-transform of the ZOH step response with fractional delay f Ts.
+  const double af = std::pow(a, 1.0 - frac);
+  Eigen::VectorXd num(2);
+  num << gain * (1.0 - af), gain * (af - a);
+  return TransferFunction(num, den, d + 1);
+}
+
+Eigen::VectorXd TransferFunction::filter(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  const Eigen::Index n = x.size();
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(n);
+  const Eigen::Index nb = num_.size(), na = den_.size();
+  for (Eigen::Index t = delay_; t < n; ++t) {
+    double acc = 0.0;
+    const Eigen::Index src = t - delay_;
+    const Eigen::Index kb = std::min<Eigen::Index>(nb, src + 1);
+    for (Eigen::Index k = 0; k < kb; ++k) acc += num_[k] * x[src - k];
+    const Eigen::Index ka = std::min<Eigen::Index>(na, t + 1);
+    for (Eigen::Index k = 1; k < ka; ++k) acc -= den_[k] * y[t - k];
+    y[t] = acc;
+  }
+  return y;
+}
+
+Eigen::VectorXd TransferFunction::impulse(int n) const {
+  if (n < 0) throw InputError("response length must be >= 0");
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
+  if (n > 0) u[0] = 1.0;
+  return filter(u);
+}
+
+Eigen::VectorXd TransferFunction::step(int n) const {
+  if (n < 0) throw InputError("response length must be >= 0");
+  return filter(Eigen::VectorXd::Ones(n));
+}
+
+double TransferFunction::dc_gain() const {
+  const double d = den_.sum();
+  const double b = num_.sum();
+  if (d == 0.0) return b == 0.0 ? 0.0 : std::copysign(INFINITY, b);
+  return b / d;
+}
+
+Eigen::VectorXcd TransferFunction::poles() const { return poly_roots(den_); }
+Eigen::VectorXcd TransferFunction::zeros() const { return poly_roots(num_); }
+bool TransferFunction::is_stable() const { return all_inside_unit_circle(poles()); }
+bool TransferFunction::is_minimum_phase() const { return all_inside_unit_circle(zeros()); }
+bool TransferFunction::is_zero() const { return (num_.array() == 0.0).all(); }
+
+TransferFunction TransferFunction::series(const TransferFunction& o) const {
+  return TransferFunction(poly_multiply(num_, o.num_), poly_multiply(den_, o.den_), delay_ + o.delay_);
+}
+
+TransferFunction TransferFunction::parallel(const TransferFunction& o) const {
+  // q^-d1 n1/d1 + q^-d2 n2/d2 = q^-min(d1,d2) (q^-(d1-m) n1 d2 + q^-(d2-m) n2 d1) / (d1 d2).
+  // Common factors are not cancelled: the sum keeps both denominators.
+  const int m = std::min(delay_, o.delay_);
+  const Eigen::VectorXd t1 = poly_multiply(num_, o.den_), t2 = poly_multiply(o.num_, den_);
+  const Eigen::Index s1 = delay_ - m, s2 = o.delay_ - m;
+  Eigen::VectorXd num = Eigen::VectorXd::Zero(std::max(s1 + t1.size(), s2 + t2.size()));
+  num.segment(s1, t1.size()) += t1;
+  num.segment(s2, t2.size()) += t2;
+  return TransferFunction(num, poly_multiply(den_, o.den_), m);
+}
+
+TransferFunction TransferFunction::inverse() const {
+  if (delay_ != 0) throw InputError("cannot invert a transfer function with a delay");
+  if (num_[0] == 0.0) throw InputError("cannot invert: num[0] is zero (non-causal inverse)");
+  return TransferFunction(den_, num_, 0);
+}
+
+bool TransferFunction::operator==(const TransferFunction& o) const {
+  return delay_ == o.delay_ && num_.size() == o.num_.size() && den_.size() == o.den_.size() &&
+         num_ == o.num_ && den_ == o.den_;
+}
+
+}  // namespace mpmpp

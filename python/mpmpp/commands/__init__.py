@@ -1,0 +1,1 @@
+"""One module per ``mpmpp`` subcommand: ``add_arguments(parser)`` and ``run(args)``."""

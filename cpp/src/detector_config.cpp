@@ -74,12 +74,12 @@ void DetectorConfig::validate() const {
   if (arx_order_b < 1) fail("arx_order_b", "must be >= 1");
   if (!(threshold > 0 && threshold <= 1)) fail("threshold", "must be in (0, 1]");
   if (!(nu > 0 && nu <= 1)) fail("nu", "must be in (0, 1]");
-  if (!(outlier_fraction < 0 || outlier_fraction < 1)) fail("outlier_fraction", "must be < 1");
+  if (!(outlier_fraction < 1)) fail("outlier_fraction", "must be < 1 (negative: cross-validate)");
   if (outlier_fraction < 0) {
     if (outlier_fraction_grid.empty())
       fail("outlier_fraction_grid", "must not be empty when outlier_fraction is chosen by cross-validation");
     for (double f : outlier_fraction_grid)
-      if (!(f >= 0 && f < 1)) fail("outlier_fraction_grid", "values must be in [0, 1)");
+      if (!(f > 0 && f < 1)) fail("outlier_fraction_grid", "values must be in (0, 1)");
     if (cv_folds < 2) fail("cv_folds", "must be >= 2");
   }
   if (fir_length < 0) fail("fir_length", "must be >= 0 (0 = automatic)");

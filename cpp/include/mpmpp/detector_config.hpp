@@ -34,12 +34,12 @@ struct DetectorConfig {
   // Fraction of resampled training models allowed to score negative. Negative = choose
   // it from outlier_fraction_grid by cv_folds-fold cross-validation (as the paper does).
   double outlier_fraction = -1.0;
-  std::vector<double> outlier_fraction_grid{0.0, 0.01, 0.02, 0.05, 0.1, 0.2};
+  std::vector<double> outlier_fraction_grid{0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3};
   int cv_folds = 10;
   int fir_length = 0;                // m + 1 FIR coefficients per channel; 0 = until the
                                      // nominal impulse response falls below 1% of its peak
   bool standardise = true;           // centre and scale the SVM features (see detector.cpp)
-  int resampled_models = 1000;       // synthetic models drawn per channel in resampling
+  int resampled_models = 300;        // synthetic models drawn per channel in resampling
   std::uint64_t seed = 0;            // resampling and cross-validation seed
   OeStructure oe_structure = OeStructure::Foptd;
   double arx_regularisation = 1e-4;  // delta of the paper's R_reg rule (Sec. 3.1)

@@ -6,3 +6,5 @@ reads and writes the user's files, plots and talks to the user.
 from ._core import TransferFunction, __version__
 
 __all__ = ["TransferFunction", "__version__"]
+from .detect import DetectionResult, Detector, DetectorConfig, detect  # noqa: E402
+__all__ += ["DetectorConfig", "Detector", "DetectionResult", "detect"]

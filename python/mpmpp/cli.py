@@ -16,11 +16,11 @@ from . import __version__
 
 # name -> (one-line help, module implementing it or None while not built yet)
 COMMANDS: dict[str, tuple[str, str | None]] = {
-    "demo": ("reproduce the paper's example end to end (simulate, detect, plot)", None),
+    "demo": ("reproduce the paper's example end to end (simulate, detect, plot)", "mpmpp.commands.demo"),
     "simulate": ("closed-loop simulation with MPC and scheduled plant/noise changes", None),
-    "evaluate": ("Monte Carlo: detection and false-alarm rates, delays, against baselines", None),
+    "evaluate": ("Monte Carlo: detection and false-alarm rates, delays, against baselines", "mpmpp.commands.evaluate"),
     "compare": ("model vs measurements: fit per output, residual tests, where it fails", None),
-    "detect": ("moving-window MPM and noise-change detection per channel", None),
+    "detect": ("moving-window MPM and noise-change detection per channel", "mpmpp.commands.detect"),
     "diagnose": ("ranked findings: which physical effect is missing, where, when", None),
     "update": ("add/refit the effect(s), write the new model, print error before and after", None),
 }

@@ -27,7 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _core, scenarios
+from . import scenarios
+from ._core import Model
+from .simulate import simulate
 from .baselines import BASELINES, baseline_alarms, baseline_indices
 from .detect import _arrays, channel_label, detect, make_config
 
@@ -35,27 +37,62 @@ __all__ = ["run_seed", "evaluate", "summarise", "format_table", "load_scenario"]
 
 
 def load_scenario(spec):
-    """'paper-siso' | 'paper-mimo' | a scenario JSON file path | a scenario object."""
+    """'paper-siso' | 'paper-mimo' | a scenario JSON file path | a scenario dict -> scenario dict."""
+    if isinstance(spec, dict):
+        return spec
     if spec in ("paper-siso", "paper_siso"):
         return scenarios.paper_siso()
     if spec in ("paper-mimo", "paper_mimo"):
         return scenarios.paper_mimo()
-    if isinstance(spec, (str, os.PathLike)):
-        return scenarios.load_scenario(os.fspath(spec))
-    return spec
+    path = os.fspath(spec)
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read the scenario ({exc.strerror})") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from None
 
 
-def default_config(spec, scenario):
-    return make_config(None, scenarios.nominal_model(scenario))
+_MODEL_KEYS = ("name", "sample_time_s", "inputs", "outputs", "process", "noise")
+
+
+def nominal_model(scenario: dict):
+    """The model the scenario's controller uses (the model-file part of the scenario)."""
+    doc = {k: scenario[k] for k in _MODEL_KEYS if k in scenario}
+    # Scenario documents may write noise models with "delay": 0, which model files do not take.
+    doc["noise"] = {o: {k: v for k, v in h.items() if not (k == "delay" and v == 0)}
+                    for o, h in doc.get("noise", {}).items()}
+    return Model.from_json(json.dumps(doc), "scenario")
+
+
+# Scenario event types that change a process channel's truth / an output's noise model.
+_PROCESS_EVENTS = ("process", "gain", "time_constant", "delay")
+
+
+def truth_onsets(scenario: dict) -> dict:
+    """First change time (s) per monitored channel, None if it never changes:
+    {"process": {(output, input): t}, "noise": {output: t}} over the model's channels."""
+    model = nominal_model(scenario)
+    process = {(o, i): None for o, i in model.channels()}
+    noise = {o: None for o in model.outputs}
+    for ev in scenario.get("events", []):
+        t = float(ev["time_s"])
+        if ev["type"] in _PROCESS_EVENTS and (ev["output"], ev["input"]) in process:
+            key = (ev["output"], ev["input"])
+            process[key] = t if process[key] is None else min(process[key], t)
+        elif ev["type"] == "noise":
+            noise[ev["output"]] = t if noise[ev["output"]] is None else min(noise[ev["output"]], t)
+    return {"process": process, "noise": noise}
 
 
 def run_seed(spec, seed: int, config_json: str | None = None) -> dict:
     """One Monte Carlo run: simulate, detect, baselines. Returns plain data (picklable)."""
     t_start = time.perf_counter()
     scenario = load_scenario(spec)
-    model = scenarios.nominal_model(scenario)
+    model = nominal_model(scenario)
     config = make_config(json.loads(config_json) if config_json else None, model)
-    data = scenarios.simulate_seed(scenario, seed)
+    data = simulate(scenario, seed=int(seed))
     t_sim = time.perf_counter()
     result = detect(model, data, config.train_duration_s, config)
     t_det = time.perf_counter()
@@ -97,10 +134,9 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
     if not seeds:
         raise ValueError("seeds: need at least one seed")
     scenario = load_scenario(spec)
-    cfg = make_config(config, scenarios.nominal_model(scenario))
+    cfg = make_config(config, nominal_model(scenario))
     config_json = cfg.to_json()
-    # A named scenario travels as its name; anything else as the object (picklable).
-    payload = spec if isinstance(spec, (str, os.PathLike)) else scenario
+    payload = scenario  # a plain dict: travels to any worker
     started = time.perf_counter()
     runs = []
     if scheduler is None:
@@ -128,8 +164,8 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
                 client.close()
     wall = time.perf_counter() - started
     runs.sort(key=lambda r: r["seed"])
-    summary = summarise(runs, scenarios.truth_onsets(scenario), scenarios.nominal_model(scenario))
-    summary.update({"scenario": spec if isinstance(spec, str) else getattr(scenario, "name", "scenario"),
+    summary = summarise(runs, truth_onsets(scenario), nominal_model(scenario))
+    summary.update({"scenario": spec if isinstance(spec, str) else scenario.get("name", "scenario"),
                     "seeds": len(seeds), "wall_seconds": wall, "where": where,
                     "cpu_seconds": float(sum(r["seconds"]["total"] for r in runs)),
                     "config": json.loads(config_json)})

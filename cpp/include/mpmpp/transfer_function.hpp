@@ -2,6 +2,8 @@
 // Discrete transfer function in the backward shift q^-1:
 //   G(q) = q^-delay * (b0 + b1 q^-1 + ... + bm q^-m) / (1 + a1 q^-1 + ... + an q^-n)
 // The denominator is normalised so that den[0] == 1 on construction.
+#include <string>
+
 #include <Eigen/Dense>
 
 namespace mpmpp {
@@ -46,6 +48,9 @@ class TransferFunction {
   Eigen::VectorXd num_, den_;
   int delay_;
 };
+
+// For people: "q^-14 (0.063) / (1 - 0.93 q^-1)", coefficients to 6 significant digits.
+std::string to_string(const TransferFunction& g);
 
 // Polynomial product in q^-1 (coefficient convolution).
 Eigen::VectorXd poly_multiply(const Eigen::Ref<const Eigen::VectorXd>& a,

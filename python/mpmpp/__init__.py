@@ -3,6 +3,6 @@
 The numerics live in the C++/Eigen engine ``mpmpp._core``; this package orchestrates,
 reads and writes the user's files, plots and talks to the user.
 """
-from ._core import TransferFunction, __version__
+from ._core import QpResult, QpSolver, TransferFunction, __version__, solve_qp
 
-__all__ = ["TransferFunction", "__version__"]
+__all__ = ["QpResult", "QpSolver", "TransferFunction", "__version__", "solve_qp"]

@@ -6,4 +6,5 @@ namespace mpmpp::bindings {
 void bind_transfer_function(pybind11::module_& m);
 void bind_model_io(pybind11::module_& m);
 void bind_data_io(pybind11::module_& m);
+void bind_qp(pybind11::module_& m);
 }  // namespace mpmpp::bindings

@@ -6,4 +6,5 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_transfer_function(m);
   mpmpp::bindings::bind_model_io(m);
   mpmpp::bindings::bind_data_io(m);
+  mpmpp::bindings::bind_qp(m);
 }

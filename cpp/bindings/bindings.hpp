@@ -4,4 +4,5 @@
 
 namespace mpmpp::bindings {
 void bind_transfer_function(pybind11::module_& m);
+void bind_identification(pybind11::module_& m);
 }  // namespace mpmpp::bindings

@@ -7,4 +7,5 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_model_io(m);
   mpmpp::bindings::bind_data_io(m);
   mpmpp::bindings::bind_qp(m);
+  mpmpp::bindings::bind_identification(m);
 }

@@ -107,19 +107,28 @@ TransferFunction TransferFunction::from_foptd(double gain, double time_constant_
   return TransferFunction(num, den, d + 1);
 }
 
-Eigen::VectorXd TransferFunction::filter(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
+                 const Eigen::Ref<const Eigen::VectorXd>& den, int delay,
+                 const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) {
   const Eigen::Index n = x.size();
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(n);
-  const Eigen::Index nb = num_.size(), na = den_.size();
-  for (Eigen::Index t = delay_; t < n; ++t) {
+  if (y.size() != n) throw InputError("filter output must have the input's length");
+  const Eigen::Index nb = num.size(), na = den.size();
+  const Eigen::Index head = std::min<Eigen::Index>(delay, n);
+  y.head(head).setZero();
+  for (Eigen::Index t = head; t < n; ++t) {
     double acc = 0.0;
-    const Eigen::Index src = t - delay_;
+    const Eigen::Index src = t - delay;
     const Eigen::Index kb = std::min<Eigen::Index>(nb, src + 1);
-    for (Eigen::Index k = 0; k < kb; ++k) acc += num_[k] * x[src - k];
+    for (Eigen::Index k = 0; k < kb; ++k) acc += num[k] * x[src - k];
     const Eigen::Index ka = std::min<Eigen::Index>(na, t + 1);
-    for (Eigen::Index k = 1; k < ka; ++k) acc -= den_[k] * y[t - k];
+    for (Eigen::Index k = 1; k < ka; ++k) acc -= den[k] * y[t - k];
     y[t] = acc;
   }
+}
+
+Eigen::VectorXd TransferFunction::filter(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  Eigen::VectorXd y(x.size());
+  filter_into(num_, den_, delay_, x, y);
   return y;
 }
 

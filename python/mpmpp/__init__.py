@@ -7,3 +7,4 @@ from ._core import __version__
 from ._core import TransferFunction
 from ._core import QpResult, QpSolver, solve_qp
 from .io import Model, load_data, load_model, save_data, save_model
+from . import identify

@@ -52,6 +52,14 @@ class TransferFunction {
 // For people: "q^-14 (0.063) / (1 - 0.93 q^-1)", coefficients to 6 significant digits.
 std::string to_string(const TransferFunction& g);
 
+// out = q^-delay num/den x with zero initial state, den monic (den[0] == 1), written into
+// a caller-owned buffer of x's size (x and out must not overlap): the allocation-free
+// core of TransferFunction::filter, shared with the identification loops that filter
+// thousands of windows.
+void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
+                 const Eigen::Ref<const Eigen::VectorXd>& den, int delay,
+                 const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> out);
+
 // Polynomial product in q^-1 (coefficient convolution).
 Eigen::VectorXd poly_multiply(const Eigen::Ref<const Eigen::VectorXd>& a,
                               const Eigen::Ref<const Eigen::VectorXd>& b);

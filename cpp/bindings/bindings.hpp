@@ -4,4 +4,5 @@
 
 namespace mpmpp::bindings {
 void bind_transfer_function(pybind11::module_& m);
+void bind_one_class_svm(pybind11::module_& m);
 }  // namespace mpmpp::bindings

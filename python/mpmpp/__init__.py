@@ -6,3 +6,5 @@ reads and writes the user's files, plots and talks to the user.
 from ._core import TransferFunction, __version__
 
 __all__ = ["TransferFunction", "__version__"]
+from .svm import OneClassSVM, cross_validate_outlier_fraction, resample  # noqa: E402
+__all__ += ["OneClassSVM", "cross_validate_outlier_fraction", "resample"]

@@ -8,4 +8,5 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_data_io(m);
   mpmpp::bindings::bind_qp(m);
   mpmpp::bindings::bind_identification(m);
+  mpmpp::bindings::bind_one_class_svm(m);
 }

@@ -4,4 +4,6 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "mpmpp C++/Eigen engine";
   m.attr("__version__") = MPMPP_VERSION;
   mpmpp::bindings::bind_transfer_function(m);
+  mpmpp::bindings::bind_mpc(m);
+  mpmpp::bindings::bind_closed_loop(m);
 }

@@ -9,4 +9,6 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_qp(m);
   mpmpp::bindings::bind_identification(m);
   mpmpp::bindings::bind_one_class_svm(m);
+  mpmpp::bindings::bind_mpc(m);
+  mpmpp::bindings::bind_closed_loop(m);
 }

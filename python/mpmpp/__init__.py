@@ -9,3 +9,5 @@ from ._core import QpResult, QpSolver, solve_qp
 from .io import Model, load_data, load_model, save_data, save_model
 from . import identify
 from .svm import OneClassSVM, cross_validate_outlier_fraction, resample
+from .simulate import simulate
+from . import scenarios

@@ -22,7 +22,7 @@ def _step(text: str, started: float) -> None:
 
 def run(args) -> int:
     from .. import save_data
-    from ..detect import detect
+    from ..detect import detect, make_config
     from ..detect_plots import plot_detection, plot_profiles
     from ..evaluate import load_scenario, nominal_model
     from ..simulate import simulate
@@ -33,7 +33,7 @@ def run(args) -> int:
     _step(f"simulating {scenario['name']} ({scenario['duration_s'] / 3600:g} h, seed {args.seed})", started)
     data = simulate(scenario, seed=args.seed)
     _step("training on the first {:g} h and monitoring every window".format(
-        (3.0 if args.example == "siso" else 4.0)), started)
+        make_config(f"paper_{args.example}").train_duration_s / 3600), started)
     result, detector = detect(model, data, None, f"paper_{args.example}", return_detector=True)
     events = [(float(e["time_s"]), _event_label(e)) for e in scenario["events"]]
     if args.json:

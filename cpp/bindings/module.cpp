@@ -12,4 +12,5 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_mpc(m);
   mpmpp::bindings::bind_closed_loop(m);
   mpmpp::bindings::bind_detector(m);
+  mpmpp::bindings::bind_streaming_detector(m);
 }

@@ -12,3 +12,4 @@ from .svm import OneClassSVM, cross_validate_outlier_fraction, resample
 from .simulate import simulate
 from . import scenarios
 from .detect import DetectionResult, Detector, DetectorConfig, detect  # noqa: E402
+from .stream import StreamingDetector  # noqa: E402

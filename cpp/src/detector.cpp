@@ -24,16 +24,11 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x) const {
 }
 
 Eigen::VectorXd ChannelScorer::score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  // Row by row through score(): a blocked kernel product would sum in a different order than
+  // the one-window (streaming) path, and batch and streaming scores must be bit-identical.
   Eigen::VectorXd h = Eigen::VectorXd::Constant(X.rows(), std::numeric_limits<double>::quiet_NaN());
-  std::vector<Eigen::Index> rows;
   for (Eigen::Index r = 0; r < X.rows(); ++r)
-    if (X.row(r).allFinite()) rows.push_back(r);
-  if (rows.empty()) return h;
-  RowMatrixXd Z(rows.size(), X.cols());
-  for (size_t k = 0; k < rows.size(); ++k)
-    Z.row(k) = (X.row(rows[k]) - feature_mean.transpose()).array() / feature_scale.transpose().array();
-  const Eigen::VectorXd f = gaussian_kernel_expansion(support_vectors, dual_coef, kernel_scale, Z);
-  for (size_t k = 0; k < rows.size(); ++k) h[rows[k]] = (f[k] - offset) / (nu * n_train);
+    if (X.row(r).allFinite()) h[r] = score(X.row(r).transpose());
   return h;
 }
 

@@ -156,11 +156,12 @@ class DetectionResult:
 
     def alarm_table(self) -> str:
         """Human summary: one line per channel with its alarm start times."""
-        lines = [f"{'channel':<28} {'kind':<8} alarms (start, h)"]
+        width = max([len("channel")] + [len(channel_label(c)) for c in self.channels])
+        lines = [f"{'channel':<{width}}  {'kind':<6} alarms (start, h)"]
         for k, c in enumerate(self.channels):
             starts = self.alarm_starts(k)
             text = ", ".join(f"{s / 3600:.2f}" for s in starts) if starts.size else "none"
-            lines.append(f"{channel_label(c):<28} {'MPM' if c['kind'] == 'process' else 'noise':<8} {text}")
+            lines.append(f"{channel_label(c):<{width}}  {'MPM' if c['kind'] == 'process' else 'noise':<6} {text}")
         n_skipped = int(self.windows["skipped"].sum())
         if n_skipped:
             lines.append(f"{n_skipped} window(s) skipped (missing values or not informative)")

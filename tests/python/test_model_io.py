@@ -99,6 +99,7 @@ def test_model_built_from_python():
     again = mpmpp.Model(m.name, m.sample_time_s, m.inputs, m.outputs, m.process_dict(), m.noise_dict())
     assert again == m
     assert mpmpp.Model.from_json(m.to_json()) == m
+    assert m != "not a model"
 
 
 @pytest.mark.parametrize("kwargs, message", [

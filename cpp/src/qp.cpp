@@ -191,7 +191,7 @@ struct QpSolver::Impl {
   }
 
   void add_active(int row, int sigma) {
-    factorization.add(d);
+    factorization.add(d, z);
     active.push_back({row, sigma});  // capacity n: the active normals are independent
     disarm(row);
   }
@@ -214,6 +214,8 @@ struct QpSolver::Impl {
       if (is_dependent()) {
         redundant_equalities.push_back(i);
       } else {
+        const int k = factorization.size();
+        factorization.J_columns_times(k, d.tail(n - k), z);
         add_active(i, +1);
       }
     }

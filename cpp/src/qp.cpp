@@ -46,13 +46,17 @@ struct ActiveConstraint {
   int sigma;  // +1: lower bound (or equality), -1: upper bound
 };
 
-void check_finite_or_inf(const Eigen::Ref<const Eigen::VectorXd>& v, const char* name) {
-  for (Eigen::Index i = 0; i < v.size(); ++i)
-    if (std::isnan(v[i])) throw InputError(std::string(name) + "[" + std::to_string(i) + "] is NaN");
-}
-
 void check_finite(const Eigen::Ref<const Eigen::MatrixXd>& M, const char* name) {
   if (!M.allFinite()) throw InputError(std::string(name) + " has a NaN or infinite entry");
+}
+
+// Throws naming the first entry of `name` where `bad` holds (the checks themselves are
+// vectorised; this runs only on failure).
+template <typename Mask>
+[[noreturn]] void reject_entry(const Mask& bad, const char* name, const char* what) {
+  Eigen::Index i = 0;
+  while (i + 1 < bad.size() && !bad[i]) ++i;
+  throw InputError(std::string(name) + "[" + std::to_string(i) + "] " + what);
 }
 
 }  // namespace
@@ -71,7 +75,7 @@ struct QpSolver::Impl {
   // The data of the current solve, copied in (O(n + m), no allocation), and its bound
   // classification (|bound| >= settings.infinite_bound is infinite).
   Eigen::VectorXd q, l, u;
-  std::vector<char> has_lower, has_upper, is_equality, previous_is_equality;
+  Eigen::Array<bool, Eigen::Dynamic, 1> is_equality, previous_is_equality;
   bool warm = false;
   // A row i is violated when A_i x < lower_trigger_i or A_i x > upper_trigger_i: its bound
   // moved by the feasibility tolerance, or +-inf while the row is active, an equality or absent.
@@ -102,8 +106,6 @@ struct QpSolver::Impl {
         q(n),
         l(m),
         u(m),
-        has_lower(m),
-        has_upper(m),
         is_equality(m),
         previous_is_equality(m),
         lower_trigger(m),
@@ -152,29 +154,36 @@ struct QpSolver::Impl {
     if (u_in.size() != m)
       throw InputError("u has " + std::to_string(u_in.size()) + " entries, expected " + std::to_string(m));
     check_finite(q_in, "q");
-    check_finite_or_inf(l_in, "l");
-    check_finite_or_inf(u_in, "u");
     q = q_in;
     l = l_in;
     u = u_in;
     const double inf = settings.infinite_bound;
-    for (int i = 0; i < m; ++i) {
-      if (l[i] > u[i]) throw InputError("l[" + std::to_string(i) + "] > u[" + std::to_string(i) + "]");
-      if (l[i] >= inf) throw InputError("l[" + std::to_string(i) + "] is +infinite");
-      if (u[i] <= -inf) throw InputError("u[" + std::to_string(i) + "] is -infinite");
-      has_lower[i] = l[i] > -inf;
-      has_upper[i] = u[i] < inf;
-      is_equality[i] = l[i] == u[i];  // both finite here
-      arm(i);
+    const double tol = settings.feasibility_tol;
+    const auto L = l.array();
+    const auto U = u.array();
+    if (L.hasNaN()) reject_entry(L.isNaN(), "l", "is NaN");
+    if (U.hasNaN()) reject_entry(U.isNaN(), "u", "is NaN");
+    if ((L > U).any()) {
+      int i = 0;
+      while (!(l[i] > u[i])) ++i;
+      throw InputError("l[" + std::to_string(i) + "] > u[" + std::to_string(i) + "]");
     }
+    if ((L >= inf).any()) reject_entry(L >= inf, "l", "is +infinite");
+    if ((U <= -inf).any()) reject_entry(U <= -inf, "u", "is -infinite");
+    is_equality = L == U;  // both bounds finite here
+    lower_trigger = (L > -inf && !is_equality).select(L - tol * (1.0 + L.abs()), -kInfinity);
+    upper_trigger = (U < inf && !is_equality).select(U + tol * (1.0 + U.abs()), kInfinity);
   }
 
-  // Violation thresholds of an inactive row (tolerance relative to 1 + |bound|).
+  bool has_lower(int i) const { return l[i] > -settings.infinite_bound; }
+  bool has_upper(int i) const { return u[i] < settings.infinite_bound; }
+
+  // Violation thresholds of an inactive row (tolerance relative to 1 + |bound|), as in load().
   void arm(int i) {
     const double tol = settings.feasibility_tol;
     const bool inequality = !is_equality[i];
-    lower_trigger[i] = inequality && has_lower[i] ? l[i] - tol * (1.0 + std::abs(l[i])) : -kInfinity;
-    upper_trigger[i] = inequality && has_upper[i] ? u[i] + tol * (1.0 + std::abs(u[i])) : kInfinity;
+    lower_trigger[i] = inequality && has_lower(i) ? l[i] - tol * (1.0 + std::abs(l[i])) : -kInfinity;
+    upper_trigger[i] = inequality && has_upper(i) ? u[i] + tol * (1.0 + std::abs(u[i])) : kInfinity;
   }
   void disarm(int i) {
     lower_trigger[i] = -kInfinity;
@@ -182,7 +191,7 @@ struct QpSolver::Impl {
   }
 
   void add_active(int row, int sigma) {
-    factorization.add(d);
+    factorization.add(d, z);
     active.push_back({row, sigma});  // capacity n: the active normals are independent
     disarm(row);
   }
@@ -205,6 +214,8 @@ struct QpSolver::Impl {
       if (is_dependent()) {
         redundant_equalities.push_back(i);
       } else {
+        const int k = factorization.size();
+        factorization.J_columns_times(k, d.tail(n - k), z);
         add_active(i, +1);
       }
     }
@@ -216,7 +227,7 @@ struct QpSolver::Impl {
     for (const ActiveConstraint& c : active) disarm(c.row);
     for (int j = static_cast<int>(active.size()) - 1; j >= num_active_equalities; --j) {
       const ActiveConstraint& c = active[j];
-      if (!(c.sigma > 0 ? has_lower[c.row] : has_upper[c.row])) drop_active(j);
+      if (!(c.sigma > 0 ? has_lower(c.row) : has_upper(c.row))) drop_active(j);
     }
   }
 
@@ -307,7 +318,7 @@ struct QpSolver::Impl {
     }
 
     int iterations = 0;
-    if (warm && is_equality == previous_is_equality) {
+    if (warm && (is_equality == previous_is_equality).all()) {
       warm_start();
     } else {
       cold_start();

@@ -45,9 +45,10 @@ class ActiveSetFactorization {
     for (int i = 0; i < k_; ++i) v[i] = (v[i] - R_.col(i).head(i).dot(v.head(i))) / R_(i, i);
   }
 
-  // Appends a constraint whose normal n gives d = J' n (computed with the current J).
-  // d is overwritten (rotated). The caller has checked that d.tail(n - size()) is not ~0.
-  void add(Eigen::Ref<Eigen::VectorXd> d);
+  // Appends a constraint whose normal n gives d = J' n and z = J2 J2' n (computed with the
+  // current J; z is GI's primal step direction). Both are overwritten. The caller has checked
+  // that d.tail(n - size()) is not ~0.
+  void add(Eigen::Ref<Eigen::VectorXd> d, Eigen::Ref<Eigen::VectorXd> z);
 
   // Removes the constraint at position `position` (0-based, in order of addition).
   void drop(int position);
@@ -57,7 +58,6 @@ class ActiveSetFactorization {
   int k_ = 0;
   Eigen::MatrixXd J_;
   Eigen::MatrixXd R_;
-  Eigen::VectorXd J2v_;  // workspace of add()
 };
 
 }  // namespace mpmpp::detail

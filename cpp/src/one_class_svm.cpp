@@ -79,51 +79,170 @@ void dot_tile(const double* q, int n_q, int m, const double* packed, int panel0,
     const int nq = std::min(4, n_q - p0);
     const double* q0 = q + static_cast<Index>(p0) * m;
     double* o = out + p0 * ldo;
+    if (nq < 4) {
+      // Fewer than 4 queries (one kernel column): 4 panels at a time, so 8 independent
+      // accumulator chains hide the multiply-add latency.
+      for (int p = 0; p < nq; ++p) {
+        const double* qp = q0 + p * m;
+        double* op = o + p * ldo;
+        int panel = panel0;
+        for (; panel + 4 <= panel1; panel += 4) {
+          const double* c = packed + static_cast<Index>(panel) * kPanel * m;
+          const Index stride = static_cast<Index>(kPanel) * m;
+          Vec4 a00 = {}, a01 = {}, a10 = {}, a11 = {}, a20 = {}, a21 = {}, a30 = {}, a31 = {};
+          for (int k = 0; k < m; ++k, c += kPanel) {
+            Vec4 c00, c01, c10, c11, c20, c21, c30, c31;
+            MPMPP_LOAD4(c00, c);
+            MPMPP_LOAD4(c01, c + 4);
+            MPMPP_LOAD4(c10, c + stride);
+            MPMPP_LOAD4(c11, c + stride + 4);
+            MPMPP_LOAD4(c20, c + 2 * stride);
+            MPMPP_LOAD4(c21, c + 2 * stride + 4);
+            MPMPP_LOAD4(c30, c + 3 * stride);
+            MPMPP_LOAD4(c31, c + 3 * stride + 4);
+            const double b = qp[k];
+            a00 += c00 * b;
+            a01 += c01 * b;
+            a10 += c10 * b;
+            a11 += c11 * b;
+            a20 += c20 * b;
+            a21 += c21 * b;
+            a30 += c30 * b;
+            a31 += c31 * b;
+          }
+          double* dst = op + static_cast<Index>(panel - panel0) * kPanel;
+          MPMPP_STORE4(dst, a00);
+          MPMPP_STORE4(dst + 4, a01);
+          MPMPP_STORE4(dst + 8, a10);
+          MPMPP_STORE4(dst + 12, a11);
+          MPMPP_STORE4(dst + 16, a20);
+          MPMPP_STORE4(dst + 20, a21);
+          MPMPP_STORE4(dst + 24, a30);
+          MPMPP_STORE4(dst + 28, a31);
+        }
+        for (; panel < panel1; ++panel) {
+          const double* c = packed + static_cast<Index>(panel) * kPanel * m;
+          Vec4 a0 = {}, a1 = {};
+          for (int k = 0; k < m; ++k, c += kPanel) {
+            Vec4 c0, c1;
+            MPMPP_LOAD4(c0, c);
+            MPMPP_LOAD4(c1, c + 4);
+            a0 += c0 * qp[k];
+            a1 += c1 * qp[k];
+          }
+          double* dst = op + static_cast<Index>(panel - panel0) * kPanel;
+          MPMPP_STORE4(dst, a0);
+          MPMPP_STORE4(dst + 4, a1);
+        }
+      }
+      continue;
+    }
     for (int panel = panel0; panel < panel1; ++panel) {
       const double* c = packed + static_cast<Index>(panel) * kPanel * m;
       const Index j0 = static_cast<Index>(panel - panel0) * kPanel;
-      if (nq == 4) {
-        Vec4 a00 = {}, a01 = {}, a10 = {}, a11 = {}, a20 = {}, a21 = {}, a30 = {}, a31 = {};
-        for (int k = 0; k < m; ++k, c += kPanel) {
-          Vec4 c0, c1;
-          MPMPP_LOAD4(c0, c);
-          MPMPP_LOAD4(c1, c + 4);
-          const double b0 = q0[k], b1 = q0[m + k], b2 = q0[2 * m + k], b3 = q0[3 * m + k];
-          a00 += c0 * b0;
-          a01 += c1 * b0;
-          a10 += c0 * b1;
-          a11 += c1 * b1;
-          a20 += c0 * b2;
-          a21 += c1 * b2;
-          a30 += c0 * b3;
-          a31 += c1 * b3;
-        }
-        MPMPP_STORE4(o + j0, a00);
-        MPMPP_STORE4(o + j0 + 4, a01);
-        MPMPP_STORE4(o + ldo + j0, a10);
-        MPMPP_STORE4(o + ldo + j0 + 4, a11);
-        MPMPP_STORE4(o + 2 * ldo + j0, a20);
-        MPMPP_STORE4(o + 2 * ldo + j0 + 4, a21);
-        MPMPP_STORE4(o + 3 * ldo + j0, a30);
-        MPMPP_STORE4(o + 3 * ldo + j0 + 4, a31);
-      } else {
-        for (int p = 0; p < nq; ++p) {
-          const double* cp = c;
-          Vec4 a0 = {}, a1 = {};
-          for (int k = 0; k < m; ++k, cp += kPanel) {
-            Vec4 c0, c1;
-            MPMPP_LOAD4(c0, cp);
-            MPMPP_LOAD4(c1, cp + 4);
-            const double b = q0[p * m + k];
-            a0 += c0 * b;
-            a1 += c1 * b;
-          }
-          MPMPP_STORE4(o + p * ldo + j0, a0);
-          MPMPP_STORE4(o + p * ldo + j0 + 4, a1);
-        }
+      Vec4 a00 = {}, a01 = {}, a10 = {}, a11 = {}, a20 = {}, a21 = {}, a30 = {}, a31 = {};
+      for (int k = 0; k < m; ++k, c += kPanel) {
+        Vec4 c0, c1;
+        MPMPP_LOAD4(c0, c);
+        MPMPP_LOAD4(c1, c + 4);
+        const double b0 = q0[k], b1 = q0[m + k], b2 = q0[2 * m + k], b3 = q0[3 * m + k];
+        a00 += c0 * b0;
+        a01 += c1 * b0;
+        a10 += c0 * b1;
+        a11 += c1 * b1;
+        a20 += c0 * b2;
+        a21 += c1 * b2;
+        a30 += c0 * b3;
+        a31 += c1 * b3;
       }
+      MPMPP_STORE4(o + j0, a00);
+      MPMPP_STORE4(o + j0 + 4, a01);
+      MPMPP_STORE4(o + ldo + j0, a10);
+      MPMPP_STORE4(o + ldo + j0 + 4, a11);
+      MPMPP_STORE4(o + 2 * ldo + j0, a20);
+      MPMPP_STORE4(o + 2 * ldo + j0 + 4, a21);
+      MPMPP_STORE4(o + 3 * ldo + j0, a30);
+      MPMPP_STORE4(o + 3 * ldo + j0 + 4, a31);
     }
   }
+}
+
+// exp(x) on 4 lanes, within 1 ulp of the correctly rounded value for x in [-708, 709] (inputs
+// are clamped to that range; below it the result is 3e-308 instead of a denormal or 0, which
+// rounds to the same single-precision 0 and is negligible in a decision sum). Cody-Waite
+// reduction x = n ln2 + r, |r| <= ln2 / 2, and the degree-11 Taylor polynomial of e^r (truncation
+// error below 1e-21). Inlined into each CPU clone.
+typedef long long Vec4i __attribute__((vector_size(32)));
+
+__attribute__((always_inline)) inline void vexp(Vec4& x) {
+  const Vec4 lo = {-708.0, -708.0, -708.0, -708.0}, hi = {709.0, 709.0, 709.0, 709.0};
+  x = x < lo ? lo : x;
+  x = x > hi ? hi : x;
+  const double shifter = 0x1.8p52;  // adding it rounds to an integer held in the low bits
+  const Vec4 t = x * 1.4426950408889634 + shifter;
+  const Vec4 n = t - shifter;
+  const Vec4 r = (x - n * 6.93147180369123816490e-01) - n * 1.90821492927058770002e-10;
+  Vec4 p = r * (1.0 / 39916800) + 1.0 / 3628800;
+  p = p * r + 1.0 / 362880;
+  p = p * r + 1.0 / 40320;
+  p = p * r + 1.0 / 5040;
+  p = p * r + 1.0 / 720;
+  p = p * r + 1.0 / 120;
+  p = p * r + 1.0 / 24;
+  p = p * r + 1.0 / 6;
+  p = p * r + 0.5;
+  p = p * r + 1.0;
+  p = p * r + 1.0;
+  Vec4i bits;
+  __builtin_memcpy(&bits, &t, sizeof bits);
+  long long shifter_bits;
+  __builtin_memcpy(&shifter_bits, &shifter, sizeof shifter_bits);
+  bits = (bits - shifter_bits + 1023) << 52;  // 2^n
+  Vec4 scale;
+  __builtin_memcpy(&scale, &bits, sizeof scale);
+  x = p * scale;
+}
+
+// out[j] = exp(-gamma (sq_i + sq[j] - 2 dots[j])) rounded to single precision, j < n: one
+// kernel column from its dot products, the expression of libsvm's RBF kernel.
+MPMPP_CPU_CLONES
+void gaussian_column(const double* dots, const double* sq, double sq_i, double gamma, int n,
+                     float* out) {
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    Vec4 d, q;
+    MPMPP_LOAD4(d, dots + j);
+    MPMPP_LOAD4(q, sq + j);
+    Vec4 v = -gamma * ((sq_i + q) - 2 * d);
+    vexp(v);
+    for (int t = 0; t < 4; ++t) out[j + t] = static_cast<float>(v[t]);
+  }
+  for (; j < n; ++j)
+    out[j] = static_cast<float>(std::exp(-gamma * (sq_i + sq[j] - 2 * dots[j])));
+}
+
+// sum_j coef[j] exp(-gamma max(0, x_sq + sq[j] - 2 dots[j])), j < n: a decision-function term.
+MPMPP_CPU_CLONES
+double gaussian_sum(const double* dots, const double* sq, const double* coef, double x_sq,
+                    double gamma, int n) {
+  Vec4 acc = {};
+  const Vec4 zero = {};
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    Vec4 d, q, c;
+    MPMPP_LOAD4(d, dots + j);
+    MPMPP_LOAD4(q, sq + j);
+    MPMPP_LOAD4(c, coef + j);
+    Vec4 d2 = (x_sq + q) - 2 * d;
+    d2 = d2 < zero ? zero : d2;  // clamp round-off below 0
+    Vec4 v = -gamma * d2;
+    vexp(v);
+    acc += c * v;
+  }
+  double sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+  for (; j < n; ++j)
+    sum += coef[j] * std::exp(-gamma * std::max(0.0, x_sq + sq[j] - 2 * dots[j]));
+  return sum;
 }
 
 // Gaussian kernel matrix Q_ij = exp(-gamma ||x_i - x_j||^2), gamma = 1/c (eq 15), seen through
@@ -173,13 +292,15 @@ class KernelColumns {
       for (int k = 0; k < m; ++k) queries(p, k) = x_.at(c0 + p, k);
     const int ld = x_.padded_size();
     RowMatrixXd tile(nc, ld);  // row p = dots of point c0 + p with all points
-    dot_tile(queries.data(), nc, m, x_.data(), 0, ld / kPanel, tile.data(), ld);
-    // Same expression as fill(), rounded to single precision like every cached column.
+    // ~200 kB of points at a time, so they stay in cache while every query passes over them.
+    const int chunk = std::max(1, 25600 / (kPanel * m));
+    for (int p0 = 0; p0 < ld / kPanel; p0 += chunk)
+      dot_tile(queries.data(), nc, m, x_.data(), p0, std::min(ld / kPanel, p0 + chunk),
+               tile.data() + p0 * kPanel, ld);
     out.resize(l_, nc);
     for (int k = 0; k < nc; ++k)
-      for (int j = 0; j < l_; ++j)
-        out(j, k) = static_cast<float>(
-            std::exp(-gamma_ * (sq_norm_[c0 + k] + sq_norm_[j] - 2 * tile(k, j))));
+      gaussian_column(tile.row(k).data(), sq_norm_.data(), sq_norm_[c0 + k], gamma_, l_,
+                      out.col(k).data());
   }
 
   // Cache a full column computed elsewhere (evicting the least recently used ones if needed).
@@ -253,9 +374,8 @@ class KernelColumns {
     dot_tile(point_.data(), 1, x_.features(), x_.data(), start / kPanel,
              (len + kPanel - 1) / kPanel, dots_.data(), 0);
     // Same expression as libsvm's RBF kernel: exp(-gamma (|x_i|^2 + |x_j|^2 - 2 x_i.x_j)).
-    const double* dots = dots_.data() - start / kPanel * kPanel;  // dots[j] for j in [start, len)
-    for (int j = start; j < len; ++j)
-      out[j] = static_cast<float>(std::exp(-gamma_ * (sq_norm_[i] + sq_norm_[j] - 2 * dots[j])));
+    gaussian_column(dots_.data() + start % kPanel, sq_norm_.data() + start, sq_norm_[i], gamma_,
+                    len - start, out + start);
   }
 
   PackedPoints x_;
@@ -652,13 +772,9 @@ Eigen::VectorXd gaussian_kernel_expansion(const Eigen::Ref<const RowMatrixXd>& s
         dot_tile(xb.data(), static_cast<int>(nr), m, sv.data(), c0, c1, tile.data(), ld);
         for (Index r = 0; r < nr; ++r) {
           const double x_sq = xb.row(r).squaredNorm();
-          const double* dots = tile.data() + r * ld;
-          double sum = 0.0;
-          // ||x - sv||^2 = ||x||^2 + ||sv||^2 - 2 x.sv, clamped at 0 against cancellation.
-          for (int j = 0; j < nj; ++j)
-            sum += coef[j0 + j] *
-                   std::exp(-gamma * std::max(0.0, x_sq + sv_sq[j0 + j] - 2 * dots[j]));
-          out[r0 + r] += sum;
+          // ||x - sv||^2 = ||x||^2 + ||sv||^2 - 2 x.sv (clamped at 0 against cancellation).
+          out[r0 + r] += gaussian_sum(tile.data() + r * ld, sv_sq.data() + j0, coef.data() + j0,
+                                      x_sq, gamma, nj);
         }
       }
     }

@@ -19,10 +19,12 @@ constexpr double kTau = 1e-12;
 
 using Eigen::Index;
 
-// The dot products behind every kernel value go through dot_tile, compiled for three x86-64
-// levels (AVX-512, AVX2+FMA, baseline SSE2) and picked at load time by the CPU (GCC function
-// multi-versioning), since the package is built without -march=native.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+// The dot products and exponentials behind every kernel value (dot_tile, gaussian_column,
+// gaussian_sum) are compiled for three x86-64 levels (AVX-512, AVX2+FMA, baseline SSE2) and
+// picked at load time by the CPU (GCC function multi-versioning), since the package is built
+// without -march=native. -DMPMPP_NO_CPU_CLONES builds the baseline only.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(MPMPP_NO_CPU_CLONES)
 #define MPMPP_CPU_CLONES \
   __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
@@ -264,8 +266,6 @@ class KernelColumns {
   }
 
   int size() const { return l_; }
-  double gamma() const { return gamma_; }
-  const Eigen::VectorXd& squared_norms() const { return sq_norm_; }
 
   // Q_i[0, len): the first len entries of column i in the current order.
   const float* column(int i, int len) {

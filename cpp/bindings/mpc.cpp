@@ -10,6 +10,10 @@ namespace py = pybind11;
 namespace mpmpp::bindings {
 
 void bind_mpc(py::module_& m) {
+  py::enum_<DisturbanceModel>(m, "DisturbanceModel", "output-disturbance forecast of the MPC (see mpc.hpp)")
+      .value("bias", DisturbanceModel::Bias)
+      .value("noise_model", DisturbanceModel::NoiseModel);
+
   py::class_<MpcTuning>(m, "MpcTuning", "MPC horizons, weights and limits (see mpc.hpp)")
       .def(py::init<>())
       .def_readwrite("prediction_horizon", &MpcTuning::prediction_horizon)
@@ -29,7 +33,8 @@ void bind_mpc(py::module_& m) {
       .def_readwrite("cv_max", &MpcTuning::cv_max)
       .def_readwrite("cv_max_move", &MpcTuning::cv_max_move)
       .def_readwrite("mv_soft_min", &MpcTuning::mv_soft_min)
-      .def_readwrite("mv_soft_max", &MpcTuning::mv_soft_max);
+      .def_readwrite("mv_soft_max", &MpcTuning::mv_soft_max)
+      .def_readwrite("disturbance", &MpcTuning::disturbance);
 
   py::class_<Mpc>(m, "Mpc", "Linear MPC on a nominal transfer-matrix model (see mpc.hpp)")
       .def(py::init<const Model&, MpcTuning, const Eigen::Ref<const Eigen::VectorXd>&>(), py::arg("model"),

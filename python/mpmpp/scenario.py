@@ -22,7 +22,7 @@ TOP_KEYS = MODEL_KEYS | {"truth", "controller", "duration_s", "seed", "events", 
 TRUTH_KEYS = {"process", "noise", "sigma", "extra", "actuators"}
 EXTRA_KEYS = {"operating_point", "sigma", "noise", "affects"}
 ACTUATOR_KEYS = {"deadband", "backlash", "min", "max"}
-CONTROLLER_KEYS = {"prediction_horizon", "control_horizon", "cv", "mv"}
+CONTROLLER_KEYS = {"prediction_horizon", "control_horizon", "cv", "mv", "disturbance"}
 CV_KEYS = {"target", "target_weight", "minmax_weight", "min", "max", "max_move", "scale"}
 MV_KEYS = {"target", "target_weight", "move_weight", "deviation_weight", "minmax_weight",
            "min", "max", "max_move", "soft_min", "soft_max", "scale"}
@@ -192,6 +192,10 @@ def _tuning(spec, outputs, inputs) -> Any:
     t.control_horizon = _int(c["control_horizon"], "controller.control_horizon", 1)
     if t.control_horizon > t.prediction_horizon:
         _fail("controller.control_horizon", "must be <= prediction_horizon")
+    disturbance = c.get("disturbance", "bias")
+    if disturbance not in ("bias", "noise_model"):
+        _fail("controller.disturbance", f"must be 'bias' or 'noise_model', got {disturbance!r}")
+    t.disturbance = getattr(_core.DisturbanceModel, disturbance)
     cvs = _obj(c["cv"], "controller.cv", set(outputs), set(outputs))
     mvs = _obj(c["mv"], "controller.mv", set(inputs), set(inputs))
     cv = {k: [] for k in ("target", "target_weight", "minmax_weight", "min", "max", "max_move")}

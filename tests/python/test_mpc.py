@@ -17,10 +17,14 @@ PROCESS = [
 U0 = np.array([10.0, 20.0])
 
 
+NOISE = [([1.0, -0.3], [1.0, 0.6]), ([1.0, 0.2], [1.0, -0.5, 0.06])]
+
+
 def core_model(process=None):
     channels = {f"y{i + 1}": {f"u{j + 1}": TF(*g) for j, g in enumerate(row) if g}
                 for i, row in enumerate(PROCESS)}
-    return _core.Model("test", 1.0, ["u1", "u2"], ["y1", "y2"], channels if process is None else process)
+    noise = {f"y{i + 1}": TF(*h) for i, h in enumerate(NOISE)}
+    return _core.Model("test", 1.0, ["u1", "u2"], ["y1", "y2"], channels if process is None else process, noise)
 
 
 def tuning(hp=8, hc=3, mv_min=(-INF, -INF), mv_max=(INF, INF), max_move=(INF, INF), **extra):
@@ -39,17 +43,19 @@ def tuning(hp=8, hc=3, mv_min=(-INF, -INF), mv_max=(INF, INF), max_move=(INF, IN
 
 
 def reference(t):
+    noise = NOISE if t.disturbance == _core.DisturbanceModel.noise_model else None
     return NumpyMpc(PROCESS, t.prediction_horizon, t.control_horizon, t.cv_target, t.mv_target,
                     t.cv_target_weight, t.mv_target_weight, t.move_weight, t.deviation_weight,
-                    t.mv_min, t.mv_max, t.mv_max_move, U0)
+                    t.mv_min, t.mv_max, t.mv_max_move, U0, noise)
 
 
 def measurements(n, scale, seed):
     return np.array([1.0, -2.0]) + scale * np.random.default_rng(seed).standard_normal((n, 2))
 
 
-def test_unconstrained_steps_equal_numpy_formulation():
-    t = tuning()
+@pytest.mark.parametrize("disturbance", ["bias", "noise_model"])
+def test_unconstrained_steps_equal_numpy_formulation(disturbance):
+    t = tuning(disturbance=getattr(_core.DisturbanceModel, disturbance))
     mpc, ref = _core.Mpc(core_model(), t, U0), reference(t)
     assert np.allclose(mpc.dynamic_matrix, ref.theta, atol=1e-14)
     assert np.allclose(mpc.P, ref.P, rtol=1e-12, atol=1e-14)
@@ -58,6 +64,7 @@ def test_unconstrained_steps_equal_numpy_formulation():
         u = mpc.step(y)
         u_ref = ref.step(y, constrained=False)
         assert np.allclose(mpc.disturbance_estimate, ref.dist, atol=1e-10)
+        assert np.allclose(mpc.free_response, ref.f, atol=1e-9)
         assert np.allclose(u, u_ref, rtol=0, atol=1e-8), (u, u_ref)
 
 

@@ -20,11 +20,7 @@ constexpr double kSpacingTolerance = 1e-6;  // relative to sample_time_s
 std::string quoted(const std::string& s) { return "\"" + detail::printable(s) + "\""; }
 std::string row_name(std::size_t row) { return "row " + std::to_string(row); }
 
-std::string format_number(double x) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, r.ptr);
-}
+using detail::format_number;
 
 std::string_view trim(std::string_view s) {
   const auto first = s.find_first_not_of(" \t");
@@ -247,12 +243,6 @@ void check_column_names(const std::vector<std::string>& names, const std::string
   }
 }
 
-std::string list(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
 // A CSV field, quoted when it would otherwise not read back as the same text.
 std::string csv_field(const std::string& s) {
   if (s.find_first_of(",\"") == std::string::npos && s == trim(s)) return s;
@@ -320,7 +310,7 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
     if (header.size() == 1)
       throw InputError(where + "not a CSV file with a header row: row 1 is " + quoted(header[0]) +
                        " (expected comma-separated column names including \"time\")");
-    throw InputError(where + "row 1: no \"time\" column (columns: " + detail::printable(list(header), 200) + ")");
+    throw InputError(where + "row 1: no \"time\" column (columns: " + detail::printable(detail::comma_list(header), 200) + ")");
   }
   check_column_names(header, where + "row 1: ");
   if (lines.size() < 2) throw InputError(where + "no data rows after the header");
@@ -368,7 +358,7 @@ void check_against_model(const DataTable& data, const Model& model, const std::s
     for (const auto& name : names)
       if (data.column(name) < 0)
         throw InputError(source + ": column " + quoted(name) + " (model " + kind + ") is missing (columns: time" +
-                         (data.columns.empty() ? "" : ", ") + detail::printable(list(data.columns), 200) + ")");
+                         (data.columns.empty() ? "" : ", ") + detail::printable(detail::comma_list(data.columns), 200) + ")");
   };
   require(model.inputs, "input");
   require(model.outputs, "output");

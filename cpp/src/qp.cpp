@@ -50,8 +50,7 @@ void check_finite(const Eigen::Ref<const Eigen::MatrixXd>& M, const char* name) 
   if (!M.allFinite()) throw InputError(std::string(name) + " has a NaN or infinite entry");
 }
 
-// Throws naming the first entry of `name` where `bad` holds (the checks themselves are
-// vectorised; this runs only on failure).
+// Throws naming the first entry of `name` where `bad` holds (only called once a check failed).
 template <typename Mask>
 [[noreturn]] void reject_entry(const Mask& bad, const char* name, const char* what) {
   Eigen::Index i = 0;

@@ -50,8 +50,7 @@ void check_finite(const Eigen::Ref<const Eigen::MatrixXd>& M, const char* name) 
   if (!M.allFinite()) throw InputError(std::string(name) + " has a NaN or infinite entry");
 }
 
-// Throws naming the first entry of `name` where `bad` holds (the checks themselves are
-// vectorised; this runs only on failure).
+// Throws naming the first entry of `name` where `bad` holds (only called once a check failed).
 template <typename Mask>
 [[noreturn]] void reject_entry(const Mask& bad, const char* name, const char* what) {
   Eigen::Index i = 0;
@@ -155,10 +154,24 @@ struct QpSolver::Impl {
       throw InputError("u has " + std::to_string(u_in.size()) + " entries, expected " + std::to_string(m));
     check_finite(q_in, "q");
     q = q_in;
-    l = l_in;
-    u = u_in;
     const double inf = settings.infinite_bound;
-    const double tol = settings.feasibility_tol;
+    // One pass: copy, classify, set the violation thresholds (as arm() does) and note any bad
+    // entry; which one and why is worked out only on failure.
+    bool bad = false;
+    for (int i = 0; i < m; ++i) {
+      const double li = l_in[i];
+      const double ui = u_in[i];
+      l[i] = li;
+      u[i] = ui;
+      bad |= !(li <= ui) || li >= inf || ui <= -inf;  // also catches NaN
+      is_equality[i] = li == ui;
+      arm(i);
+    }
+    if (bad) reject_bounds();
+  }
+
+  [[noreturn]] void reject_bounds() const {
+    const double inf = settings.infinite_bound;
     const auto L = l.array();
     const auto U = u.array();
     if (L.hasNaN()) reject_entry(L.isNaN(), "l", "is NaN");
@@ -169,10 +182,7 @@ struct QpSolver::Impl {
       throw InputError("l[" + std::to_string(i) + "] > u[" + std::to_string(i) + "]");
     }
     if ((L >= inf).any()) reject_entry(L >= inf, "l", "is +infinite");
-    if ((U <= -inf).any()) reject_entry(U <= -inf, "u", "is -infinite");
-    is_equality = L == U;  // both bounds finite here
-    lower_trigger = (L > -inf && !is_equality).select(L - tol * (1.0 + L.abs()), -kInfinity);
-    upper_trigger = (U < inf && !is_equality).select(U + tol * (1.0 + U.abs()), kInfinity);
+    reject_entry(U <= -inf, "u", "is -infinite");
   }
 
   bool has_lower(int i) const { return l[i] > -settings.infinite_bound; }
@@ -258,7 +268,10 @@ struct QpSolver::Impl {
   // Most violated constraint (violation scaled by the row norm), or -1 when all hold.
   int most_violated(int& sigma) {
     if (m == 0) return -1;
-    Ax.noalias() = At.transpose() * x;
+    if (n <= detail::kLazyProductMaxSize)
+      Ax.noalias() = At.transpose().lazyProduct(x);
+    else
+      Ax.noalias() = At.transpose() * x;
     violation = (lower_trigger - Ax).cwiseMax(Ax - upper_trigger).cwiseProduct(row_inv_norm);
     Eigen::Index p;
     if (!(violation.maxCoeff(&p) > 0.0)) return -1;

@@ -12,6 +12,10 @@
 
 namespace mpmpp::detail {
 
+// Eigen's blocked matrix-vector kernels cost more to set up than the whole product for the
+// small matrices of MPC problems; up to this size the coefficient-wise (lazy) product is used.
+constexpr int kLazyProductMaxSize = 8;
+
 class ActiveSetFactorization {
  public:
   explicit ActiveSetFactorization(int n);
@@ -25,11 +29,17 @@ class ActiveSetFactorization {
   // and dot products): k is small and Eigen's blocked triangular kernels cost more to set up.
   // out = J' a.
   void J_transpose_times(const Eigen::Ref<const Eigen::VectorXd>& a, Eigen::Ref<Eigen::VectorXd> out) const {
-    out.noalias() = J_.transpose() * a;
+    if (n_ <= kLazyProductMaxSize)
+      out.noalias() = J_.transpose().lazyProduct(a);
+    else
+      out.noalias() = J_.transpose() * a;
   }
   // out = J(:, first .. first+c.size()-1) c.
   void J_columns_times(int first, const Eigen::Ref<const Eigen::VectorXd>& c, Eigen::Ref<Eigen::VectorXd> out) const {
-    out.noalias() = J_.middleCols(first, c.size()) * c;
+    if (n_ <= kLazyProductMaxSize)
+      out.noalias() = J_.middleCols(first, c.size()).lazyProduct(c);
+    else
+      out.noalias() = J_.middleCols(first, c.size()) * c;
   }
   // v <- R^{-1} v (back substitution by columns of R), v of length size().
   template <typename V>

@@ -8,6 +8,7 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_data_io(m);
   mpmpp::bindings::bind_qp(m);
   mpmpp::bindings::bind_identification(m);
+  mpmpp::bindings::bind_one_class_svm(m);
   mpmpp::bindings::bind_mpc(m);
   mpmpp::bindings::bind_closed_loop(m);
 }

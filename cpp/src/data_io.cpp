@@ -301,7 +301,9 @@ DataTable make_data_table(Eigen::VectorXd time_s, std::vector<std::string> colum
   return d;
 }
 
-DataTable parse_csv(const std::string& text, const std::string& source) {
+namespace {
+
+DataTable parse_csv_text(const std::string& text, const std::string& source) {
   const std::string where = source + ": ";
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(where + "file is empty");
   if (text.find('\0') != std::string::npos) throw InputError(where + "not a CSV file (binary content)");
@@ -358,9 +360,7 @@ DataTable parse_csv(const std::string& text, const std::string& source) {
   return d;
 }
 
-DataTable read_csv(const std::string& path) { return parse_csv(detail::read_text_file(path), path); }
-
-void validate_data(const DataTable& data, const Model& model, const std::string& source) {
+void check_against_model(const DataTable& data, const Model& model, const std::string& source) {
   auto require = [&](const std::vector<std::string>& names, const char* kind) {
     for (const auto& name : names)
       if (data.column(name) < 0)
@@ -377,6 +377,28 @@ void validate_data(const DataTable& data, const Model& model, const std::string&
                        format_number(step) + " s from the previous row, expected the model's sample_time_s = " +
                        format_number(ts) + " s");
   }
+}
+
+// Runs `check` with every InputError it throws made one line.
+template <class Check>
+auto one_line_errors(Check check) -> decltype(check()) {
+  try {
+    return check();
+  } catch (const InputError& e) {
+    throw InputError(detail::one_line(e.what()));
+  }
+}
+
+}  // namespace
+
+DataTable parse_csv(const std::string& text, const std::string& source) {
+  return one_line_errors([&] { return parse_csv_text(text, source); });
+}
+
+DataTable read_csv(const std::string& path) { return parse_csv(detail::read_text_file(path), path); }
+
+void validate_data(const DataTable& data, const Model& model, const std::string& source) {
+  one_line_errors([&] { check_against_model(data, model, source); });
 }
 
 DataTable load_data(const std::string& path, const Model& model) {

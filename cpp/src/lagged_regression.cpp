@@ -18,13 +18,32 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
   const Eigen::Index p = static_cast<Eigen::Index>(columns.size());
   G.resize(p, p);
   h.resize(p);
+  // Column k continues column k-1 when it is the same signal one lag further.
+  const auto continues = [&columns](Eigen::Index k) {
+    if (k == 0) return false;
+    const LaggedColumn &c = columns[k], &prev = columns[k - 1];
+    return c.signal == prev.signal && c.lag == prev.lag + 1 && c.sign == prev.sign;
+  };
   const ConstSegment y(target + t0, n);
   for (Eigen::Index i = 0; i < p; ++i) {
-    const ConstSegment xi = column_segment(columns[i], t0, n);
-    h[i] = columns[i].sign * xi.dot(y);
+    const LaggedColumn& ci = columns[i];
+    const ConstSegment xi = column_segment(ci, t0, n);
+    h[i] = ci.sign * xi.dot(y);
+    const bool ci_continues = continues(i);
     for (Eigen::Index j = 0; j <= i; ++j) {
-      const double s = columns[i].sign * columns[j].sign;
-      G(i, j) = G(j, i) = s * xi.dot(column_segment(columns[j], t0, n));
+      const LaggedColumn& cj = columns[j];
+      const double s = ci.sign * cj.sign;
+      if (ci_continues && continues(j)) {
+        // Both columns shift by one lag against (i-1, j-1): the sum over the rows
+        // gains the term at t0 and loses the one at t0 + n (Toeplitz recursion),
+        // O(1) instead of an O(n) dot product.
+        const double enter = ci.signal[t0 - ci.lag] * cj.signal[t0 - cj.lag];
+        const double leave = ci.signal[t0 + n - ci.lag] * cj.signal[t0 + n - cj.lag];
+        G(i, j) = G(i - 1, j - 1) + s * (enter - leave);
+      } else {
+        G(i, j) = s * xi.dot(column_segment(cj, t0, n));
+      }
+      G(j, i) = G(i, j);
     }
   }
 }

@@ -324,7 +324,7 @@ Model parse_model(const std::string& json_text, const std::string& source) {
     }
     return model_from_json(root);
   } catch (const InputError& e) {
-    throw InputError(source + ": " + e.what());
+    throw InputError(detail::one_line(source + ": " + e.what()));
   }
 }
 

@@ -84,4 +84,11 @@ std::string printable(const std::string& text, std::size_t max_length) {
   return out;
 }
 
+std::string one_line(const std::string& message) {
+  std::string out = message;
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return out;
+}
+
 }  // namespace mpmpp::detail

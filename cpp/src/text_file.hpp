@@ -16,4 +16,8 @@ void write_file_atomic(const std::string& path, const std::string& content);
 // user's (possibly binary) file stays one readable line.
 std::string printable(const std::string& text, std::size_t max_length = 40);
 
+// The message with control characters (line breaks, tabs, ...) replaced by '?':
+// every error reaches the user as exactly one line, whatever names a file holds.
+std::string one_line(const std::string& message);
+
 }  // namespace mpmpp::detail

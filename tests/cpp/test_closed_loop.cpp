@@ -84,6 +84,52 @@ TEST(ClosedLoop, GainEventReplaysTheNewChannelOverTheInputHistory) {
   EXPECT_NEAR(r.y(1499, 0), 23.75, 1e-3);  // offset-free after the change
 }
 
+TEST(ClosedLoop, EveryEventKindTakesEffectAtItsSample) {
+  auto c = siso(600, 0.05);
+  mpmpp::ExtraVariable x;
+  x.name = "consistency";
+  x.operating_point = 1.1;
+  x.sigma = 0.2;
+  c.plant.extra = {x};
+  c.plant.extra_process = {{std::nullopt}};
+  c.plant.actuators = {mpmpp::ActuatorNonlinearity{}};
+  auto event = [](int sample, mpmpp::EventKind kind) {
+    mpmpp::Event e;
+    e.sample = sample;
+    e.kind = kind;
+    e.output = 0;
+    e.input = 0;
+    return e;
+  };
+  auto extra = event(100, mpmpp::EventKind::ExtraProcess);
+  extra.model = TransferFunction(vec({0.0, 0.5}), vec({1.0, -0.6}), 2);
+  auto noise = event(150, mpmpp::EventKind::Noise);
+  noise.model = TransferFunction(vec({1.0, 0.3}), vec({1.0, -0.6}), 0);
+  auto sigma = event(200, mpmpp::EventKind::Sigma);
+  sigma.value = 0.1;
+  auto drift = event(250, mpmpp::EventKind::Drift);
+  drift.value = 0.3;
+  drift.rate = 0.001;
+  auto actuator = event(300, mpmpp::EventKind::Actuator);
+  actuator.actuator.deadband = 0.05;
+  actuator.actuator.min = 130.95;
+  actuator.actuator.max = 131.05;
+  auto setpoint = event(350, mpmpp::EventKind::CvTarget);
+  setpoint.value = 24.0;
+  auto mv_target = event(400, mpmpp::EventKind::MvTarget);
+  mv_target.value = 132.0;
+  auto removed = event(450, mpmpp::EventKind::Process);  // the plant loses its only channel
+  c.events = {removed, mv_target, setpoint, actuator, drift, sigma, noise, extra};  // any order
+  const auto r = mpmpp::simulate_closed_loop(c);
+  EXPECT_EQ(r.setpoint(349, 0), 23.75);
+  EXPECT_EQ(r.setpoint(350, 0), 24.0);
+  EXPECT_GE(r.u_actual.col(0).tail(300).minCoeff(), 130.95);
+  EXPECT_LE(r.u_actual.col(0).tail(300).maxCoeff(), 131.05);
+  EXPECT_GT((r.u_actual.col(0).tail(300) - r.u.col(0).tail(300)).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_NEAR(r.extra.col(0).mean(), 1.1, 0.1);
+  EXPECT_EQ(r.failed_solves, 0);
+}
+
 TEST(ClosedLoop, SameSeedSameRun) {
   auto c = siso(400, 0.05);
   c.seed = 11;

@@ -4,4 +4,6 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "mpmpp C++/Eigen engine";
   m.attr("__version__") = MPMPP_VERSION;
   mpmpp::bindings::bind_transfer_function(m);
+  mpmpp::bindings::bind_prediction(m);
+  mpmpp::bindings::bind_residual_analysis(m);
 }

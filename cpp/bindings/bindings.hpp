@@ -6,4 +6,5 @@ namespace mpmpp::bindings {
 void bind_transfer_function(pybind11::module_& m);
 void bind_prediction(pybind11::module_& m);
 void bind_residual_analysis(pybind11::module_& m);
+void bind_change_scan(pybind11::module_& m);
 }  // namespace mpmpp::bindings

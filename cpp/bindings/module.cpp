@@ -6,4 +6,5 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_transfer_function(m);
   mpmpp::bindings::bind_prediction(m);
   mpmpp::bindings::bind_residual_analysis(m);
+  mpmpp::bindings::bind_change_scan(m);
 }

@@ -4,6 +4,10 @@
 
 namespace mpmpp::bindings {
 void bind_transfer_function(pybind11::module_& m);
+void bind_model_io(pybind11::module_& m);
+void bind_data_io(pybind11::module_& m);
+void bind_qp(pybind11::module_& m);
+void bind_identification(pybind11::module_& m);
 void bind_prediction(pybind11::module_& m);
 void bind_residual_analysis(pybind11::module_& m);
 void bind_change_scan(pybind11::module_& m);

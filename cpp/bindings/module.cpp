@@ -4,6 +4,10 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "mpmpp C++/Eigen engine";
   m.attr("__version__") = MPMPP_VERSION;
   mpmpp::bindings::bind_transfer_function(m);
+  mpmpp::bindings::bind_model_io(m);
+  mpmpp::bindings::bind_data_io(m);
+  mpmpp::bindings::bind_qp(m);
+  mpmpp::bindings::bind_identification(m);
   mpmpp::bindings::bind_prediction(m);
   mpmpp::bindings::bind_residual_analysis(m);
   mpmpp::bindings::bind_change_scan(m);

@@ -1,6 +1,7 @@
 #include "mpmpp/transfer_function.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "mpmpp/error.hpp"
@@ -17,6 +18,21 @@ Eigen::VectorXd trim_zeros(const Eigen::Ref<const Eigen::VectorXd>& c) {
   while (last >= first && c[last] == 0.0) --last;
   if (first > last) return Eigen::VectorXd();
   return c.segment(first, last - first + 1);
+}
+
+// c0 + c1 q^-1 + ... with zero terms left out, e.g. "1 - 0.93 q^-1".
+std::string polynomial_string(const Eigen::VectorXd& c) {
+  std::string out;
+  char buf[32];
+  for (Eigen::Index k = 0; k < c.size(); ++k) {
+    if (c[k] == 0.0) continue;
+    const double magnitude = out.empty() ? c[k] : std::abs(c[k]);
+    std::snprintf(buf, sizeof buf, "%.6g", magnitude);
+    if (!out.empty()) out += c[k] < 0 ? " - " : " + ";
+    out += buf;
+    if (k > 0) out += " q^-" + std::to_string(k);
+  }
+  return out.empty() ? "0" : out;
 }
 
 bool all_inside_unit_circle(const Eigen::VectorXcd& roots) {
@@ -91,19 +107,28 @@ TransferFunction TransferFunction::from_foptd(double gain, double time_constant_
   return TransferFunction(num, den, d + 1);
 }
 
-Eigen::VectorXd TransferFunction::filter(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
+                 const Eigen::Ref<const Eigen::VectorXd>& den, int delay,
+                 const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) {
   const Eigen::Index n = x.size();
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(n);
-  const Eigen::Index nb = num_.size(), na = den_.size();
-  for (Eigen::Index t = delay_; t < n; ++t) {
+  if (y.size() != n) throw InputError("filter output must have the input's length");
+  const Eigen::Index nb = num.size(), na = den.size();
+  const Eigen::Index head = std::min<Eigen::Index>(delay, n);
+  y.head(head).setZero();
+  for (Eigen::Index t = head; t < n; ++t) {
     double acc = 0.0;
-    const Eigen::Index src = t - delay_;
+    const Eigen::Index src = t - delay;
     const Eigen::Index kb = std::min<Eigen::Index>(nb, src + 1);
-    for (Eigen::Index k = 0; k < kb; ++k) acc += num_[k] * x[src - k];
+    for (Eigen::Index k = 0; k < kb; ++k) acc += num[k] * x[src - k];
     const Eigen::Index ka = std::min<Eigen::Index>(na, t + 1);
-    for (Eigen::Index k = 1; k < ka; ++k) acc -= den_[k] * y[t - k];
+    for (Eigen::Index k = 1; k < ka; ++k) acc -= den[k] * y[t - k];
     y[t] = acc;
   }
+}
+
+Eigen::VectorXd TransferFunction::filter(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  Eigen::VectorXd y(x.size());
+  filter_into(num_, den_, delay_, x, y);
   return y;
 }
 
@@ -157,6 +182,13 @@ TransferFunction TransferFunction::inverse() const {
 bool TransferFunction::operator==(const TransferFunction& o) const {
   return delay_ == o.delay_ && num_.size() == o.num_.size() && den_.size() == o.den_.size() &&
          num_ == o.num_ && den_ == o.den_;
+}
+
+std::string to_string(const TransferFunction& g) {
+  std::string out = g.delay() > 0 ? "q^-" + std::to_string(g.delay()) + " " : "";
+  out += "(" + polynomial_string(g.num()) + ")";
+  if (g.den().size() > 1) out += " / (" + polynomial_string(g.den()) + ")";
+  return out;
 }
 
 }  // namespace mpmpp

@@ -3,6 +3,8 @@
 The numerics live in the C++/Eigen engine ``mpmpp._core``; this package orchestrates,
 reads and writes the user's files, plots and talks to the user.
 """
-from ._core import TransferFunction, __version__
-
-__all__ = ["TransferFunction", "__version__"]
+from ._core import __version__
+from ._core import TransferFunction
+from ._core import QpResult, QpSolver, solve_qp
+from .io import Model, load_data, load_model, save_data, save_model
+from . import identify

@@ -23,6 +23,7 @@ COMMANDS: dict[str, tuple[str, str | None]] = {
     "detect": ("moving-window MPM and noise-change detection per channel", None),
     "diagnose": ("ranked findings: which physical effect is missing, where, when", None),
     "update": ("add/refit the effect(s), write the new model, print error before and after", None),
+    "check": ("validate a model file (and a data file against it) and summarise them", "mpmpp.commands.check"),
 }
 
 

@@ -2,6 +2,8 @@
 // Discrete transfer function in the backward shift q^-1:
 //   G(q) = q^-delay * (b0 + b1 q^-1 + ... + bm q^-m) / (1 + a1 q^-1 + ... + an q^-n)
 // The denominator is normalised so that den[0] == 1 on construction.
+#include <string>
+
 #include <Eigen/Dense>
 
 namespace mpmpp {
@@ -46,6 +48,17 @@ class TransferFunction {
   Eigen::VectorXd num_, den_;
   int delay_;
 };
+
+// For people: "q^-14 (0.063) / (1 - 0.93 q^-1)", coefficients to 6 significant digits.
+std::string to_string(const TransferFunction& g);
+
+// out = q^-delay num/den x with zero initial state, den monic (den[0] == 1), written into
+// a caller-owned buffer of x's size (x and out must not overlap): the allocation-free
+// core of TransferFunction::filter, shared with the identification loops that filter
+// thousands of windows.
+void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
+                 const Eigen::Ref<const Eigen::VectorXd>& den, int delay,
+                 const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> out);
 
 // Polynomial product in q^-1 (coefficient convolution).
 Eigen::VectorXd poly_multiply(const Eigen::Ref<const Eigen::VectorXd>& a,

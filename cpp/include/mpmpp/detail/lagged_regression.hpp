@@ -1,0 +1,60 @@
+#pragma once
+// Least squares whose regressors are lagged copies of a few signals (ARX, FIR, the
+// Gauss-Newton steps of OE). The regressor matrix is never formed: every column is a
+// shifted view of a signal, so the normal equations are dot products of segments of
+// the caller's arrays (no copy of the data per window).
+#include <Eigen/Dense>
+#include <vector>
+
+namespace mpmpp::detail {
+
+// Column k of Phi: Phi(t, k) = sign * signal[t - lag] for rows t in [t0, t0 + n).
+// `signal` points at sample 0; the caller guarantees signal[t0 - lag .. t0 + n - lag)
+// is readable (zero-padded history where the model assumes zero initial state).
+struct LaggedColumn {
+  const double* signal;
+  Eigen::Index lag;
+  double sign;
+};
+
+// G = Phi^T Phi and h = Phi^T target[t0 .. t0 + n) (G, h resized only when p changes).
+void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const double* target,
+                             Eigen::Index t0, Eigen::Index n, Eigen::MatrixXd& G,
+                             Eigen::VectorXd& h);
+
+// residual = target[t0 .. t0 + n) - Phi theta.
+void lagged_residual(const std::vector<LaggedColumn>& columns, const double* target,
+                     Eigen::Index t0, Eigen::Index n, const Eigen::VectorXd& theta,
+                     Eigen::VectorXd& residual);
+
+// Solves the normal equations R theta = f with R = G / n, f = h / n, in the
+// regressor-scaled coordinates Rs = S R S, S = diag(R)^-1/2 (unit-free: y and every u_j
+// may have any engineering unit). Section 3.1 regularisation rule applied to Rs:
+//   use Rs + delta/2 I when ||Rs^-1||_2 = 1/lambda_min(Rs) >= 2/delta, else Rs;
+// delta = 0 disables it. One symmetric eigendecomposition gives the solution, the rule's
+// test, the rank check and the sandwich covariance R_reg^-1 R R_reg^-1 / n.
+class NormalEquationsSolver {
+ public:
+  enum class Status { Ok, ZeroColumn, Singular };
+  struct Outcome {
+    Status status = Status::Ok;
+    Eigen::Index zero_column = -1;  // the first identically-zero regressor (ZeroColumn)
+    bool regularised = false;
+    double min_scaled_eigenvalue = 0.0;
+  };
+
+  // rank_tolerance: lambda_min(Rs) <= rank_tolerance * lambda_max(Rs) means exactly
+  // collinear regressors (the data do not identify the model): Status::Singular.
+  Outcome solve(const Eigen::MatrixXd& G, const Eigen::VectorXd& h, double delta,
+                double rank_tolerance, Eigen::VectorXd& theta);
+  // Unscaled (sum-form) covariance factor C with cov(theta) = sigma^2 C after solve().
+  void covariance_factor(Eigen::MatrixXd& C) const;
+
+ private:
+  Eigen::VectorXd scale_, work_;
+  Eigen::MatrixXd scaled_;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig_;
+  double shift_ = 0.0;
+};
+
+}  // namespace mpmpp::detail

@@ -1,0 +1,130 @@
+#include "mpmpp/arx.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "mpmpp/error.hpp"
+
+namespace mpmpp {
+
+namespace {
+void require_informative_signal(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                const std::string& name) {
+  if (const auto k = (!x.array().isFinite()).count(); k > 0)
+    throw NumericalError("window not informative: " + name + " has " + std::to_string(k) +
+                         " non-finite samples of " + std::to_string(x.size()));
+  const double hi = x.maxCoeff(), lo = x.minCoeff();
+  if (hi - lo <= 1e-12 * std::max(std::abs(hi), std::abs(lo)))
+    throw NumericalError("window not informative: " + name + " is constant over the window");
+}
+}  // namespace
+
+void require_informative_window(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                const Eigen::Ref<const Eigen::MatrixXd>& u) {
+  require_informative_signal(y, "y");
+  for (Eigen::Index j = 0; j < u.cols(); ++j)
+    require_informative_signal(u.col(j), "u[" + std::to_string(j) + "]");
+}
+
+ArxEstimator::ArxEstimator(ArxOrders orders, ArxOptions options)
+    : orders_(std::move(orders)), options_(options) {
+  const std::size_t m = orders_.nb.size();
+  if (orders_.na < 0) throw InputError("na must be >= 0, got " + std::to_string(orders_.na));
+  if (m == 0) throw InputError("nb must name at least one input");
+  if (orders_.delays.size() != m)
+    throw InputError("delays must have one entry per input (" + std::to_string(m) + "), got " +
+                     std::to_string(orders_.delays.size()));
+  if (!(options_.delta >= 0.0)) throw InputError("delta must be >= 0");
+  if (!(options_.rank_tolerance >= 0.0)) throw InputError("rank_tolerance must be >= 0");
+  t0_ = orders_.na;
+  p_ = orders_.na;
+  for (std::size_t j = 0; j < m; ++j) {
+    if (orders_.nb[j] < 1)
+      throw InputError("nb[" + std::to_string(j) + "] must be >= 1, got " +
+                       std::to_string(orders_.nb[j]));
+    if (orders_.delays[j] < 0)
+      throw InputError("delays[" + std::to_string(j) + "] must be >= 0, got " +
+                       std::to_string(orders_.delays[j]));
+    t0_ = std::max<Eigen::Index>(t0_, orders_.delays[j] + orders_.nb[j] - 1);
+    p_ += orders_.nb[j];
+  }
+  columns_.resize(static_cast<std::size_t>(p_));
+}
+
+void ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
+                            const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out) {
+  const Eigen::Index N = y.size();
+  const Eigen::Index m = static_cast<Eigen::Index>(orders_.nb.size());
+  if (u.cols() != m)
+    throw InputError("u must have one column per input (" + std::to_string(m) + "), got " +
+                     std::to_string(u.cols()));
+  if (u.rows() != N)
+    throw InputError("u must have as many rows as y has samples (" + std::to_string(N) +
+                     "), got " + std::to_string(u.rows()));
+  if (N < min_window())
+    throw NumericalError("window too short for the ARX orders: " + std::to_string(N) +
+                         " samples, need at least " + std::to_string(min_window()) + " (" +
+                         std::to_string(p_) + " parameters, first equation at t0 = " +
+                         std::to_string(t0_) + ")");
+  require_informative_window(y, u);
+
+  // Regressor phi(t) = [-y(t-1) .. -y(t-na), u_j(t-d_j) .. u_j(t-d_j-nb_j+1) ...] (eq. 6).
+  std::size_t c = 0;
+  for (int k = 1; k <= orders_.na; ++k) columns_[c++] = {y.data(), k, -1.0};
+  for (Eigen::Index j = 0; j < m; ++j)
+    for (int k = 0; k < orders_.nb[j]; ++k)
+      columns_[c++] = {u.col(j).data(), orders_.delays[j] + k, 1.0};
+
+  const Eigen::Index n_eq = N - t0_;
+  detail::lagged_normal_equations(columns_, y.data(), t0_, n_eq, G_, h_);
+  const auto outcome = solver_.solve(G_, h_, options_.delta, options_.rank_tolerance, out.theta);
+  using Status = detail::NormalEquationsSolver::Status;
+  if (outcome.status == Status::ZeroColumn) {
+    const Eigen::Index k = outcome.zero_column;
+    std::string what = "y";
+    if (k >= orders_.na) {
+      Eigen::Index j = 0, first = orders_.na;
+      while (k >= first + orders_.nb[j]) first += orders_.nb[j++];
+      what = "u[" + std::to_string(j) + "]";
+    }
+    throw NumericalError("window not informative: " + what +
+                         " is constant (zero after mean removal) over the ARX equations");
+  }
+  if (outcome.status == Status::Singular)
+    throw NumericalError(
+        "window not informative: the ARX regressors are collinear (rank-deficient R; "
+        "the inputs do not excite the orders na/nb)");
+
+  detail::lagged_residual(columns_, y.data(), t0_, n_eq, out.theta, residual_);
+  out.equations = n_eq;
+  out.noise_variance = residual_.squaredNorm() / static_cast<double>(n_eq - p_);
+  out.regularised = outcome.regularised;
+  solver_.covariance_factor(out.covariance);
+  out.covariance *= out.noise_variance;
+
+  out.a.resize(orders_.na + 1);
+  out.a[0] = 1.0;
+  out.a.tail(orders_.na) = out.theta.head(orders_.na);
+  out.b.resize(static_cast<std::size_t>(m));
+  Eigen::Index offset = orders_.na;
+  for (Eigen::Index j = 0; j < m; ++j) {
+    out.b[j] = out.theta.segment(offset, orders_.nb[j]);
+    offset += orders_.nb[j];
+  }
+}
+
+ArxResult ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                 const Eigen::Ref<const Eigen::MatrixXd>& u) {
+  ArxResult out;
+  estimate(y, u, out);
+  return out;
+}
+
+ArxResult arx(const Eigen::Ref<const Eigen::VectorXd>& y,
+              const Eigen::Ref<const Eigen::MatrixXd>& u, const ArxOrders& orders,
+              const ArxOptions& options) {
+  return ArxEstimator(orders, options).estimate(y, u);
+}
+
+}  // namespace mpmpp

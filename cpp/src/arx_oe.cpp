@@ -1,0 +1,139 @@
+#include "mpmpp/arx_oe.hpp"
+
+#include <cmath>
+
+#include "mpmpp/error.hpp"
+
+namespace mpmpp {
+
+int fir_length_to_one_percent(const TransferFunction& nominal) {
+  if (nominal.is_zero()) throw InputError("nominal transfer function is zero: give fir_length");
+  for (int n = 4096; n <= 1 << 20; n *= 2) {
+    const Eigen::VectorXd g = nominal.impulse(n).cwiseAbs();
+    const double threshold = 0.01 * g.maxCoeff();
+    Eigen::Index last = n - 1;
+    while (g[last] < threshold) --last;
+    // Decayed when the last quarter of the computed response stays below the threshold.
+    if (last < n - n / 4) return static_cast<int>(last + 1);
+  }
+  throw InputError("nominal impulse response does not fall below 1% of its peak within 1,000,000 samples "
+                   "(integrating or unstable?): give fir_length");
+}
+
+void detrend_in_place(Eigen::Ref<Eigen::VectorXd> x, Detrend mode) {
+  const Eigen::Index n = x.size();
+  if (mode == Detrend::None || n == 0) return;
+  const double mean = x.mean();
+  if (mode == Detrend::Mean || n < 2) {
+    x.array() -= mean;
+    return;
+  }
+  // Least-squares line on centred time tc = t - (n-1)/2: slope = sum(tc x) / sum(tc^2).
+  const double centre = 0.5 * static_cast<double>(n - 1);
+  double sxt = 0.0, stt = 0.0;
+  for (Eigen::Index t = 0; t < n; ++t) {
+    const double tc = static_cast<double>(t) - centre;
+    sxt += tc * x[t];
+    stt += tc * tc;
+  }
+  const double slope = sxt / stt;
+  for (Eigen::Index t = 0; t < n; ++t) x[t] -= mean + slope * (static_cast<double>(t) - centre);
+}
+
+ArxOeEstimator::ArxOeEstimator(ArxOeConfig config)
+    : config_(std::move(config)),
+      arx_(config_.arx, config_.arx_options),
+      oe_(config_.structures, config_.oe_options) {
+  const std::size_t m = config_.arx.nb.size();
+  if (config_.structures.size() != m)
+    throw InputError("structures must have one entry per input (" + std::to_string(m) + ")");
+  if (config_.fir_length.size() != m)
+    throw InputError("fir_length must have one entry per input (" + std::to_string(m) + ")");
+  for (std::size_t j = 0; j < m; ++j)
+    if (config_.fir_length[j] < 1)
+      throw InputError("fir_length[" + std::to_string(j) + "] must be >= 1");
+  start_impulse_.resize(m);
+}
+
+void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
+                              const Eigen::Ref<const Eigen::MatrixXd>& u, ArxOeResult& out) {
+  const Eigen::Index N = y.size(), m = static_cast<Eigen::Index>(config_.structures.size());
+  if (u.cols() != m || u.rows() != N)
+    throw InputError("u must be " + std::to_string(N) + " x " + std::to_string(m) + ", got " +
+                     std::to_string(u.rows()) + " x " + std::to_string(u.cols()));
+  // Checked on the raw window: after mean removal a constant signal is rounding noise.
+  require_informative_window(y, u);
+
+  // 1. detrended copies in the reused workspace (the ARX/OE below only take views).
+  y_ = y;
+  u_ = u;
+  detrend_in_place(y_, config_.detrend);
+  for (Eigen::Index j = 0; j < m; ++j) detrend_in_place(u_.col(j), config_.detrend);
+
+  // 2. high-order ARX.
+  arx_.estimate(y_, u_, out.arx);
+  const Eigen::VectorXd& a = out.arx.a;
+  const int na = config_.arx.na;
+
+  // 3. A(q)-filtered data (A is FIR: numerator a, denominator 1).
+  yf_.resize(N);
+  uf_.resize(N, m);
+  filter_into(a, one_, 0, y_, yf_);
+  for (Eigen::Index j = 0; j < m; ++j) filter_into(a, one_, 0, u_.col(j), uf_.col(j));
+
+  // 4. OE started from the ARX estimate G_j = q^-d_j B_j / A (impulse after the delay).
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const int L = oe_.start_impulse_length(static_cast<std::size_t>(j));
+    pulse_.setZero(L);
+    if (L > 0) pulse_[0] = 1.0;
+    start_impulse_[j].resize(L);
+    filter_into(out.arx.b[j], a, 0, pulse_, start_impulse_[j]);
+  }
+  oe_.estimate(yf_, uf_, na, out.oe, &start_impulse_);
+
+  out.noise = a.tail(na);
+  out.channels.resize(static_cast<std::size_t>(m));
+  for (Eigen::Index j = 0; j < m; ++j) {
+    ChannelEstimate& c = out.channels[j];
+    c.b = out.oe.b[j];
+    c.f = out.oe.f[j];
+    c.delay = config_.structures[j].delay;
+    c.gain = c.b.sum() / c.f.sum();
+    pulse_.setZero(config_.fir_length[j]);
+    pulse_[0] = 1.0;
+    c.fir.resize(config_.fir_length[j]);
+    filter_into(c.b, c.f, c.delay, pulse_, c.fir);
+  }
+}
+
+ArxOeResult ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                     const Eigen::Ref<const Eigen::MatrixXd>& u) {
+  ArxOeResult out;
+  estimate(y, u, out);
+  return out;
+}
+
+std::vector<WindowEstimate> ArxOeEstimator::estimate_windows(
+    const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,
+    Eigen::Index window, Eigen::Index step) {
+  if (window < 1) throw InputError("window must be >= 1 sample");
+  if (step < 1) throw InputError("step must be >= 1 sample");
+  if (u.rows() != y.size())
+    throw InputError("u must have as many rows as y has samples (" + std::to_string(y.size()) +
+                     "), got " + std::to_string(u.rows()));
+  std::vector<WindowEstimate> windows;
+  if (y.size() >= window) windows.reserve(static_cast<std::size_t>((y.size() - window) / step + 1));
+  for (Eigen::Index s = 0; s + window <= y.size(); s += step) {
+    WindowEstimate& w = windows.emplace_back();
+    w.start = s;
+    try {
+      estimate(y.segment(s, window), u.middleRows(s, window), w.result);
+      w.ok = true;
+    } catch (const NumericalError& e) {
+      w.message = e.what();
+    }
+  }
+  return windows;
+}
+
+}  // namespace mpmpp

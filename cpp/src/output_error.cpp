@@ -1,0 +1,315 @@
+#include "mpmpp/output_error.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <string>
+
+#include "mpmpp/arx.hpp"
+#include "mpmpp/error.hpp"
+#include "mpmpp/transfer_function.hpp"
+
+namespace mpmpp {
+
+OutputErrorEstimator::OutputErrorEstimator(std::vector<OeChannel> channels, OeOptions options)
+    : channels_(std::move(channels)), options_(options) {
+  if (channels_.empty()) throw InputError("channels must name at least one input");
+  for (std::size_t j = 0; j < channels_.size(); ++j) {
+    const auto& c = channels_[j];
+    const std::string at = "channels[" + std::to_string(j) + "]";
+    if (c.nb < 1) throw InputError(at + ".nb must be >= 1, got " + std::to_string(c.nb));
+    if (c.nf < 0) throw InputError(at + ".nf must be >= 0, got " + std::to_string(c.nf));
+    if (c.delay < 0) throw InputError(at + ".delay must be >= 0, got " + std::to_string(c.delay));
+    p_ += c.nb + c.nf;
+    if (c.nf > 0) ++nonlinear_channels_;
+  }
+  if (options_.max_iterations < 1) throw InputError("max_iterations must be >= 1");
+  if (!(options_.max_pole_radius > 0.0 && options_.max_pole_radius < 1.0))
+    throw InputError("max_pole_radius must be in (0, 1)");
+  if (options_.init_fir_length < 0) throw InputError("init_fir_length must be >= 0");
+  const std::size_t m = channels_.size();
+  yhat_.resize(m);
+  w_.resize(m);
+  v_.resize(m);
+  unit_ = Eigen::VectorXd::Ones(1);
+}
+
+int OutputErrorEstimator::start_impulse_length(std::size_t j) const {
+  const OeChannel& c = channels_[j];
+  if (c.nf == 0) return c.nb;
+  return options_.init_fir_length > 0 ? options_.init_fir_length : std::max(30, c.nb + c.nf + 10);
+}
+
+int OutputErrorEstimator::init_fir_length(std::size_t j, Eigen::Index n_eq) const {
+  if (channels_[j].nf == 0) return channels_[j].nb;
+  int linear_coefficients = 0;
+  for (const auto& other : channels_)
+    if (other.nf == 0) linear_coefficients += other.nb;
+  // Keep >= 4 equations per FIR coefficient in the joint start fit.
+  const Eigen::Index budget = (n_eq / 4 - linear_coefficients) / nonlinear_channels_;
+  return static_cast<int>(std::clamp<Eigen::Index>(budget, 0, start_impulse_length(j)));
+}
+
+void OutputErrorEstimator::unpack(const Eigen::VectorXd& theta, OeResult& par) const {
+  Eigen::Index k = 0;
+  for (std::size_t j = 0; j < channels_.size(); ++j) {
+    const auto& c = channels_[j];
+    par.b[j] = theta.segment(k, c.nb);
+    k += c.nb;
+    par.f[j].resize(c.nf + 1);
+    par.f[j][0] = 1.0;
+    par.f[j].tail(c.nf) = theta.segment(k, c.nf);
+    k += c.nf;
+  }
+}
+
+void OutputErrorEstimator::pack(const OeResult& par, Eigen::VectorXd& theta) const {
+  theta.resize(p_);
+  Eigen::Index k = 0;
+  for (std::size_t j = 0; j < channels_.size(); ++j) {
+    const auto& c = channels_[j];
+    theta.segment(k, c.nb) = par.b[j];
+    k += c.nb;
+    theta.segment(k, c.nf) = par.f[j].tail(c.nf);
+    k += c.nf;
+  }
+}
+
+void OutputErrorEstimator::stabilise(Eigen::VectorXd& f) const {
+  const double rmax = options_.max_pole_radius;
+  const Eigen::Index nf = f.size() - 1;
+  if (nf == 0) return;
+  // Reflect z -> 1/conj(z) (same magnitude response up to a gain) and cap the radius.
+  const auto project = [rmax](std::complex<double> z) {
+    if (std::abs(z) > 1.0) z = 1.0 / std::conj(z);
+    if (std::abs(z) > rmax) z *= rmax / std::abs(z);
+    return z;
+  };
+  if (nf == 1) {  // root z = -f1: no eigenvalue problem on the hot path
+    if (std::abs(f[1]) > rmax) f[1] = -project(-f[1]).real();
+    return;
+  }
+  const Eigen::VectorXcd roots = poly_roots(f);
+  if (roots.size() == 0 || roots.cwiseAbs().maxCoeff() <= rmax) return;
+  Eigen::VectorXcd c = Eigen::VectorXcd::Zero(nf + 1);
+  c[0] = 1.0;
+  for (Eigen::Index r = 0; r < roots.size(); ++r) {  // c *= (1 - z_r q^-1)
+    const std::complex<double> z = project(roots[r]);
+    for (Eigen::Index k = r + 1; k >= 1; --k) c[k] -= z * c[k - 1];
+  }
+  f = c.real();  // trailing zero coefficients (roots at the origin) stay zero
+}
+
+void OutputErrorEstimator::prony_start(std::size_t j, const Eigen::Ref<const Eigen::VectorXd>& g,
+                                       Eigen::VectorXd& b, Eigen::VectorXd& f) const {
+  // F(q) G(q) = B(q): for k >= nb, g_k + sum_i f_i g_{k-i} = 0 (least squares in f),
+  // then b_k = g_k + sum_i f_i g_{k-i} for k < nb (Kalman's / Prony's method).
+  const int nb = channels_[j].nb, nf = channels_[j].nf;
+  const Eigen::Index L = g.size();
+  const auto at = [&g](Eigen::Index k) { return k >= 0 && k < g.size() ? g[k] : 0.0; };
+  f = Eigen::VectorXd::Zero(nf + 1);
+  f[0] = 1.0;
+  if (nf > 0 && L - nb >= nf) {
+    Eigen::MatrixXd M(L - nb, nf);
+    Eigen::VectorXd rhs(L - nb);
+    for (Eigen::Index k = nb; k < L; ++k) {
+      rhs[k - nb] = -g[k];
+      for (int i = 1; i <= nf; ++i) M(k - nb, i - 1) = at(k - i);
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(M);
+    // A rank-deficient M (e.g. a zero impulse response) keeps F = 1: poles at the origin.
+    if (qr.rank() == nf) f.tail(nf) = qr.solve(rhs);
+    stabilise(f);
+  }
+  b.resize(nb);
+  for (int k = 0; k < nb; ++k) {
+    double s = at(k);
+    for (int i = 1; i <= std::min(k, nf); ++i) s += f[i] * at(k - i);
+    b[k] = s;
+  }
+}
+
+double OutputErrorEstimator::simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
+                                      Eigen::Index skip, Eigen::Index N, const OeResult& par) {
+  error_ = Eigen::Map<const Eigen::VectorXd>(y, N);
+  for (std::size_t j = 0; j < channels_.size(); ++j) {
+    auto yhat = yhat_[j].segment(pad_, N);
+    filter_into(par.b[j], par.f[j], channels_[j].delay, u.col(j), yhat);
+    error_ -= yhat;
+  }
+  return 0.5 * error_.tail(N - skip).squaredNorm();
+}
+
+void OutputErrorEstimator::jacobian_columns(const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                            Eigen::Index N, const OeResult& par) {
+  columns_.resize(static_cast<std::size_t>(p_));
+  std::size_t c = 0;
+  for (std::size_t j = 0; j < channels_.size(); ++j) {
+    const OeChannel& ch = channels_[j];
+    // Sensitivity filters: w_j = q^-d_j / F_j u_j, v_j = 1 / F_j yhat_j.
+    filter_into(unit_, par.f[j], ch.delay, u.col(j), w_[j].segment(pad_, N));
+    for (int k = 0; k < ch.nb; ++k) columns_[c++] = {w_[j].data() + pad_, k, 1.0};
+    if (ch.nf == 0) continue;
+    filter_into(unit_, par.f[j], 0, yhat_[j].segment(pad_, N), v_[j].segment(pad_, N));
+    for (int i = 1; i <= ch.nf; ++i) columns_[c++] = {v_[j].data() + pad_, i, -1.0};
+  }
+}
+
+void OutputErrorEstimator::throw_if_not_informative(
+    const detail::NormalEquationsSolver::Outcome& o, const char* where) const {
+  using Status = detail::NormalEquationsSolver::Status;
+  if (o.status == Status::Ok) return;
+  throw NumericalError(std::string("data not informative for the OE structure: ") + where +
+                       (o.status == Status::ZeroColumn ? " has a regressor with no energy"
+                                                       : " is rank-deficient"));
+}
+
+void OutputErrorEstimator::fir_start(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
+                                     Eigen::Index skip, Eigen::Index N, OeResult& out) {
+  // Joint FIR least squares: channel j gets L_j taps on q^-d_j u_j (nb_j taps if linear).
+  columns_.clear();
+  for (std::size_t j = 0; j < channels_.size(); ++j) {
+    const OeChannel& ch = channels_[j];
+    auto w = w_[j].segment(pad_, N);
+    const Eigen::Index d = std::min<Eigen::Index>(ch.delay, N);
+    w.head(d).setZero();
+    w.tail(N - d) = u.col(j).head(N - d);
+    const int L = init_fir_length(j, N - skip);
+    for (int k = 0; k < L; ++k) columns_.push_back({w_[j].data() + pad_, k, 1.0});
+  }
+  detail::lagged_normal_equations(columns_, y, skip, N - skip, G_, h_);
+  throw_if_not_informative(solver_.solve(G_, h_, 0.0, options_.rank_tolerance, theta_),
+                           "the FIR start fit");
+  Eigen::Index k = 0;
+  for (std::size_t j = 0; j < channels_.size(); ++j) {
+    const int L = init_fir_length(j, N - skip);
+    prony_start(j, theta_.segment(k, L), out.b[j], out.f[j]);
+    k += L;
+  }
+}
+
+void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                    const Eigen::Ref<const Eigen::MatrixXd>& u, Eigen::Index skip,
+                                    OeResult& out,
+                                    const std::vector<Eigen::VectorXd>* initial_impulse) {
+  const Eigen::Index N = y.size();
+  const std::size_t m = channels_.size();
+  if (u.cols() != static_cast<Eigen::Index>(m))
+    throw InputError("u must have one column per channel (" + std::to_string(m) + "), got " +
+                     std::to_string(u.cols()));
+  if (u.rows() != N)
+    throw InputError("u must have as many rows as y has samples (" + std::to_string(N) +
+                     "), got " + std::to_string(u.rows()));
+  if (skip < 0) throw InputError("skip must be >= 0");
+  if (initial_impulse && initial_impulse->size() != m)
+    throw InputError("initial_impulse must have one response per channel");
+  const Eigen::Index n_eq = N - skip;
+  if (n_eq < 2 * p_)
+    throw NumericalError("window too short for the OE structure: " + std::to_string(n_eq) +
+                         " equations for " + std::to_string(p_) + " parameters (need >= " +
+                         std::to_string(2 * p_) + ")");
+  require_informative_window(y, u);
+
+  // History the lagged columns may reach before sample 0 (zero initial state).
+  pad_ = 0;
+  for (std::size_t j = 0; j < m; ++j) {
+    const int L = (!initial_impulse || channels_[j].nf == 0) ? init_fir_length(j, n_eq) : 0;
+    if (channels_[j].nf > 0 && !initial_impulse && L < channels_[j].nb + channels_[j].nf)
+      throw NumericalError("window too short for the OE start fit: " + std::to_string(n_eq) +
+                           " equations");
+    pad_ = std::max<Eigen::Index>(pad_, std::max({channels_[j].nb - 1, channels_[j].nf, L - 1}));
+  }
+  for (std::size_t j = 0; j < m; ++j)
+    for (auto* buf : {&yhat_[j], &w_[j], &v_[j]}) {
+      buf->resize(pad_ + N);
+      buf->head(pad_).setZero();
+    }
+  out.b.resize(m);
+  out.f.resize(m);
+  candidate_.b.resize(m);
+  candidate_.f.resize(m);
+  out.equations = n_eq;
+  out.iterations = 0;
+
+  if (initial_impulse && !linear()) {
+    for (std::size_t j = 0; j < m; ++j) prony_start(j, (*initial_impulse)[j], out.b[j], out.f[j]);
+  } else {
+    fir_start(u, y.data(), skip, N, out);
+  }
+
+  double cost = simulate(u, y.data(), skip, N, out);
+  out.converged = linear();  // the FIR least-squares start is then the optimum
+  pack(out, theta_);
+  double lambda = 1e-3;
+  while (!out.converged && out.iterations < options_.max_iterations) {
+    ++out.iterations;
+    jacobian_columns(u, N, out);
+    detail::lagged_normal_equations(columns_, error_.data(), skip, n_eq, G_, h_);
+    const double residual_norm = std::sqrt(2.0 * cost);
+    bool stationary = true;  // every sensitivity is orthogonal to the residual
+    for (Eigen::Index k = 0; k < p_ && stationary; ++k)
+      stationary = std::abs(h_[k]) <=
+                   options_.gradient_tolerance * std::sqrt(G_(k, k)) * residual_norm;
+    if (stationary) {
+      out.converged = true;
+      break;
+    }
+    bool accepted = false;
+    while (!accepted) {
+      A_ = G_;
+      A_.diagonal() += lambda * G_.diagonal();  // Marquardt's scaling
+      ldlt_.compute(A_);
+      delta_ = ldlt_.solve(h_);
+      candidate_theta_ = theta_ + delta_;
+      unpack(candidate_theta_, candidate_);
+      for (std::size_t j = 0; j < m; ++j) stabilise(candidate_.f[j]);
+      pack(candidate_, candidate_theta_);
+      const double candidate_cost =
+          delta_.allFinite() ? simulate(u, y.data(), skip, N, candidate_) : INFINITY;
+      if (candidate_cost < cost) {
+        accepted = true;
+        lambda = std::max(lambda / 10.0, 1e-12);
+        const double step = (candidate_theta_ - theta_).cwiseAbs().maxCoeff();
+        theta_.swap(candidate_theta_);
+        std::swap(out.b, candidate_.b);
+        std::swap(out.f, candidate_.f);
+        cost = candidate_cost;
+        if (step <= options_.step_tolerance * (theta_.cwiseAbs().maxCoeff() + options_.step_tolerance))
+          out.converged = true;
+      } else if (lambda > 1e12) {
+        // No descent direction left at any damping: theta is a (numerical) minimum.
+        out.converged = true;
+        cost = simulate(u, y.data(), skip, N, out);  // restore yhat_/error_ at theta
+        break;
+      } else {
+        lambda *= 10.0;
+      }
+    }
+  }
+
+  // Covariance sigma^2 (J'J)^-1 at the estimate; J'J also tells whether it is identified.
+  jacobian_columns(u, N, out);
+  detail::lagged_normal_equations(columns_, error_.data(), skip, n_eq, G_, h_);
+  throw_if_not_informative(solver_.solve(G_, h_, 0.0, options_.rank_tolerance, delta_),
+                           "the OE Jacobian at the estimate");
+  out.theta = theta_;
+  out.cost = cost;
+  out.noise_variance = 2.0 * cost / static_cast<double>(n_eq - p_);
+  solver_.covariance_factor(out.covariance);
+  out.covariance *= out.noise_variance;
+}
+
+OeResult OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                        const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                        Eigen::Index skip) {
+  OeResult out;
+  estimate(y, u, skip, out);
+  return out;
+}
+
+OeResult oe(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,
+            const std::vector<OeChannel>& channels, Eigen::Index skip, const OeOptions& options) {
+  return OutputErrorEstimator(channels, options).estimate(y, u, skip);
+}
+
+}  // namespace mpmpp

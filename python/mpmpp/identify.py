@@ -1,0 +1,123 @@
+"""Closed-loop ARX-OE identification (paper Section 3) on NumPy arrays.
+
+``arx`` is the high-order MISO ARX step, ``oe`` the output-error fit, ``arx_oe`` the
+per-window pipeline (mean removal, ARX, A(q)-filtering, OE) and ``arx_oe_windows`` the
+same over moving windows of a long series. The numerics are in C++ (``mpmpp._core``);
+see docs/identification.md for conventions (nb counts coefficients, delays are known).
+"""
+from __future__ import annotations
+
+from typing import Sequence, Union
+
+import numpy as np
+
+from . import _core
+
+IntOrList = Union[int, Sequence[int]]
+
+__all__ = ["arx", "oe", "arx_oe", "arx_oe_windows", "channels", "fir_length_to_one_percent"]
+
+fir_length_to_one_percent = _core.fir_length_to_one_percent
+
+
+def _as_signals(y, u):
+    y = np.asarray(y, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if y.ndim != 1:
+        raise ValueError(f"y must be 1-D (samples), got shape {y.shape}")
+    if u.ndim == 1:
+        u = u[:, None]
+    if u.ndim != 2:
+        raise ValueError(f"u must be 1-D or 2-D (samples x inputs), got shape {u.shape}")
+    if u.shape[0] != y.shape[0]:
+        raise ValueError(f"u must have {y.shape[0]} rows (the samples of y), got {u.shape[0]}")
+    # Column-major so every input is one contiguous array for the C++ side (one copy).
+    return y, np.asfortranarray(u)
+
+
+def _per_input(value: IntOrList, m: int, name: str) -> list[int]:
+    values = [int(value)] * m if np.isscalar(value) else [int(v) for v in value]
+    if len(values) != m:
+        raise ValueError(f"{name} must have one entry per input ({m}), got {len(values)}")
+    return values
+
+
+def channels(delays: IntOrList, structure: str = "foptd", nb: IntOrList = 1,
+             nf: IntOrList = 1, m: int | None = None) -> list:
+    """OE structures per input: 'foptd' (b q^-d / (1 + f q^-1)), 'oe' (nb, nf) or
+    'fir' (nb taps from q^-d on)."""
+    m = len(delays) if m is None and not np.isscalar(delays) else (m or 1)
+    d = _per_input(delays, m, "delays")
+    if structure == "foptd":
+        return [_core.OeChannel.foptd(dj) for dj in d]
+    if structure == "oe":
+        return [_core.OeChannel(b, f, dj) for b, f, dj in
+                zip(_per_input(nb, m, "nb"), _per_input(nf, m, "nf"), d)]
+    if structure == "fir":
+        return [_core.OeChannel.fir(b, dj) for b, dj in zip(_per_input(nb, m, "nb"), d)]
+    raise ValueError(f"structure must be 'foptd', 'oe' or 'fir', got {structure!r}")
+
+
+def arx(y, u, na: int, nb: IntOrList, delays: IntOrList, *, delta: float = 1e-4,
+        rank_tolerance: float = 1e-10):
+    """High-order ARX  A(q) y = sum_j q^-d_j B_j(q) u_j + e  by (regularised) least squares.
+
+    nb counts the coefficients of each B_j (paper's order n = 9: na=9, nb=10). Returns
+    an ``ArxResult`` (a, b, theta, covariance, noise_variance, equations, regularised).
+    The data are used as given (no mean removal)."""
+    y, u = _as_signals(y, u)
+    m = u.shape[1]
+    return _core.arx(y, u, int(na), _per_input(nb, m, "nb"), _per_input(delays, m, "delays"),
+                     delta=delta, rank_tolerance=rank_tolerance)
+
+
+def oe(y, u, delays: IntOrList, structure: str = "foptd", nb: IntOrList = 1,
+       nf: IntOrList = 1, *, skip: int = 0, max_iterations: int = 200,
+       max_pole_radius: float = 0.9999, init_fir_length: int = 0):
+    """Output-error fit of all channels of one output jointly (criterion over t >= skip,
+    zero initial state). Returns an ``OeResult`` (b, f, theta, covariance, cost, ...)."""
+    y, u = _as_signals(y, u)
+    chans = channels(delays, structure, nb, nf, m=u.shape[1])
+    return _core.oe(y, u, chans, skip=skip, max_iterations=max_iterations,
+                    max_pole_radius=max_pole_radius, init_fir_length=init_fir_length)
+
+
+def _estimator(m, na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend, delta,
+               max_iterations, max_pole_radius):
+    return _core.ArxOeEstimator(
+        int(na), _per_input(nb, m, "nb"), _per_input(delays, m, "delays"),
+        channels(delays, structure, oe_nb, oe_nf, m=m), _per_input(fir_length, m, "fir_length"),
+        detrend=detrend, delta=delta, max_iterations=max_iterations,
+        max_pole_radius=max_pole_radius)
+
+
+def arx_oe(y, u, na: int, nb: IntOrList, delays: IntOrList, *, structure: str = "foptd",
+           oe_nb: IntOrList = 1, oe_nf: IntOrList = 1, fir_length: IntOrList = 60,
+           detrend: str = "mean", delta: float = 1e-4, max_iterations: int = 200,
+           max_pole_radius: float = 0.9999):
+    """ARX-OE estimate of one output from one window: detrend ('none', 'mean', 'linear'),
+    ARX(na, nb, delays), filter by A(q), OE of the given structure. Returns an
+    ``ArxOeResult``: channels[j] (b, f, delay, fir, gain), noise (a_1..a_na), arx, oe.
+    RuntimeError when the window is not informative."""
+    y, u = _as_signals(y, u)
+    est = _estimator(u.shape[1], na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend,
+                     delta, max_iterations, max_pole_radius)
+    return est.estimate(y, u)
+
+
+def arx_oe_windows(y, u, window: int, step: int, na: int, nb: IntOrList, delays: IntOrList,
+                   **options):
+    """``arx_oe`` on the windows [s, s + window), s = 0, step, ..., of a long series.
+    Returns a list of ``WindowEstimate`` (start, ok, message, result); a window that is
+    not informative (missing samples, constant input, ...) has ok=False and the reason."""
+    y, u = _as_signals(y, u)
+    defaults = dict(structure="foptd", oe_nb=1, oe_nf=1, fir_length=60, detrend="mean",
+                    delta=1e-4, max_iterations=200, max_pole_radius=0.9999)
+    unknown = set(options) - set(defaults)
+    if unknown:
+        raise ValueError(f"unknown option(s) for arx_oe_windows: {sorted(unknown)}")
+    defaults.update(options)
+    est = _estimator(u.shape[1], na, nb, delays, defaults["structure"], defaults["oe_nb"],
+                     defaults["oe_nf"], defaults["fir_length"], defaults["detrend"],
+                     defaults["delta"], defaults["max_iterations"], defaults["max_pole_radius"])
+    return est.estimate_windows(y, u, int(window), int(step))

@@ -1,0 +1,144 @@
+"""Independent NumPy/SciPy implementation of the ARX-OE equations (paper Section 3).
+
+Written from the equations, not from the C++: explicit regressor matrices and
+numpy.linalg.lstsq for ARX and FIR, scipy.signal.lfilter for A(q)-filtering and
+simulation, scipy.optimize.least_squares on the OE criterion (10). Used by the tests
+(equality to 1e-8) and by bench/bench_arx_oe.py (the speed peer).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.optimize as so
+import scipy.signal as ss
+
+
+def arx_regressors(y, u, na, nb, delays):
+    """Phi with rows t = t0..N-1: [-y(t-1)..-y(t-na), u_j(t-d_j)..u_j(t-d_j-nb_j+1) ...]."""
+    N = len(y)
+    t0 = max([na] + [d + b - 1 for b, d in zip(nb, delays)])
+    t = np.arange(t0, N)
+    cols = [-y[t - k] for k in range(1, na + 1)]
+    for j, (b, d) in enumerate(zip(nb, delays)):
+        cols += [u[t - d - k, j] for k in range(b)]
+    return np.column_stack(cols), y[t0:]
+
+
+def arx(y, u, na, nb, delays, delta=0.0):
+    """Least squares; with delta > 0 the Section 3.1 rule on the regressor-scaled R
+    (ridge delta/2 * diag(Phi'Phi) when lambda_min(D^-1/2 Phi'Phi D^-1/2) <= delta/2)."""
+    Phi, target = arx_regressors(y, u, na, nb, delays)
+    G = Phi.T @ Phi
+    d = np.sqrt(np.diag(G))
+    lam_min = np.linalg.eigvalsh(G / np.outer(d, d))[0]
+    if delta > 0 and lam_min <= delta / 2:
+        Phi_aug = np.vstack([Phi, np.diag(np.sqrt(delta / 2) * d)])
+        theta = np.linalg.lstsq(Phi_aug, np.r_[target, np.zeros(len(d))], rcond=None)[0]
+        regularised = True
+    else:
+        theta = np.linalg.lstsq(Phi, target, rcond=None)[0]
+        regularised = False
+    eps = target - Phi @ theta
+    return theta, eps @ eps / (len(target) - len(theta)), regularised
+
+
+def simulate(theta, u, chans):
+    """sum_j q^-d_j B_j/F_j u_j with zero initial state; chans = [(nb, nf, d), ...]."""
+    yhat = np.zeros(u.shape[0])
+    k = 0
+    for j, (nb, nf, d) in enumerate(chans):
+        b, f = theta[k:k + nb], theta[k + nb:k + nb + nf]
+        k += nb + nf
+        yhat += ss.lfilter(np.r_[np.zeros(d), b], np.r_[1.0, f], u[:, j])
+    return yhat
+
+
+def oe_jacobian(theta, u, chans, skip):
+    """d eps / d theta = -d yhat / d theta via the sensitivity filters."""
+    cols = []
+    k = 0
+    for j, (nb, nf, d) in enumerate(chans):
+        b, f = theta[k:k + nb], theta[k + nb:k + nb + nf]
+        k += nb + nf
+        F = np.r_[1.0, f]
+        w = ss.lfilter(np.r_[np.zeros(d), 1.0], F, u[:, j])
+        yj = ss.lfilter(np.r_[np.zeros(d), b], F, u[:, j])
+        v = ss.lfilter([1.0], F, yj)
+        cols += [np.r_[np.zeros(i), w[:len(w) - i]] for i in range(nb)]
+        cols += [-np.r_[np.zeros(i), v[:len(v) - i]] for i in range(1, nf + 1)]
+    return -np.column_stack(cols)[skip:]
+
+
+def oe(y, u, chans, theta0, skip=0):
+    """least_squares on eps(t) = y(t) - sum_j G_j u_j(t), t >= skip, from theta0."""
+    res = so.least_squares(lambda th: (y - simulate(th, u, chans))[skip:], theta0,
+                           jac=lambda th: oe_jacobian(th, u, chans, skip), method="lm",
+                           xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=2000)
+    return res.x
+
+
+def prony(g, nb, nf):
+    """Kalman/Prony fit of B/F (nb, nf) to an impulse response g (sample 0 after the delay)."""
+    L = len(g)
+    gz = np.r_[np.zeros(nf), g]  # gz[k + nf] = g[k], zero before 0
+    f = np.zeros(nf)
+    if nf > 0 and L - nb >= nf:
+        M = np.array([[gz[k - i + nf] for i in range(1, nf + 1)] for k in range(nb, L)])
+        f = np.linalg.lstsq(M, -g[nb:], rcond=None)[0]
+        roots = np.roots(np.r_[1.0, f])
+        if np.any(np.abs(roots) > 0.9999):  # reflect and cap, as the C++ does
+            roots = np.where(np.abs(roots) > 1, 1 / np.conj(roots), roots)
+            roots = np.where(np.abs(roots) > 0.9999, roots * 0.9999 / np.abs(roots), roots)
+            f = np.real(np.poly(roots))[1:]
+    b = np.array([g[k] + sum(f[i - 1] * gz[k - i + nf] for i in range(1, min(k, nf) + 1))
+                  for k in range(nb)])
+    return np.r_[b, f]
+
+
+def arx_oe(y, u, na, nb, delays, chans, fir_length, detrend="constant", start_length=30):
+    """The whole per-window pipeline; returns (theta_oe, a, gains, firs)."""
+    y = ss.detrend(y, type=detrend)
+    u = ss.detrend(u, axis=0, type=detrend)
+    theta_arx, _, _ = arx(y, u, na, nb, delays, delta=1e-4)
+    a = np.r_[1.0, theta_arx[:na]]
+    yf = ss.lfilter(a, [1.0], y)
+    uf = ss.lfilter(a, [1.0], u, axis=0)
+    theta0, k = [], na
+    impulse = np.r_[1.0, np.zeros(start_length - 1)]
+    for j, (cnb, cnf, d) in enumerate(chans):
+        g = ss.lfilter(theta_arx[k:k + nb[j]], a, impulse)
+        k += nb[j]
+        theta0.append(prony(g, cnb, cnf))
+    theta = oe(yf, uf, chans, np.concatenate(theta0), skip=na)
+    gains, firs, k = [], [], 0
+    for (cnb, cnf, d), L in zip(chans, fir_length):
+        b, f = theta[k:k + cnb], np.r_[1.0, theta[k + cnb:k + cnb + cnf]]
+        k += cnb + cnf
+        gains.append(b.sum() / f.sum())
+        firs.append(ss.lfilter(np.r_[np.zeros(d), b], f, np.r_[1.0, np.zeros(L - 1)]))
+    return theta, a, np.array(gains), firs
+
+
+def saturating_loop(G, H, sigma, N, seed, kp=2.0, ki=0.05, u_limit=0.3, move_limit=0.05):
+    """Closed loop y = G u + H e under a PI controller with amplitude and move limits
+    (the limits make the controller nonlinear, so the routine data are informative)."""
+    rng = np.random.default_rng(seed)
+    v = ss.lfilter(H[0], H[1], sigma * rng.standard_normal(N))
+    (bg, ag, dg) = G
+    y = np.zeros(N)
+    u = np.zeros(N)
+    integ = 0.0
+    nb, na = len(bg), len(ag)
+    for t in range(N):
+        acc = v[t]
+        for k in range(nb):
+            if t - dg - k >= 0:
+                acc += bg[k] * u[t - dg - k]
+        for k in range(1, na):
+            if t - k >= 0:
+                acc -= ag[k] * (y[t - k] - v[t - k])
+        y[t] = acc
+        integ += -y[t]
+        target = np.clip(kp * -y[t] + ki * integ, -u_limit, u_limit)
+        prev = u[t - 1] if t > 0 else 0.0
+        u[t] = prev + np.clip(target - prev, -move_limit, move_limit)
+    return y, u

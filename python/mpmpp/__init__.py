@@ -8,3 +8,6 @@ from ._core import TransferFunction
 from ._core import QpResult, QpSolver, solve_qp
 from .io import Model, load_data, load_model, save_data, save_model
 from . import identify
+from .compare import compare
+from .diagnose import diagnose
+from .update import update

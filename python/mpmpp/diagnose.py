@@ -56,7 +56,8 @@ DELAY_RANGE = (-10, 15)      # new delay = model delay + this range (samples)
 COUPLING_POLES = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98)
 # Delay >= 1: in closed loop u(t) may already react to y(t), a lag-0 channel would fit feedback.
 COUPLING_DELAYS = range(1, 41)
-DRIFT_POLES = (0.99, 0.995, 0.998, 0.999)
+DRIFT_POLES = (0.995, 0.998, 0.999, 0.9995)
+DRIFT_ZEROS = (0.8, 0.9, 0.95, 0.98)
 BACKLASH_WIDTHS = (0.5, 1.0, 2.0, 4.0)   # times the median absolute MV move
 MAX_FINDINGS_PER_OUTPUT = 3
 DEBUG = False
@@ -613,8 +614,11 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float):
     """noise_change / output_drift on an output whose process model passed."""
     e = out.e
     ok = np.isfinite(e) & (out.weight > 0)
+    ramp_onset, ramp_stat = _drift_onset(out, first_onset)
     if out.split_significant:
         onset = out.split_onset
+    elif ramp_stat > 3 * logn:
+        onset = ramp_onset
     else:
         onset = first_onset
     after = ok & (np.arange(len(e)) >= onset)
@@ -653,13 +657,17 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float):
     noise_score = max(noise_gain - (AR_ORDER + onset_params) * logn, level - (1 + onset_params) * logn)
     candidates.append(("noise_change", noise_score, noise_gain, level))
 
+    # A slow drift on top of the modelled disturbance: v = H e + d with d a slowly wandering
+    # level has the innovations form H (1 - c q^-1) / (1 - rho q^-1), rho close to 1 (the
+    # drift) and c < rho (how fast the level wanders); rho < 1 keeps H stable as FORMATS asks.
     drift_best = None
     for rho in DRIFT_POLES:
-        g = heldout_gain(lambda mask, rho=rho: TransferFunction([1.0, -rho], [1.0], 0))
-        if drift_best is None or g > drift_best[1]:
-            drift_best = (rho, g)
-    drift_score = drift_best[1] - (1 + onset_params) * logn
-    candidates.append(("output_drift", drift_score, drift_best[1], 0.0))
+        for c in DRIFT_ZEROS:
+            g = heldout_gain(lambda mask, rho=rho, c=c: TransferFunction([1.0, -rho], [1.0, -c], 0))
+            if drift_best is None or g > drift_best[2]:
+                drift_best = (rho, c, g)
+    drift_score = drift_best[2] - (2 + onset_params) * logn
+    candidates.append(("output_drift", drift_score, drift_best[2], 0.0))
     effect, score, gain, level = max(candidates, key=lambda c: c[1])
     if score <= 0.0:
         return []
@@ -676,12 +684,12 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float):
         params = AR_ORDER + onset_params
         conf_stat = max(gain, level)
     else:
-        rho = drift_best[0]
-        noise = TransferFunction(out.noise.num, np.convolve(out.noise.den, [1.0, -rho]), 0)
-        estimate = {"drift_pole": rho, "ci95": [min(DRIFT_POLES), max(DRIFT_POLES)],
+        rho, c = drift_best[0], drift_best[1]
+        noise = TransferFunction(np.convolve(out.noise.num, [1.0, -c]), np.convolve(out.noise.den, [1.0, -rho]), 0)
+        estimate = {"drift_pole": rho, "ci95": [min(DRIFT_POLES), max(DRIFT_POLES)], "drift_zero": c,
                     "drift_time_constant_s": -sig.sample_time_s / math.log(rho)}
         text = f"slow drift on {out.name} {when}; the process model still fits"
-        params = 1 + onset_params
+        params = 2 + onset_params
         conf_stat = gain
     change = ModelChange(output=out.name, noise=_refit_noise(out, effect, fold[0], e0, noise))
     before, after_err = _held_out_errors(out, sig, onset, change)
@@ -689,6 +697,32 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float):
                             confidence=_confidence(conf_stat, params), estimate=estimate,
                             error_before=before, error_after=after_err, explanation=text,
                             score=score, change=change))]
+
+
+def _drift_onset(out: _Output, first_onset: int, grid: int = 60):
+    """Onset of an additive step + ramp on the output: least squares of the nominal one-step
+    error e on H^-1 [1, step(t - k), ramp(t - k)] for k on a grid (the AR correction is left
+    out: it would whiten the drift away). Returns (k, drop of the residual sum of squares in
+    units of the early error variance)."""
+    e = np.nan_to_num(out.e)
+    ok = out.weight > 0
+    n = len(e)
+    hinv = out.noise.inverse()
+    t = np.arange(n, dtype=float)
+    step0, ramp0 = hinv.filter(np.ones(n)), hinv.filter(t / n)
+    base = np.ones(n)
+    scale = out.sigma[0] ** 2
+    rss0 = np.sum((e[ok] - e[ok].mean()) ** 2)
+    best = (first_onset, 0.0)
+    for k in range(max(first_onset, 2 * SETTLE), n - 2 * grid, grid):
+        step = np.r_[np.zeros(k), step0[: n - k]]
+        ramp = np.r_[np.zeros(k), ramp0[: n - k]]
+        x = np.column_stack([base, step, ramp])[ok]
+        coef = np.linalg.solve(x.T @ x + 1e-12 * np.eye(3), x.T @ e[ok])
+        drop = (rss0 - np.sum((e[ok] - x @ coef) ** 2)) / scale
+        if drop > best[1]:
+            best = (k, float(drop))
+    return best
 
 
 def _refit_noise(out, effect, fit_mask, e0, full_noise):

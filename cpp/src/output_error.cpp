@@ -266,7 +266,14 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
       pack(candidate_, candidate_theta_);
       const double candidate_cost =
           delta_.allFinite() ? simulate(u, y.data(), skip, N, candidate_) : INFINITY;
-      if (candidate_cost < cost) {
+      // A small step only means convergence when it was (nearly) the Gauss-Newton
+      // step; a heavily damped step is small because of the damping.
+      const bool nearly_gauss_newton = lambda <= 1e-4;
+      // Near the minimum the cost is flat to rounding (a 1e-9 parameter error changes it
+      // by ~1e-18 relative), so a cost-decrease test alone stalls at ~sqrt(eps):
+      // Gauss-Newton steps that leave the cost equal up to rounding are accepted too.
+      const bool flat = nearly_gauss_newton && candidate_cost <= cost * (1.0 + 1e-13);
+      if (candidate_cost < cost || flat) {
         accepted = true;
         lambda = std::max(lambda / 10.0, 1e-12);
         const double step = (candidate_theta_ - theta_).cwiseAbs().maxCoeff();
@@ -274,7 +281,8 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
         std::swap(out.b, candidate_.b);
         std::swap(out.f, candidate_.f);
         cost = candidate_cost;
-        if (step <= options_.step_tolerance * (theta_.cwiseAbs().maxCoeff() + options_.step_tolerance))
+        if (nearly_gauss_newton &&
+            step <= options_.step_tolerance * (theta_.cwiseAbs().maxCoeff() + options_.step_tolerance))
           out.converged = true;
       } else if (lambda > 1e12) {
         // No descent direction left at any damping: theta is a (numerical) minimum.

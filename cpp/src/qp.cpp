@@ -68,20 +68,25 @@ struct QpSolver::Impl {
   bool positive_definite = false;
   detail::ActiveSetFactorization factorization;
 
-  // Per-solve bound classification (|bound| >= settings.infinite_bound is infinite).
+  // The data of the current solve, copied in (O(n + m), no allocation), and its bound
+  // classification (|bound| >= settings.infinite_bound is infinite).
+  Eigen::VectorXd q, l, u;
   std::vector<char> has_lower, has_upper, is_equality, previous_is_equality;
   bool warm = false;
+  // A row i is violated when A_i x < lower_trigger_i or A_i x > upper_trigger_i: its bound
+  // moved by the feasibility tolerance, or +-inf while the row is active, an equality or absent.
+  Eigen::VectorXd lower_trigger, upper_trigger;
 
   // Active set in factorisation order (equalities first), multipliers of the one-sided
   // constraints sigma a'x >= sigma b (>= 0 for inequalities), and redundant equality rows.
   std::vector<ActiveConstraint> active;
-  std::vector<char> is_active;
   int num_active_equalities = 0;
   std::vector<int> redundant_equalities;
   Eigen::VectorXd mult;
 
   // Workspace, sized once.
-  Eigen::VectorXd x, Ax, d, z, r, w, Jq;
+  Eigen::VectorXd x, Ax, violation, d, z, r, w, Jq;
+  double x_P_x = 0.0;
   QpResult result;
 
   Impl(const Eigen::Ref<const Eigen::MatrixXd>& P_, const Eigen::Ref<const Eigen::MatrixXd>& A_,
@@ -94,14 +99,19 @@ struct QpSolver::Impl {
         row_inv_norm(m),
         L_inv_transpose(n, n),
         factorization(n),
+        q(n),
+        l(m),
+        u(m),
         has_lower(m),
         has_upper(m),
         is_equality(m),
         previous_is_equality(m),
-        is_active(m, 0),
+        lower_trigger(m),
+        upper_trigger(m),
         mult(Eigen::VectorXd::Zero(n)),
         x(n),
         Ax(m),
+        violation(m),
         d(n),
         z(n),
         r(n),
@@ -131,26 +141,55 @@ struct QpSolver::Impl {
     if (n == 0) positive_definite = true;  // trivial problem, nothing to factorise
   }
 
-  double bound(const ActiveConstraint& c, const Eigen::Ref<const Eigen::VectorXd>& l,
-               const Eigen::Ref<const Eigen::VectorXd>& u) const {
-    return c.sigma > 0 ? l[c.row] : u[c.row];
-  }
+  double bound(const ActiveConstraint& c) const { return c.sigma > 0 ? l[c.row] : u[c.row]; }
 
-  void classify_bounds(const Eigen::Ref<const Eigen::VectorXd>& l,
-                       const Eigen::Ref<const Eigen::VectorXd>& u) {
+  void load(const Eigen::Ref<const Eigen::VectorXd>& q_in, const Eigen::Ref<const Eigen::VectorXd>& l_in,
+            const Eigen::Ref<const Eigen::VectorXd>& u_in) {
+    if (q_in.size() != n)
+      throw InputError("q has " + std::to_string(q_in.size()) + " entries, expected " + std::to_string(n));
+    if (l_in.size() != m)
+      throw InputError("l has " + std::to_string(l_in.size()) + " entries, expected " + std::to_string(m));
+    if (u_in.size() != m)
+      throw InputError("u has " + std::to_string(u_in.size()) + " entries, expected " + std::to_string(m));
+    check_finite(q_in, "q");
+    check_finite_or_inf(l_in, "l");
+    check_finite_or_inf(u_in, "u");
+    q = q_in;
+    l = l_in;
+    u = u_in;
     const double inf = settings.infinite_bound;
     for (int i = 0; i < m; ++i) {
-      if (l[i] > u[i])
-        throw InputError("l[" + std::to_string(i) + "] > u[" + std::to_string(i) + "]");
+      if (l[i] > u[i]) throw InputError("l[" + std::to_string(i) + "] > u[" + std::to_string(i) + "]");
+      if (l[i] >= inf) throw InputError("l[" + std::to_string(i) + "] is +infinite");
+      if (u[i] <= -inf) throw InputError("u[" + std::to_string(i) + "] is -infinite");
       has_lower[i] = l[i] > -inf;
       has_upper[i] = u[i] < inf;
-      is_equality[i] = has_lower[i] && l[i] == u[i];
+      is_equality[i] = l[i] == u[i];  // both finite here
+      arm(i);
     }
+  }
+
+  // Violation thresholds of an inactive row (tolerance relative to 1 + |bound|).
+  void arm(int i) {
+    const double tol = settings.feasibility_tol;
+    const bool inequality = !is_equality[i];
+    lower_trigger[i] = inequality && has_lower[i] ? l[i] - tol * (1.0 + std::abs(l[i])) : -kInfinity;
+    upper_trigger[i] = inequality && has_upper[i] ? u[i] + tol * (1.0 + std::abs(u[i])) : kInfinity;
+  }
+  void disarm(int i) {
+    lower_trigger[i] = -kInfinity;
+    upper_trigger[i] = kInfinity;
+  }
+
+  void add_active(int row, int sigma) {
+    factorization.add(d);
+    active.push_back({row, sigma});  // capacity n: the active normals are independent
+    disarm(row);
   }
 
   void drop_active(int position) {
     factorization.drop(position);
-    is_active[active[position].row] = 0;
+    arm(active[position].row);
     active.erase(active.begin() + position);  // no reallocation: erase never grows
     for (int j = position; j < static_cast<int>(active.size()); ++j) mult[j] = mult[j + 1];
   }
@@ -159,17 +198,14 @@ struct QpSolver::Impl {
   void cold_start() {
     factorization.reset(L_inv_transpose);
     active.clear();
-    std::fill(is_active.begin(), is_active.end(), 0);
     redundant_equalities.clear();
     for (int i = 0; i < m; ++i) {
       if (!is_equality[i]) continue;
-      d.noalias() = factorization.J().transpose() * At.col(i);
+      factorization.J_transpose_times(At.col(i), d);
       if (is_dependent()) {
         redundant_equalities.push_back(i);
       } else {
-        factorization.add(d);
-        active.push_back({i, +1});
-        is_active[i] = 1;
+        add_active(i, +1);
       }
     }
     num_active_equalities = static_cast<int>(active.size());
@@ -177,6 +213,7 @@ struct QpSolver::Impl {
 
   // Warm start: keep the previous active set except inequalities whose bound is now infinite.
   void warm_start() {
+    for (const ActiveConstraint& c : active) disarm(c.row);
     for (int j = static_cast<int>(active.size()) - 1; j >= num_active_equalities; --j) {
       const ActiveConstraint& c = active[j];
       if (!(c.sigma > 0 ? has_lower[c.row] : has_upper[c.row])) drop_active(j);
@@ -193,108 +230,80 @@ struct QpSolver::Impl {
 
   // Minimiser over the active set held as equalities, and its multipliers (closed form):
   // with w = J^{-1} x, R'w1 = b_active, w2 = -J2'q, R mult = w1 + J1'q.
-  void solve_on_active_set(const Eigen::Ref<const Eigen::VectorXd>& q,
-                           const Eigen::Ref<const Eigen::VectorXd>& l,
-                           const Eigen::Ref<const Eigen::VectorXd>& u) {
+  void solve_on_active_set() {
     const int k = factorization.size();
-    const Eigen::MatrixXd& J = factorization.J();
-    Jq.noalias() = J.transpose() * q;
-    for (int j = 0; j < k; ++j) w[j] = active[j].sigma * bound(active[j], l, u);
+    factorization.J_transpose_times(q, Jq);
+    for (int j = 0; j < k; ++j) w[j] = active[j].sigma * bound(active[j]);
+    w.tail(n - k) = -Jq.tail(n - k);
     auto w1 = w.head(k);
     factorization.solve_R_transpose(w1);
-    x.noalias() = J.leftCols(k) * w1;
-    x.noalias() -= J.rightCols(n - k) * Jq.tail(n - k);
+    factorization.J_columns_times(0, w, x);
     auto mk = mult.head(k);
     mk = w1 + Jq.head(k);
     factorization.solve_R(mk);
+    x_P_x = w.squaredNorm();  // x = J w and J'PJ = I
   }
 
-  // Most violated constraint (violation scaled by the row norm), or -1 when all hold to
-  // feasibility_tol (relative to 1 + |bound|).
-  int most_violated(const Eigen::Ref<const Eigen::VectorXd>& l,
-                    const Eigen::Ref<const Eigen::VectorXd>& u, int& sigma) {
+  // Most violated constraint (violation scaled by the row norm), or -1 when all hold.
+  int most_violated(int& sigma) {
+    if (m == 0) return -1;
     Ax.noalias() = At.transpose() * x;
-    int best = -1;
-    double best_violation = 0.0;
-    for (int i = 0; i < m; ++i) {
-      if (is_active[i] || is_equality[i]) continue;
-      double v = 0.0;
-      int s = 0;
-      if (has_lower[i] && l[i] - Ax[i] > settings.feasibility_tol * (1.0 + std::abs(l[i]))) {
-        v = l[i] - Ax[i];
-        s = +1;
-      } else if (has_upper[i] && Ax[i] - u[i] > settings.feasibility_tol * (1.0 + std::abs(u[i]))) {
-        v = Ax[i] - u[i];
-        s = -1;
-      }
-      v *= row_inv_norm[i];
-      if (s != 0 && v > best_violation) {
-        best_violation = v;
-        best = i;
-        sigma = s;
-      }
-    }
-    return best;
+    violation = (lower_trigger - Ax).cwiseMax(Ax - upper_trigger).cwiseProduct(row_inv_norm);
+    Eigen::Index p;
+    if (!(violation.maxCoeff(&p) > 0.0)) return -1;
+    sigma = lower_trigger[p] - Ax[p] > 0.0 ? +1 : -1;
+    return static_cast<int>(p);
   }
 
-  bool redundant_equalities_hold(const Eigen::Ref<const Eigen::VectorXd>& l) const {
+  bool redundant_equalities_hold() const {
     for (int i : redundant_equalities)
-      if (std::abs(At.col(i).dot(x) - l[i]) > settings.feasibility_tol * (1.0 + std::abs(l[i])))
-        return false;
+      if (std::abs(At.col(i).dot(x) - l[i]) > settings.feasibility_tol * (1.0 + std::abs(l[i]))) return false;
     return true;
   }
 
-  // Drops active inequalities with negative multipliers (most negative first) until the point
-  // is dual feasible; needed after a warm start because q, l, u moved.
-  void restore_dual_feasibility(const Eigen::Ref<const Eigen::VectorXd>& q,
-                                const Eigen::Ref<const Eigen::VectorXd>& l,
-                                const Eigen::Ref<const Eigen::VectorXd>& u, int& iterations) {
+  // Drops active inequalities with negative multipliers until the point is dual feasible, all of
+  // them in each round (a closed-form solve costs as much as several drops); needed after a warm
+  // start because q, l, u moved, and harmless after the final recompute.
+  void restore_dual_feasibility(int& iterations) {
     for (;;) {
-      solve_on_active_set(q, l, u);
-      int worst = -1;
-      double worst_mult = -settings.optimality_tol;
-      for (int j = num_active_equalities; j < static_cast<int>(active.size()); ++j) {
-        if (mult[j] < worst_mult) {
-          worst_mult = mult[j];
-          worst = j;
+      solve_on_active_set();
+      bool dropped = false;
+      for (int j = static_cast<int>(active.size()) - 1; j >= num_active_equalities; --j) {
+        if (mult[j] < -settings.optimality_tol) {
+          drop_active(j);
+          ++iterations;
+          dropped = true;
         }
       }
-      if (worst < 0) break;
-      drop_active(worst);
-      ++iterations;
+      if (!dropped) break;
     }
-    for (int j = num_active_equalities; j < static_cast<int>(active.size()); ++j)
-      mult[j] = std::max(mult[j], 0.0);
+    for (int j = num_active_equalities; j < static_cast<int>(active.size()); ++j) mult[j] = std::max(mult[j], 0.0);
   }
 
-  void finish(QpStatus status, int iterations, const Eigen::Ref<const Eigen::VectorXd>& q) {
+  // x_P_x holds x'Px from the last closed-form solve when `exact` (x has not moved since).
+  const QpResult& finish(QpStatus status, int iterations, bool exact = false) {
     result.status = status;
     result.iterations = iterations;
     result.x = x;
     result.y.setZero();
     // P x + q = sum_j mult_j sigma_j a_j  and OSQP's  P x + q + A'y = 0  give y = -sigma mult.
-    for (int j = 0; j < static_cast<int>(active.size()); ++j)
-      result.y[active[j].row] = -active[j].sigma * mult[j];
-    w.noalias() = P * x;
-    result.objective = 0.5 * x.dot(w) + q.dot(x);
+    for (int j = 0; j < static_cast<int>(active.size()); ++j) result.y[active[j].row] = -active[j].sigma * mult[j];
+    if (!exact) {
+      w.noalias() = P * x;
+      x_P_x = x.dot(w);
+    }
+    result.objective = 0.5 * x_P_x + q.dot(x);
+    return result;
   }
 
-  const QpResult& solve(const Eigen::Ref<const Eigen::VectorXd>& q,
-                        const Eigen::Ref<const Eigen::VectorXd>& l,
-                        const Eigen::Ref<const Eigen::VectorXd>& u) {
-    if (q.size() != n) throw InputError("q has " + std::to_string(q.size()) + " entries, expected " + std::to_string(n));
-    if (l.size() != m) throw InputError("l has " + std::to_string(l.size()) + " entries, expected " + std::to_string(m));
-    if (u.size() != m) throw InputError("u has " + std::to_string(u.size()) + " entries, expected " + std::to_string(m));
-    check_finite(q, "q");
-    check_finite_or_inf(l, "l");
-    check_finite_or_inf(u, "u");
-    classify_bounds(l, u);
+  const QpResult& solve(const Eigen::Ref<const Eigen::VectorXd>& q_in, const Eigen::Ref<const Eigen::VectorXd>& l_in,
+                        const Eigen::Ref<const Eigen::VectorXd>& u_in) {
+    load(q_in, l_in, u_in);
     if (!positive_definite) {
       x.setZero();
       active.clear();
       warm = false;
-      finish(QpStatus::NonConvex, 0, q);
-      return result;
+      return finish(QpStatus::NonConvex, 0);
     }
 
     int iterations = 0;
@@ -305,23 +314,17 @@ struct QpSolver::Impl {
     }
     previous_is_equality = is_equality;  // same size: no allocation
     warm = true;
-    restore_dual_feasibility(q, l, u, iterations);
-    if (!redundant_equalities_hold(l)) {
-      finish(QpStatus::PrimalInfeasible, iterations, q);
-      return result;
-    }
+    restore_dual_feasibility(iterations);
+    if (!redundant_equalities_hold()) return finish(QpStatus::PrimalInfeasible, iterations);
 
     bool refined = true;  // x, mult were just computed in closed form
     for (;;) {
       int sigma = 0;
-      const int p = most_violated(l, u, sigma);
+      const int p = most_violated(sigma);
       if (p < 0) {
-        if (refined) {
-          finish(QpStatus::Solved, iterations, q);
-          return result;
-        }
+        if (refined) return finish(QpStatus::Solved, iterations, /*exact=*/true);
         // The steps accumulate rounding; recompute x on the final active set and re-check.
-        restore_dual_feasibility(q, l, u, iterations);
+        restore_dual_feasibility(iterations);
         refined = true;
         continue;
       }
@@ -330,14 +333,10 @@ struct QpSolver::Impl {
       double mult_p = 0.0;  // multiplier of the entering constraint
       // GI Step 2: move towards satisfying constraint p, dropping blocking inequalities.
       for (;;) {
-        if (iterations >= settings.max_iterations) {
-          finish(QpStatus::MaxIterations, iterations, q);
-          return result;
-        }
+        if (iterations >= settings.max_iterations) return finish(QpStatus::MaxIterations, iterations);
         ++iterations;
         const int k = factorization.size();
-        const Eigen::MatrixXd& J = factorization.J();
-        d.noalias() = J.transpose() * At.col(p);
+        factorization.J_transpose_times(At.col(p), d);
         if (sigma < 0) d = -d;
         // r = R^{-1} J1'n: how the active multipliers change per unit of the new one.
         auto rk = r.head(k);
@@ -356,28 +355,23 @@ struct QpSolver::Impl {
           }
         }
         const bool dependent = is_dependent();
-        if (dependent && blocking < 0) {
-          finish(QpStatus::PrimalInfeasible, iterations, q);
-          return result;
-        }
+        if (dependent && blocking < 0) return finish(QpStatus::PrimalInfeasible, iterations);
         double t_primal = kInfinity;
         if (!dependent) {
           // Full step: constraint p becomes active. z = J2 J2'n is the primal direction.
           const double curvature = d.tail(n - k).squaredNorm();
-          const double violation = sigma * (b - At.col(p).dot(x));
-          t_primal = std::max(violation, 0.0) / curvature;
+          const double gap = sigma * (b - At.col(p).dot(x));
+          t_primal = std::max(gap, 0.0) / curvature;
         }
         const double t = std::min(t_dual, t_primal);
         if (!dependent) {
-          z.noalias() = J.rightCols(n - k) * d.tail(n - k);
+          factorization.J_columns_times(k, d.tail(n - k), z);
           x += t * z;
         }
         mult.head(k) -= t * rk;
         mult_p += t;
         if (t_primal <= t_dual) {
-          factorization.add(d);
-          active.push_back({p, sigma});
-          is_active[p] = 1;
+          add_active(p, sigma);
           mult[k] = mult_p;
           break;
         }

@@ -1,14 +1,16 @@
 #include "qp_factorization.hpp"
 
+#include <Eigen/Jacobi>
 #include <cmath>
 
 namespace mpmpp::detail {
 
 namespace {
 
-// Rotation (c, s) with [c s; -s c] [a; b] = [h; 0]; returns h.
+// Rotation (c, s) with [c s; -s c] [a; b] = [h; 0]; returns h. (std::hypot's overflow guard
+// costs more than the whole rotation here and the entries are far from overflow.)
 double givens(double a, double b, double& c, double& s) {
-  const double h = std::hypot(a, b);
+  const double h = std::sqrt(a * a + b * b);
   if (h == 0.0) {
     c = 1.0;
     s = 0.0;
@@ -19,21 +21,11 @@ double givens(double a, double b, double& c, double& s) {
   return h;
 }
 
-// Columns (x, y) <- (c x + s y, -s x + c y): keeps J' P J = I since the rotation is orthogonal.
-template <typename X, typename Y>
-void rotate(X&& x, Y&& y, double c, double s) {
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    const double xi = x[i];
-    const double yi = y[i];
-    x[i] = c * xi + s * yi;
-    y[i] = -s * xi + c * yi;
-  }
-}
 
 }  // namespace
 
 ActiveSetFactorization::ActiveSetFactorization(int n)
-    : n_(n), J_(Eigen::MatrixXd::Zero(n, n)), R_(Eigen::MatrixXd::Zero(n, n)) {}
+    : n_(n), J_(Eigen::MatrixXd::Zero(n, n)), R_(Eigen::MatrixXd::Zero(n, n)), J2v_(n) {}
 
 void ActiveSetFactorization::reset(const Eigen::MatrixXd& L_inv_transpose) {
   J_ = L_inv_transpose;  // same size: Eigen copies without reallocating
@@ -41,15 +33,22 @@ void ActiveSetFactorization::reset(const Eigen::MatrixXd& L_inv_transpose) {
 }
 
 void ActiveSetFactorization::add(Eigen::Ref<Eigen::VectorXd> d) {
-  // Zero d(k+1..n-1) from the bottom up into d(k), rotating the matching columns of J so that
-  // d stays J' n; afterwards J' [N n] = [R d(0..k); 0].
-  for (int j = n_ - 1; j > k_; --j) {
-    double c, s;
-    d[j - 1] = givens(d[j - 1], d[j], c, s);
-    d[j] = 0.0;
-    rotate(J_.col(j - 1), J_.col(j), c, s);
+  // One Householder reflection H (H d2 = alpha e1) applied to J2 = J(:, k..n-1) maps d = J'n to
+  // [d1; alpha; 0], so J' [N n] = [R d1; 0 alpha; 0 0]. (GI use a sequence of Givens rotations;
+  // the reflection does the same in two vectorised passes over J2.)
+  const int free = n_ - k_;
+  auto v = d.tail(free);
+  const double norm = v.norm();
+  const double alpha = v[0] > 0.0 ? -norm : norm;
+  v[0] -= alpha;  // v = d2 - alpha e1, H = I - 2 v v' / v'v
+  const double vv = v.squaredNorm();
+  if (vv > 0.0) {
+    J_columns_times(k_, v, J2v_);
+    const double scale = 2.0 / vv;
+    for (int j = 0; j < free; ++j) J_.col(k_ + j) -= (scale * v[j]) * J2v_;
   }
-  R_.col(k_).head(k_ + 1) = d.head(k_ + 1);
+  R_.col(k_).head(k_) = d.head(k_);
+  R_(k_, k_) = alpha;
   ++k_;
 }
 
@@ -62,8 +61,10 @@ void ActiveSetFactorization::drop(int position) {
     R_(j, j) = givens(R_(j, j), R_(j + 1, j), c, s);
     R_(j + 1, j) = 0.0;
     const int rest = k_ - 2 - j;  // columns j+1 .. k-2 of the shifted R
-    if (rest > 0) rotate(R_.row(j).segment(j + 1, rest), R_.row(j + 1).segment(j + 1, rest), c, s);
-    rotate(J_.col(j), J_.col(j + 1), c, s);
+    // JacobiRotation(c, s) on the left and (c, -s) on the right both map (x, y) to
+    // (c x + s y, -s x + c y), vectorised by Eigen.
+    if (rest > 0) R_.middleCols(j + 1, rest).applyOnTheLeft(j, j + 1, Eigen::JacobiRotation<double>(c, s));
+    J_.applyOnTheRight(j, j + 1, Eigen::JacobiRotation<double>(c, -s));
   }
   --k_;
 }

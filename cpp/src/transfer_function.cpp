@@ -87,6 +87,7 @@ TransferFunction TransferFunction::from_foptd(double gain, double time_constant_
   if (!(dead_time_s >= 0.0) || !std::isfinite(dead_time_s))
     throw InputError("dead_time_s must be >= 0");
   const double samples = dead_time_s / sample_time_s;
+  if (samples > 1e6) throw InputError("dead_time_s must be at most 1e6 samples");
   // Snap to an integer when the dead time is a multiple of Ts up to rounding.
   double whole = std::floor(samples + 1e-9);
   double frac = samples - whole;

@@ -8,6 +8,9 @@ from ._core import TransferFunction
 from ._core import QpResult, QpSolver, solve_qp
 from .io import Model, load_data, load_model, save_data, save_model
 from . import identify
+from .svm import OneClassSVM, cross_validate_outlier_fraction, resample
+from .simulate import simulate
+from . import scenarios
 from .compare import compare
 from .diagnose import diagnose
 from .update import update

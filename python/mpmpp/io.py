@@ -8,13 +8,15 @@ the field, column or row at fault.
 from __future__ import annotations
 
 import os
-from typing import Optional, Union
+from typing import TYPE_CHECKING, Optional, Union
 
 import numpy as np
-import pandas as pd
 
 from . import _core
 from ._core import Model
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -39,6 +41,8 @@ def load_data(path: PathLike, model: Optional[Model] = None) -> pd.DataFrame:
     ``missing`` (count per column), ``time_origin`` (the first timestamp for ISO-8601 time,
     time then counts seconds from it; None for numeric time) and ``source`` (the path).
     """
+    import pandas as pd  # here, not at the top: `import mpmpp` stays fast for model-only work
+
     path = os.fspath(path)
     table = _core.read_csv(path) if model is None else _core.load_data(path, model)
     columns = {"time": np.asarray(table.time_s)}

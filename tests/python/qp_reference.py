@@ -5,7 +5,9 @@ keys P, q, A, l, u) through mpmpp and compares each against the references.
 References, all independent of mpmpp:
 - feasibility (the status): SciPy's HiGHS LP `linprog` on l <= Ax <= u;
 - x: quadprog (Goldfarb-Idnani in Fortran), after removing linearly dependent equality rows,
-  which quadprog cannot take (it reports them as inconsistent);
+  which quadprog cannot take (it reports them as inconsistent); where quadprog still gives up on
+  a feasible problem (it also stumbles over dependent inequality rows) or its answer fails its
+  own stationarity check (ill-conditioned P), OSQP at eps 1e-10 with solution polishing;
 - duals: the KKT conditions checked directly with NumPy (stationarity, sign and complementarity).
 """
 import os
@@ -42,8 +44,33 @@ def is_feasible(A, l, u):
     return res.status == 0
 
 
+def osqp_solve(P, q, A, l, u):
+    """x of the QP by OSQP at high accuracy with polishing (the fallback reference)."""
+    import osqp
+    import scipy.sparse as sp
+
+    solver = osqp.OSQP()
+    solver.setup(sp.triu(sp.csc_matrix(P), format="csc"), q, sp.csc_matrix(A),
+                 np.clip(l, -1e30, 1e30), np.clip(u, -1e30, 1e30), eps_abs=1e-10, eps_rel=1e-10,
+                 polishing=True, max_iter=200000, eps_prim_inf=1e-15, eps_dual_inf=1e-15, verbose=False)
+    res = solver.solve()
+    if res.info.status != "solved":
+        raise RuntimeError(f"OSQP reference failed: {res.info.status}")
+    return res.x
+
+
+def reference_solve(P, q, A, l, u):
+    """x of a feasible QP: quadprog, or polished OSQP where quadprog reports dependent rows as
+    inconsistent or its own answer is not stationary to 1e-9 (it loses digits on ill-conditioned P)."""
+    try:
+        return quadprog_solve(P, q, A, l, u)
+    except (ValueError, ArithmeticError):
+        return osqp_solve(P, q, A, l, u)
+
+
 def quadprog_solve(P, q, A, l, u):
-    """x of the QP by quadprog; equality rows reduced to an independent, consistent subset."""
+    """x of the QP by quadprog; equality rows reduced to an independent, consistent subset.
+    Raises ArithmeticError when quadprog's (x, multipliers) are not stationary to 1e-9."""
     n = P.shape[0]
     lo, hi = _finite(l), _finite(u)
     eq = lo & hi & (l == u)
@@ -59,7 +86,11 @@ def quadprog_solve(P, q, A, l, u):
     b = np.concatenate([beq, l[lo & ~eq], -u[hi & ~eq]])
     if len(b) == 0:  # quadprog needs at least one constraint
         return np.linalg.solve(P, -q)
-    return quadprog.solve_qp(P, -q, C, b, len(beq))[0]
+    x, _, _, _, multipliers, _ = quadprog.solve_qp(P, -q, C, b, len(beq))
+    grad = P @ x + q
+    if np.linalg.norm(grad - C @ multipliers, np.inf) > 1e-9 * (1.0 + np.linalg.norm(grad, np.inf)):
+        raise ArithmeticError("quadprog's answer is not stationary")
+    return x
 
 
 def kkt_residuals(P, q, A, l, u, x, y):
@@ -82,7 +113,7 @@ def kkt_residuals(P, q, A, l, u, x, y):
 
 def check_against_reference(qp, result, x_tol=1e-8, kkt_tol=1e-8, label=""):
     """Assert that an mpmpp result for one QP (dict P, q, A, l, u) is right: the status agrees
-    with the LP feasibility test and, when solved, x matches quadprog and (x, y) satisfy KKT."""
+    with the LP feasibility test and, when solved, x matches the reference and (x, y) satisfy KKT."""
     P, q, A, l, u = (np.asarray(qp[k], dtype=float) for k in ("P", "q", "A", "l", "u"))
     A = A.reshape(-1, P.shape[0])
     feasible = is_feasible(A, l, u)
@@ -90,9 +121,9 @@ def check_against_reference(qp, result, x_tol=1e-8, kkt_tol=1e-8, label=""):
     assert result.status == expected, f"{label}: status {result.status}, expected {expected}"
     if not feasible:
         return
-    x_ref = quadprog_solve(P, q, A, l, u)
+    x_ref = reference_solve(P, q, A, l, u)
     err = np.linalg.norm(result.x - x_ref, np.inf) / (1.0 + np.linalg.norm(x_ref, np.inf))
-    assert err <= x_tol, f"{label}: |x - x_quadprog| = {err:.2e} (relative)"
+    assert err <= x_tol, f"{label}: |x - x_reference| = {err:.2e} (relative)"
     residuals = kkt_residuals(P, q, A, l, u, result.x, result.y)
     assert max(residuals) <= kkt_tol, f"{label}: KKT residuals {residuals}"
 
@@ -113,3 +144,56 @@ def check_qps(qps, solver_factory=None, **kwargs):
         result = solver.solve(np.asarray(qp["q"], float), np.asarray(qp["l"], float), np.asarray(qp["u"], float))
         check_against_reference(qp, result, label=f"QP {i}", **kwargs)
     return len(qps)
+
+
+def mpc_like_sequence(n_mv, n_moves, n_steps, seed, horizon=20):
+    """Recorded QPs of a receding-horizon MPC in condensed form (variables: the n_moves future
+    moves of each of n_mv inputs), a stand-in for the paper's controllers: first-order channels
+    (n_mv outputs), tracking + move + input-target weights, hard input bounds and move limits as
+    rows [T; I] of A (T sums moves into inputs, so its first row per input duplicates a move
+    row). The loop is closed on a plant with a random-walk output disturbance and setpoint steps,
+    solved with mpmpp, and every QP is returned as a dict P, q, A, l, u."""
+    import mpmpp
+
+    rng = np.random.default_rng(seed)
+    n_cv = n_mv
+    gain = rng.uniform(0.5, 2.0, (n_cv, n_mv)) * rng.choice([-1.0, 1.0], (n_cv, n_mv))
+    gain[np.diag_indices(n_cv)] = np.abs(gain[np.diag_indices(n_cv)]) + 1.0  # dominant diagonal
+    pole = rng.uniform(0.7, 0.95, (n_cv, n_mv))
+    # Step response of channel (i, j) after k+1 samples: gain (1 - pole^(k+1)).
+    step = lambda k: gain * (1.0 - pole ** (k + 1))
+    n = n_mv * n_moves
+    # Y (horizon x n_cv, stacked by time) = free + S dU, dU stacked as [input j, move k].
+    S = np.zeros((horizon * n_cv, n))
+    for t in range(horizon):
+        for k in range(min(t + 1, n_moves)):
+            S[t * n_cv:(t + 1) * n_cv, [j * n_moves + k for j in range(n_mv)]] = step(t - k)
+    T = np.kron(np.eye(n_mv), np.tril(np.ones((n_moves, n_moves))))
+    w_move, w_target = 0.5, 0.01
+    P = 2.0 * (S.T @ S + w_move * np.eye(n) + w_target * T.T @ T)
+    A = np.vstack([T, np.eye(n)])
+    u_max, move_max = 1.0, 0.1
+    state = np.zeros((n_cv, n_mv))  # first-order channel outputs
+    u_prev = np.zeros(n_mv)
+    disturbance = np.zeros(n_cv)
+    setpoint = np.zeros(n_cv)
+    solver = mpmpp.QpSolver(P, A)
+    qps = []
+    for k in range(n_steps):
+        if k % 40 == 0:
+            setpoint = rng.uniform(-3.0, 3.0, n_cv)
+        disturbance += 0.02 * rng.standard_normal(n_cv)
+        # Free response: channels decay towards gain * u_prev from the current state.
+        free = np.concatenate([(gain * u_prev + pole ** (t + 1) * (state - gain * u_prev)).sum(axis=1)
+                               + disturbance for t in range(horizon)])
+        error = free - np.tile(setpoint, horizon)
+        q = 2.0 * (S.T @ error + w_target * T.T @ np.repeat(u_prev, n_moves))
+        l = np.concatenate([np.repeat(-u_max - u_prev, n_moves), np.full(n, -move_max)])
+        u = np.concatenate([np.repeat(u_max - u_prev, n_moves), np.full(n, move_max)])
+        qps.append(dict(P=P, q=q, A=A, l=l, u=u))
+        result = solver.solve(q, l, u)
+        if result.status != "solved":
+            raise RuntimeError(f"stand-in MPC QP {k}: {result.status}")
+        u_prev = u_prev + result.x[::n_moves]
+        state = pole * state + (1.0 - pole) * gain * u_prev
+    return qps

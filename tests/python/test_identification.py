@@ -24,7 +24,8 @@ def open_loop(N, seed, channels, noise=0.05):
 
 @pytest.fixture(scope="module")
 def siso_closed_loop():
-    return ref.saturating_loop(G0[:2] + (G0[2],), H0, 0.05, 1440, seed=3)
+    y, u = ref.closed_loop(N=1440, seeds=[3], **ref.PAPER_SISO)
+    return y[0, :, 0], u[0, :, 0]
 
 
 def test_arx_siso_equals_lstsq(siso_closed_loop):

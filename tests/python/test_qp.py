@@ -5,7 +5,7 @@ import pytest
 import scipy.io
 
 import mpmpp
-from qp_reference import SHARED_DIR, check_against_reference, check_qps, kkt_residuals, quadprog_solve
+from qp_reference import SHARED_DIR, check_against_reference, check_qps, kkt_residuals, mpc_like_sequence, reference_solve
 
 SHARED = SHARED_DIR / "qp"
 INF = np.inf
@@ -169,6 +169,8 @@ def test_bad_input_names_the_argument():
         mpmpp.solve_qp(P, ok, A, np.array([0.0, 2.0]), np.array([1.0, 1.0]))
     with pytest.raises(ValueError, match="l\\[0\\] is NaN"):
         mpmpp.solve_qp(P, ok, A, np.array([np.nan, 0.0]), ok)
+    with pytest.raises(ValueError, match=r"l\[0\] is \+infinite"):
+        mpmpp.solve_qp(P, ok, A, np.array([np.inf, 0.0]), np.array([np.inf, 0.0]))
     with pytest.raises(ValueError, match="A has 3 columns"):
         mpmpp.solve_qp(P, ok, np.ones((2, 3)), ok, ok)
     with pytest.raises(ValueError, match="P must be square"):
@@ -195,7 +197,7 @@ def test_maros_meszaros_positive_definite(name):
     qp = load_maros_meszaros(name)
     r = mpmpp.solve_qp(qp["P"], qp["q"], qp["A"], qp["l"], qp["u"])
     assert r.status == "solved"
-    x_ref = quadprog_solve(qp["P"], qp["q"], qp["A"], qp["l"], qp["u"])
+    x_ref = reference_solve(qp["P"], qp["q"], qp["A"], qp["l"], qp["u"])
     f_ref = 0.5 * x_ref @ qp["P"] @ x_ref + qp["q"] @ x_ref + qp["r"]
     assert r.objective + qp["r"] == pytest.approx(f_ref, rel=1e-6, abs=1e-9)
     primal, stationarity, sign, complementarity = kkt_residuals(qp["P"], qp["q"], qp["A"], qp["l"], qp["u"], r.x, r.y)
@@ -223,3 +225,12 @@ def test_mpc_qpbenchmark_sequences_warm_started(family):
     qps = load_mpc_family(family)
     assert all(np.array_equal(qp["P"], qps[0]["P"]) and np.array_equal(qp["A"], qps[0]["A"]) for qp in qps)
     assert check_qps(qps) == 30
+
+
+@pytest.mark.parametrize("n_mv, n_moves", [(1, 4), (3, 2)])
+def test_mpc_like_closed_loop_sequences(n_mv, n_moves):
+    """Paper-sized stand-ins (SISO: 4 moves; MIMO: 3 inputs x 2 moves) with duplicated rows."""
+    qps = mpc_like_sequence(n_mv, n_moves, n_steps=400, seed=11 + n_mv)
+    binding = np.mean([np.any(mpmpp.solve_qp(**qp).y != 0.0) for qp in qps])
+    assert 0.2 < binding < 0.9, binding  # constraints bind in part of the run, not all of it
+    assert check_qps(qps) == 400

@@ -14,6 +14,7 @@
 
 #include <Eigen/Dense>
 
+#include "mpmpp/error.hpp"
 #include "mpmpp/model.hpp"
 
 namespace mpmpp {

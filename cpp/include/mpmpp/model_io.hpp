@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "mpmpp/error.hpp"
 #include "mpmpp/model.hpp"
 #include "mpmpp/transfer_function.hpp"
 

@@ -32,6 +32,8 @@ class TransferFunction {
   Eigen::VectorXd step(int n) const;
   // G(1) = sum(num) / sum(den); InputError-free, returns inf for a pole at z = 1.
   double dc_gain() const;
+  // Finite non-zero poles / zeros in z. Roots at the origin are left out: in q^-1 form
+  // they come only from delays and trailing zero coefficients and never decide stability.
   Eigen::VectorXcd poles() const;
   Eigen::VectorXcd zeros() const;
   bool is_stable() const;          // all poles strictly inside the unit circle

@@ -19,12 +19,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON document instead of the summary")
 
 
+def _finite_or_none(x: float):
+    """JSON has no infinity: an integrating channel's dc gain is reported as null."""
+    return x if np.isfinite(x) else None
+
+
 def _model_summary(path: str, model) -> dict:
     channels = []
     for output, input_ in model.channels():
         g = model.process(output, input_)
         channels.append({"output": output, "input": input_, "num": g.num.tolist(), "den": g.den.tolist(),
-                         "delay": g.delay, "dc_gain": g.dc_gain(), "text": str(g)})
+                         "delay": g.delay, "dc_gain": _finite_or_none(g.dc_gain()), "text": str(g)})
     noise = []
     for output in model.outputs:
         h = model.noise(output)
@@ -63,7 +68,8 @@ def _print_summary(report: dict) -> None:
           f"sample time {m['sample_time_s']:g} s")
     print(f"  inputs: {', '.join(m['inputs'])}; outputs: {', '.join(m['outputs'])}")
     for ch in m["channels"]:
-        print(f"  channel {ch['output']} <- {ch['input']}: {ch['text']}, dc gain {ch['dc_gain']:.6g}")
+        gain = "infinite (integrating)" if ch["dc_gain"] is None else f"{ch['dc_gain']:.6g}"
+        print(f"  channel {ch['output']} <- {ch['input']}: {ch['text']}, dc gain {gain}")
     if not m["channels"]:
         print("  no process channels (the model claims no coupling at all)")
     for h in m["noise"]:

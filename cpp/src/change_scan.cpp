@@ -136,4 +136,16 @@ Eigen::VectorXd backlash(const Eigen::Ref<const Eigen::VectorXd>& u, double widt
   return out;
 }
 
+Eigen::VectorXd stick_slip(const Eigen::Ref<const Eigen::VectorXd>& u, double band) {
+  if (!(band >= 0.0) || !std::isfinite(band)) throw InputError("stick-slip band must be >= 0");
+  Eigen::VectorXd out(u.size());
+  if (u.size() == 0) return out;
+  double pos = u[0];
+  for (Eigen::Index t = 0; t < u.size(); ++t) {
+    if (std::abs(u[t] - pos) > band) pos = u[t];
+    out[t] = pos;
+  }
+  return out;
+}
+
 }  // namespace mpmpp

@@ -59,6 +59,9 @@ COUPLING_DELAYS = range(1, 41)
 DRIFT_POLES = (0.995, 0.998, 0.999, 0.9995)
 DRIFT_ZEROS = (0.8, 0.9, 0.95, 0.98)
 BACKLASH_WIDTHS = (0.5, 1.0, 2.0, 4.0)   # times the median absolute MV move
+ACTUATOR_KINDS = ("backlash", "stick_slip")
+DRIFT_GRID_S = 1800.0
+DRIFT_COLUMN = "(drift)"
 MAX_FINDINGS_PER_OUTPUT = 3
 DEBUG = False
 
@@ -273,6 +276,17 @@ def _process_shapes(sig: Signals, i: int) -> list[_Shape]:
             if dd != 0 and g.delay + dd >= 0:
                 shapes.append(_Shape("delay", name, "input", TransferFunction(g.num, g.den, g.delay + dd),
                                      g, g.delay + dd, 2, u))
+    # Output drift competes in the same pool: an additive ramp or step on the output from
+    # onset tau on (grid of DRIFT_GRID_S). In closed loop the controller cancels a drift with
+    # its inputs, so a drift otherwise poses as a channel change fitted to that compensation.
+    n = len(sig.time_s)
+    hour = 3600.0 / sig.sample_time_s
+    grid = max(int(round(DRIFT_GRID_S / sig.sample_time_s)), 1)
+    for tau in range(0, max(n - 2 * grid, 1), grid):
+        t = np.maximum(np.arange(n) - tau, 0.0)
+        shapes.append(_Shape("output_drift", DRIFT_COLUMN, "drift", TransferFunction(), None, tau, 2, t / hour))
+        shapes.append(_Shape("output_drift", DRIFT_COLUMN, "drift", TransferFunction(), None, tau, 2,
+                             (t > 0).astype(float)))
     for k, name in enumerate(sig.extras):
         z = sig.z[:, k]
         shapes += [_Shape("unmodeled_input", name, "extra", _unit_foptd(p, d), None, d, 3, z)
@@ -390,8 +404,12 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     raw: list[tuple[float, Finding]] = []
     for out in outputs:
         raw += _process_findings(out, sig, first_onset, min_segment, step, logn, min_effect)
-    raw += _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn,
-                                  {f.input for _, f in raw if f.effect != "unmodeled_input"})
+    # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels:
+    # it replaces them when it explains more than they do together.
+    for nl_score, nl in _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect):
+        rivals = [(s, f) for s, f in raw if f.input == nl.input and f.effect in ("gain", "time_constant", "delay")]
+        if nl_score > sum(s for s, _ in rivals):
+            raw = [(s, f) for s, f in raw if all(f is not r for _, r in rivals)] + [(nl_score, nl)]
     with_process = {f.output for _, f in raw}
     for out in outputs:
         if out.name not in with_process:
@@ -424,7 +442,17 @@ def _process_findings(out: _Output, sig: Signals, first_onset, min_segment, step
         if top.score <= 0.0 or top.heldout < min_effect * out.weight[top.onset:].sum():
             break
         taken.add(top.shape.column)
-        found.append((top.score, _process_finding(out, sig, top)))
+        if top.shape.effect == "output_drift":
+            finding = _noise_findings(out, sig, first_onset, logn, drift_onset=int(top.shape.label))
+            finding = finding[0][1] if finding else None
+            if finding is not None:
+                finding.score = top.score
+        else:
+            finding = _process_finding(out, sig, top)
+        if finding is None or not finding.error_after < finding.error_before:
+            # the whitened-domain gain does not carry over to the model the update would write
+            break
+        found.append((top.score, finding))
         # The accepted change stays in the residual the next candidates are fitted to.
         s = top.shape
         drive = np.nan_to_num(s.drive)
@@ -537,30 +565,31 @@ def one_step_errors(sig: Signals, i: int, changes: list[ModelChange]) -> np.ndar
 # Actuator nonlinearity
 
 
-def _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, already):
-    """Backlash on an input: every channel from it sees backlash(u) instead of u."""
+def _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect):
+    """Backlash or stick-slip on an input: every channel from it sees f(u) instead of u."""
     found = []
     for j, name in enumerate(sig.inputs):
-        if name in already:
-            continue
         u = np.nan_to_num(sig.u[:, j])
         moves = np.abs(np.diff(u))
         scale = float(np.median(moves[moves > 0])) if np.any(moves > 0) else 0.0
         if scale == 0.0:
             continue
         best = None
-        for width_factor in BACKLASH_WIDTHS:
+        for kind, width_factor in [(k, w) for k in ACTUATOR_KINDS for w in BACKLASH_WIDTHS]:
             width = width_factor * scale
-            ub = _core.backlash(u, width) - np.mean(_core.backlash(u, width))
+            moved = getattr(_core, kind)(u, width)
+            ub = moved - np.mean(moved)
             total, heldout, per_out = 0.0, 0.0, []
             for out in outputs:
                 g = out.row[j]
                 if g is None:
                     continue
                 shape = _Shape("input_nonlinearity", name, "input", g, g, width, 1, ub)
-                # the nominal channel acts on u, the candidate on backlash(u): r_without uses u
-                psi = out.whiten(out.channel_response(g, ub))
-                r_without = out.r + out.whiten(out.channel_response(g, u))
+                # The plant sees f(u) = u + (f(u) - u): the candidate adds theta G (f(u) - u) to
+                # the nominal G u (theta = 1 for the nonlinearity itself). Fitting the difference,
+                # not G f(u) with a free scale, keeps a plain gain change from posing as one.
+                psi = out.whiten(out.channel_response(g, ub - u))
+                r_without = out.r
                 scan = _core.scan_onset(out.r[first_onset:], r_without[first_onset:], psi[first_onset:],
                                         out.weight[first_onset:], min_segment, step)
                 onset = first_onset + scan.onset
@@ -579,25 +608,31 @@ def _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, a
             params = 1 + len(per_out) + 1
             score = heldout - params * logn
             if best is None or score > best[0]:
-                best = (score, heldout, width, per_out, params)
+                best = (score, heldout, width, per_out, params, kind)
         if best is None or best[0] <= 0.0:
             continue
-        score, heldout, width, per_out, params = best
+        score, heldout, width, per_out, params, kind = best
+        n_after = sum(o.weight[on:].sum() for o, _, on, _, _ in per_out)
+        if heldout < min_effect * n_after:
+            continue
         out0, _, onset, theta, _ = max(per_out, key=lambda p: abs(p[3]))
         onset_s = float(sig.time_s[onset])
         # The fixed model format has no actuator block: update applies the describing-function
         # gain, the linear channel scale theta that best matches the backlash response.
         changes = [ModelChange(output=o.name, input=name,
-                               channel=TransferFunction(np.asarray(sh.nominal.num) * th_fit,
+                               channel=TransferFunction(np.asarray(sh.nominal.num) * _describing_gain(u, sh.drive, th_fit),
                                                         sh.nominal.den, sh.nominal.delay))
                    for o, sh, _, _, th_fit in per_out]
         before, after = _held_out_errors(out0, sig, onset, changes[[o for o, *_ in per_out].index(out0)])
+        if not after < before:
+            continue
+        theta = _describing_gain(u, per_out[0][1].drive, theta)
         f = Finding(id="", effect="input_nonlinearity", output=out0.name, input=name, onset_s=onset_s,
                     confidence=_confidence(heldout, params),
-                    estimate={"backlash_width": width, "ci95": [width / 2, width * 2],
+                    estimate={"kind": kind, "width": width, "ci95": [width / 2, width * 2],
                               "equivalent_gain_ratio": theta},
                     error_before=before, error_after=after,
-                    explanation=(f"actuator {name} behaves like a backlash/deadband of about "
+                    explanation=(f"actuator {name} behaves like a {kind.replace('_', '-')} of about "
                                  f"{width:.3g} units (small moves do not reach the process)"
                                  + (f" since t={onset_s / 3600:.1f} h" if onset > 0 else "")),
                     score=score, change=changes[0])
@@ -606,16 +641,27 @@ def _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, a
     return found
 
 
+def _describing_gain(u: np.ndarray, moved: np.ndarray, theta: float) -> float:
+    """Least-squares scale k with k u ~ u + theta (f(u) - u): the linear channel gain ratio
+    that best reproduces the nonlinear actuator (what the fixed model format can hold)."""
+    x = u - u.mean()
+    target = x + theta * ((moved - moved.mean()) - x)
+    return float(x @ target / (x @ x)) if x @ x > 0 else 1.0
+
+
 # --------------------------------------------------------------------------------------------
 # Disturbance-side findings
 
 
-def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float):
-    """noise_change / output_drift on an output whose process model passed."""
+def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float, drift_onset=None):
+    """noise_change / output_drift on an output whose process model passed; with drift_onset
+    (a drift won in the process pool) only the drift noise model from that onset."""
     e = out.e
     ok = np.isfinite(e) & (out.weight > 0)
-    ramp_onset, ramp_stat = _drift_onset(out, first_onset)
-    if out.split_significant:
+    ramp_onset, ramp_stat = (drift_onset, 0.0) if drift_onset is not None else _drift_onset(out, first_onset)
+    if drift_onset is not None:
+        onset = drift_onset
+    elif out.split_significant:
         onset = out.split_onset
     elif ramp_stat > 3 * logn:
         onset = ramp_onset
@@ -668,8 +714,10 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float):
                 drift_best = (rho, c, g)
     drift_score = drift_best[2] - (2 + onset_params) * logn
     candidates.append(("output_drift", drift_score, drift_best[2], 0.0))
+    if drift_onset is not None:
+        candidates = [c for c in candidates if c[0] == "output_drift"]
     effect, score, gain, level = max(candidates, key=lambda c: c[1])
-    if score <= 0.0:
+    if score <= 0.0 and drift_onset is None:
         return []
     onset_s = float(sig.time_s[onset])
     when = f"since t={onset_s / 3600:.1f} h" if onset > first_onset else "throughout the record"
@@ -693,6 +741,8 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float):
         conf_stat = gain
     change = ModelChange(output=out.name, noise=_refit_noise(out, effect, fold[0], e0, noise))
     before, after_err = _held_out_errors(out, sig, onset, change)
+    if not after_err < before:
+        return []
     return [(score, Finding(id="", effect=effect, output=out.name, input=None, onset_s=onset_s,
                             confidence=_confidence(conf_stat, params), estimate=estimate,
                             error_before=before, error_after=after_err, explanation=text,

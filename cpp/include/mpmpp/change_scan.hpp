@@ -56,4 +56,8 @@ ArSplit split_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::I
 // once the input has moved more than width/2 past it, as a valve with a loose linkage does.
 Eigen::VectorXd backlash(const Eigen::Ref<const Eigen::VectorXd>& u, double width);
 
+// Actuator with stick-slip (a deadband on the move): the position stays put until the
+// command differs from it by more than `band`, then jumps to the command.
+Eigen::VectorXd stick_slip(const Eigen::Ref<const Eigen::VectorXd>& u, double band);
+
 }  // namespace mpmpp

@@ -99,7 +99,8 @@ def case(effect: str, seed: int) -> tuple[dict, dict]:
         sc["events"] = [{**ev, "type": "drift", "output": out, "rate_per_s": 0.04 / HOUR}]
         expect = {"effect": effect, "output": out, "input": None, "onset_s": ONSET}
     elif effect == "input_nonlinearity":
-        sc["events"] = [{**ev, "type": "actuator", "input": inp, "backlash": 0.05}]
+        kind = "backlash" if seed % 4 < 2 else "deadband"
+        sc["events"] = [{**ev, "type": "actuator", "input": inp, kind: 0.2}]
         expect = {"effect": effect, "output": None, "input": inp, "onset_s": ONSET}
     else:
         raise ValueError(f"unknown effect {effect}")

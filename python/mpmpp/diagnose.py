@@ -58,7 +58,7 @@ COUPLING_POLES = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98)
 COUPLING_DELAYS = range(1, 41)
 DRIFT_POLES = (0.995, 0.998, 0.999, 0.9995)
 DRIFT_ZEROS = (0.8, 0.9, 0.95, 0.98)
-BACKLASH_WIDTHS = (0.5, 1.0, 2.0, 4.0)   # times the median absolute MV move
+BACKLASH_WIDTHS = (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)   # times the median absolute MV move
 ACTUATOR_KINDS = ("backlash", "stick_slip")
 DRIFT_GRID_S = 1800.0
 DRIFT_COLUMN = "(drift)"
@@ -407,10 +407,12 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels:
     # it replaces them when it explains more than they do together.
     for nl_score, nl in _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect):
-        rivals = [(s, f) for s, f in raw if f.input == nl.input and f.effect in ("gain", "time_constant", "delay")]
+        driven = nl.outputs_driven
+        rivals = [(s, f) for s, f in raw if f.output in driven and (
+            (f.input == nl.input and f.effect in ("gain", "time_constant", "delay")) or f.effect == "output_drift")]
         if nl_score > sum(s for s, _ in rivals):
             raw = [(s, f) for s, f in raw if all(f is not r for _, r in rivals)] + [(nl_score, nl)]
-    with_process = {f.output for _, f in raw}
+    with_process = {f.output for _, f in raw} | {o for _, f in raw for o in getattr(f, "outputs_driven", ())}
     for out in outputs:
         if out.name not in with_process:
             raw += _noise_findings(out, sig, first_onset, logn)
@@ -585,44 +587,47 @@ def _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, m
                 if g is None:
                     continue
                 shape = _Shape("input_nonlinearity", name, "input", g, g, width, 1, ub)
-                # The plant sees f(u) = u + (f(u) - u): the candidate adds theta G (f(u) - u) to
-                # the nominal G u (theta = 1 for the nonlinearity itself). Fitting the difference,
-                # not G f(u) with a free scale, keeps a plain gain change from posing as one.
+                # The plant sees f(u) = u + (f(u) - u): the candidate adds G (f(u) - u) to the
+                # nominal G u with no free scale (the channel itself is unchanged). A free scale
+                # would let a very wide backlash (f(u) nearly constant, f(u) - u ~ -u) pose as a
+                # plain gain change.
                 psi = out.whiten(out.channel_response(g, ub - u))
-                r_without = out.r
-                scan = _core.scan_onset(out.r[first_onset:], r_without[first_onset:], psi[first_onset:],
-                                        out.weight[first_onset:], min_segment, step)
-                onset = first_onset + scan.onset
+                drop = out.weight * (out.r**2 - (out.r - psi) ** 2)
+
+                def best_onset(w):
+                    suffix = np.cumsum((drop * w)[::-1])[::-1]
+                    ks = np.r_[first_onset, np.arange(first_onset + min_segment, len(u) - min_segment + 1, step)]
+                    k = int(ks[np.argmax(suffix[ks])])
+                    return k, float(suffix[k])
+
+                onset, stat = best_onset(np.ones(len(u)))
                 h = 0.0
-                thetas = []
-                for fit_w, test_w in ((out.fold[0], out.fold[1]), (out.fold[1], out.fold[0])):
-                    f = _core.fit_at_onset(out.r, r_without, psi, fit_w, onset)
-                    thetas.append(f.theta)
-                    resid = r_without[onset:] - f.theta * psi[onset:]
-                    h += float(np.sum(test_w[onset:] * (out.r[onset:] ** 2 - resid**2)))
-                total += scan.statistic
+                for k in (0, 1):
+                    on_k, _ = best_onset(out.fold[k])
+                    h += float(np.sum((drop * out.fold[1 - k])[on_k:]))
+                total += stat
                 heldout += h
-                per_out.append((out, shape, onset, scan.theta, thetas[0]))
+                per_out.append((out, shape, onset, 1.0, 1.0, h))
             if not per_out:
                 continue
-            params = 1 + len(per_out) + 1
-            score = heldout - params * logn
+            params = 2 + 1   # kind and width, onset
+            score = heldout - 0.5 * params * logn
             if best is None or score > best[0]:
                 best = (score, heldout, width, per_out, params, kind)
         if best is None or best[0] <= 0.0:
             continue
         score, heldout, width, per_out, params, kind = best
-        n_after = sum(o.weight[on:].sum() for o, _, on, _, _ in per_out)
+        n_after = sum(o.weight[on:].sum() for o, _, on, _, _, _ in per_out)
         if heldout < min_effect * n_after:
             continue
-        out0, _, onset, theta, _ = max(per_out, key=lambda p: abs(p[3]))
+        out0, _, onset, theta, _, _ = max(per_out, key=lambda p: p[5])
         onset_s = float(sig.time_s[onset])
         # The fixed model format has no actuator block: update applies the describing-function
         # gain, the linear channel scale theta that best matches the backlash response.
         changes = [ModelChange(output=o.name, input=name,
                                channel=TransferFunction(np.asarray(sh.nominal.num) * _describing_gain(u, sh.drive, th_fit),
                                                         sh.nominal.den, sh.nominal.delay))
-                   for o, sh, _, _, th_fit in per_out]
+                   for o, sh, _, _, th_fit, _ in per_out]
         before, after = _held_out_errors(out0, sig, onset, changes[[o for o, *_ in per_out].index(out0)])
         if not after < before:
             continue
@@ -636,7 +641,9 @@ def _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, m
                                  f"{width:.3g} units (small moves do not reach the process)"
                                  + (f" since t={onset_s / 3600:.1f} h" if onset > 0 else "")),
                     score=score, change=changes[0])
-        f.extra_changes = changes[1:]
+        f.extra_changes = [c for c in changes if c.output != out0.name]
+        f.change = next(c for c in changes if c.output == out0.name)
+        f.outputs_driven = tuple(o.name for o, *_ in per_out)
         found.append((score, f))
     return found
 
@@ -741,7 +748,11 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float, d
         conf_stat = gain
     change = ModelChange(output=out.name, noise=_refit_noise(out, effect, fold[0], e0, noise))
     before, after_err = _held_out_errors(out, sig, onset, change)
-    if not after_err < before:
+    # A pure level change is a real disturbance change the model file cannot hold (H is monic,
+    # the innovation variance is not in FORMATS.md), so it need not lower the error.
+    level_driven = effect == "noise_change" and level - (1 + onset_params) * logn >= noise_gain - (
+        AR_ORDER + onset_params) * logn
+    if not after_err < before and not level_driven:
         return []
     return [(score, Finding(id="", effect=effect, output=out.name, input=None, onset_s=onset_s,
                             confidence=_confidence(conf_stat, params), estimate=estimate,

@@ -122,8 +122,10 @@ def matches(f, expect) -> bool:
 
 
 def model_of(sc: dict):
-    return mpmpp.Model.from_json(json.dumps({k: sc[k] for k in ("name", "sample_time_s", "inputs", "outputs",
-                                                                "process", "noise")}))
+    """The controller's model of a scenario as a model file (noise models carry no delay there)."""
+    doc = {k: sc[k] for k in ("name", "sample_time_s", "inputs", "outputs", "process")}
+    doc["noise"] = {o: {"num": h["num"], "den": h["den"]} for o, h in sc.get("noise", {}).items()}
+    return mpmpp.Model.from_json(json.dumps(doc))
 
 
 def evaluate(effects, seeds, quiet=False):

@@ -10,7 +10,6 @@
 """
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
@@ -24,6 +23,9 @@ import mpmpp  # noqa: E402
 from mpmpp import _core  # noqa: E402
 from mpmpp.compare import compare  # noqa: E402
 from mpmpp.diagnose import diagnose  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from diagnose_eval import model_of  # noqa: E402
 
 
 def best_of(fn, repeat=3):
@@ -52,9 +54,10 @@ def main() -> int:
     t0 = time.perf_counter()
     data = mpmpp.simulate(sc, seed=1)
     t_sim = time.perf_counter() - t0
-    model = mpmpp.Model.from_json(json.dumps({k: sc[k] for k in ("name", "sample_time_s", "inputs",
-                                                                 "outputs", "process", "noise")}))
+    model = model_of(sc)
     t_diag = best_of(lambda: diagnose(model, data), repeat=2)
+    for f in diagnose(model, data).findings:
+        print(f"  finding {f.id}: {f.effect} {f.output} <- {f.input} at {f.onset_s / 60:.0f} min")
     t_cmp = best_of(lambda: compare(model, data), repeat=2)
     print(f"3x3, 20 h, {len(data)} samples (simulated in {t_sim:.1f} s)")
     print(f"  diagnose: {t_diag:.2f} s = {t_diag / 10.0:.2f} x the 10 s budget")

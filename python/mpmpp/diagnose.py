@@ -323,13 +323,29 @@ def _preferred(fits: list[_Fit]) -> _Fit:
     return top
 
 
+def _whitened(out: _Output, shape: _Shape, cache: dict) -> tuple[np.ndarray, np.ndarray | None]:
+    """Whitened responses of the candidate shape and of the nominal channel (cached: they do not
+    change between the greedy rounds, only the residual does)."""
+    key = id(shape)
+    if key not in cache:
+        drive = np.nan_to_num(shape.drive)
+        psi = out.whiten(out.channel_response(shape.shape, drive))
+        nkey = (id(shape.nominal), id(shape.drive))
+        if shape.nominal is not None and nkey not in cache:
+            cache[nkey] = out.whiten(out.channel_response(shape.nominal, drive))
+        cache[key] = (psi, cache[nkey] if shape.nominal is not None else None)
+    return cache[key]
+
+
 def _fit_shape(out: _Output, r: np.ndarray, shape: _Shape, min_onset: int, min_segment: int,
-               step: int) -> _Fit:
+               step: int, cache: dict) -> _Fit:
     """Onset scan of one shape on all data and on each fold (the folds feed the held-out test)."""
-    drive = np.nan_to_num(shape.drive)
-    weight = out.weight * np.isfinite(shape.drive)
-    psi = out.whiten(out.channel_response(shape.shape, drive))
-    r_without = r if shape.nominal is None else r + out.whiten(out.channel_response(shape.nominal, drive))
+    psi, nominal = _whitened(out, shape, cache)
+    wkey = ("weight", id(shape.drive))
+    if wkey not in cache:
+        cache[wkey] = out.weight * np.isfinite(shape.drive)
+    weight = cache[wkey]
+    r_without = r if nominal is None else r + nominal
     tail = slice(min_onset, None)
 
     def scan(w):
@@ -430,8 +446,9 @@ def _process_findings(out: _Output, sig: Signals, first_onset, min_segment, step
     r = out.r.copy()
     found = []
     taken: set = set()
+    cache: dict = {}
     for _ in range(MAX_FINDINGS_PER_OUTPUT):
-        fits = [_fit_shape(out, r, s, first_onset, min_segment, step)
+        fits = [_fit_shape(out, r, s, first_onset, min_segment, step, cache)
                 for s in shapes if s.column not in taken]
         fits = _best_per_channel(fits, logn)
         if DEBUG:
@@ -456,10 +473,8 @@ def _process_findings(out: _Output, sig: Signals, first_onset, min_segment, step
             break
         found.append((top.score, finding))
         # The accepted change stays in the residual the next candidates are fitted to.
-        s = top.shape
-        drive = np.nan_to_num(s.drive)
-        psi = out.whiten(out.channel_response(s.shape, drive))
-        r_without = r if s.nominal is None else r + out.whiten(out.channel_response(s.nominal, drive))
+        psi, nominal = _whitened(out, top.shape, cache)
+        r_without = r if nominal is None else r + nominal
         r = np.where(np.arange(len(r)) >= top.onset, r_without - top.theta * psi, r)
     return found
 
@@ -760,7 +775,7 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float, d
                             score=score, change=change))]
 
 
-def _drift_onset(out: _Output, first_onset: int, grid: int = 60):
+def _drift_onset(out: _Output, first_onset: int, grid: int = 120):
     """Onset of an additive step + ramp on the output: least squares of the nominal one-step
     error e on H^-1 [1, step(t - k), ramp(t - k)] for k on a grid (the AR correction is left
     out: it would whiten the drift away). Returns (k, drop of the residual sum of squares in

@@ -8,7 +8,8 @@ Prints per case the top finding and, per effect, hits (top finding = effect, out
 onset within 1 h), misses and false findings (findings that do not match the hidden effect;
 for the control and noise cases any process finding). The plant is a 2x2 paper-machine MD
 loop (basis weight, moisture / stock flow, steam pressure) under MPC, 16 h at 5 s, changes at
-6 h, plus one measured candidate column that only matters in the unmodeled_input case.
+6 h (9 h with --weak), plus one measured candidate column that only matters in the
+unmodeled_input case. Effect sizes: STRONG / WEAK below.
 """
 from __future__ import annotations
 
@@ -25,7 +26,6 @@ import mpmpp  # noqa: E402
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose  # noqa: E402
 
 HOUR = 3600.0
-ONSET = 6 * HOUR
 
 
 def _tf(num, den, delay=0):
@@ -63,45 +63,56 @@ BASE = {
 CHANNELS = [("basis_weight", "stock_flow"), ("moisture", "steam_pressure")]
 
 
+# Effect sizes: the default suite and a weaker one (--weak) that shows where detection ends.
+STRONG = {"onset": 6 * HOUR, "gain": (2.0, 0.4), "time_constant": 3.0, "delay": 10, "coupling": 0.035,
+          "column": 0.4, "noise_den": [1.0, -0.6], "sigma": 2.0, "drift_per_h": 0.04, "actuator": 0.2}
+WEAK = {"onset": 9 * HOUR, "gain": (1.5, 0.65), "time_constant": 2.0, "delay": 4, "coupling": 0.015,
+        "column": 0.2, "noise_den": [1.0, -0.3], "sigma": 1.5, "drift_per_h": 0.015, "actuator": 0.1}
+SIZE = STRONG
+
+
 def case(effect: str, seed: int) -> tuple[dict, dict]:
     """(scenario, expected top finding) for one effect and seed."""
+    sz = SIZE
+    onset = sz["onset"]
     sc = copy.deepcopy(BASE)
     sc["seed"] = seed
     sc["name"] = f"{effect} seed {seed}"
     out, inp = CHANNELS[seed % 2]
-    ev = {"time_s": ONSET}
-    expect = {"effect": effect, "output": out, "input": inp, "onset_s": ONSET}
+    ev = {"time_s": onset}
+    expect = {"effect": effect, "output": out, "input": inp, "onset_s": onset}
     if effect == "none":
         expect = None
     elif effect == "gain":
-        sc["events"] = [{**ev, "type": "gain", "output": out, "input": inp, "factor": 2.0 if seed % 4 < 2 else 0.4}]
+        sc["events"] = [{**ev, "type": "gain", "output": out, "input": inp, "factor": sz["gain"][0] if seed % 4 < 2 else sz["gain"][1]}]
     elif effect == "time_constant":
-        sc["events"] = [{**ev, "type": "time_constant", "output": out, "input": inp, "factor": 3.0}]
+        sc["events"] = [{**ev, "type": "time_constant", "output": out, "input": inp,
+                         "factor": sz["time_constant"]}]
     elif effect == "delay":
         d = sc["process"][out][inp]["delay"]
-        sc["events"] = [{**ev, "type": "delay", "output": out, "input": inp, "delay": d + 10}]
+        sc["events"] = [{**ev, "type": "delay", "output": out, "input": inp, "delay": d + sz["delay"]}]
     elif effect == "missing_coupling":
         sc["truth"]["process"] = copy.deepcopy(sc["process"])
-        sc["truth"]["process"]["basis_weight"]["steam_pressure"] = _tf([0.035], [1.0, -0.9], 10)
+        sc["truth"]["process"]["basis_weight"]["steam_pressure"] = _tf([sz["coupling"]], [1.0, -0.9], 10)
         expect = {"effect": effect, "output": "basis_weight", "input": "steam_pressure", "onset_s": 0.0}
     elif effect == "unmodeled_input":
         target = CHANNELS[seed % 2][0]
-        sc["truth"]["extra"]["headbox_consistency"]["affects"] = {target: _tf([0.4], [1.0, -0.9], 6)}
+        sc["truth"]["extra"]["headbox_consistency"]["affects"] = {target: _tf([sz["column"]], [1.0, -0.9], 6)}
         expect = {"effect": effect, "output": target, "input": "headbox_consistency", "onset_s": 0.0}
     elif effect == "noise_change":
-        sc["events"] = [{**ev, "type": "noise", "output": out, "model": _tf([1.0, 0.3], [1.0, -0.6])}]
-        expect = {"effect": effect, "output": out, "input": None, "onset_s": ONSET}
+        sc["events"] = [{**ev, "type": "noise", "output": out, "model": {"num": [1.0, 0.3], "den": sz["noise_den"]}}]
+        expect = {"effect": effect, "output": out, "input": None, "onset_s": onset}
     elif effect == "noise_level":
         sigma = sc["truth"]["sigma"][out]
-        sc["events"] = [{**ev, "type": "sigma", "output": out, "value": 2.0 * sigma}]
-        expect = {"effect": "noise_change", "output": out, "input": None, "onset_s": ONSET}
+        sc["events"] = [{**ev, "type": "sigma", "output": out, "value": sz["sigma"] * sigma}]
+        expect = {"effect": "noise_change", "output": out, "input": None, "onset_s": onset}
     elif effect == "output_drift":
-        sc["events"] = [{**ev, "type": "drift", "output": out, "rate_per_s": 0.04 / HOUR}]
-        expect = {"effect": effect, "output": out, "input": None, "onset_s": ONSET}
+        sc["events"] = [{**ev, "type": "drift", "output": out, "rate_per_s": sz["drift_per_h"] / HOUR}]
+        expect = {"effect": effect, "output": out, "input": None, "onset_s": onset}
     elif effect == "input_nonlinearity":
         kind = "backlash" if seed % 4 < 2 else "deadband"
-        sc["events"] = [{**ev, "type": "actuator", "input": inp, kind: 0.2}]
-        expect = {"effect": effect, "output": None, "input": inp, "onset_s": ONSET}
+        sc["events"] = [{**ev, "type": "actuator", "input": inp, kind: sz["actuator"]}]
+        expect = {"effect": effect, "output": None, "input": inp, "onset_s": onset}
     else:
         raise ValueError(f"unknown effect {effect}")
     return sc, expect
@@ -166,7 +177,10 @@ def main(argv=None) -> int:
     p.add_argument("--seeds", type=int, default=4)
     p.add_argument("--effects", default=",".join(EFFECTS))
     p.add_argument("--quiet", action="store_true")
+    p.add_argument("--weak", action="store_true", help="smaller effects, onset at 9 h")
     args = p.parse_args(argv)
+    global SIZE
+    SIZE = WEAK if args.weak else STRONG
     rows, timings = evaluate(args.effects.split(","), args.seeds, args.quiet)
     print(f"\n| case | hits | misses | false findings |\n| --- | --- | --- | --- |")
     total_h = total_n = 0

@@ -311,6 +311,21 @@ class _Fit:
     profile: list = field(default_factory=list)   # (label, statistic) of the same effect/column
 
 
+def _present_in_both_halves(out: _Output, r: np.ndarray, fit: _Fit, cache: dict) -> bool:
+    """A changed channel is a lasting effect: with the fitted theta it must lower the squared
+    error in the first and in the second half of the data after its onset. The interleaved
+    1 h folds cannot see a fit that only works in part of the record (in closed loop, a drift
+    that starts later can pose as a channel change present throughout)."""
+    if fit.score <= 0.0:
+        return True   # rejected later anyway; no need to compute
+    psi, nominal = _whitened(out, fit.shape, cache)
+    r_without = r if nominal is None else r + nominal
+    weight = cache[("weight", id(fit.shape.drive))]
+    drop = weight * (r**2 - (r_without - fit.theta * psi) ** 2)
+    mid = (fit.onset + len(r)) // 2
+    return drop[fit.onset:mid].sum() > 0.0 and drop[mid:].sum() > 0.0
+
+
 def _preferred(fits: list[_Fit]) -> _Fit:
     """The best-scoring fit, except that a new time constant or delay whose channel scale theta
     is far from 1 is a change of gain *and* dynamics: when the gain-only fit of the same channel
@@ -455,6 +470,7 @@ def _process_findings(out: _Output, sig: Signals, first_onset, min_segment, step
             for f in sorted(fits, key=lambda f: -f.score)[:6]:
                 print(f"   {out.name} {f.shape.effect} {f.shape.column} label={f.shape.label} onset={f.onset} "
                       f"stat={f.statistic:.1f} heldout={f.heldout:.1f} score={f.score:.1f} theta={f.theta:.3f}")
+        fits = [f for f in fits if _present_in_both_halves(out, r, f, cache)]
         if not fits:
             break
         top = _preferred(fits)

@@ -187,7 +187,12 @@ class _Output:
             base[a + SETTLE:b] = 1.0
         self.weight = base
         e0 = np.nan_to_num(self.e)
-        split = _core.split_ar(e0[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
+        # The split looks for a change of the disturbance's level or colour. A slow drift
+        # changes the AR fit too, and a split inside it lets each side's correction absorb a
+        # different part of it; so the split is made on e with its best step + ramp removed
+        # (the drift itself is a candidate of the process pool).
+        _, _, trend = _trend_fit(e0, base > 0, self.noise.inverse(), first_onset, 4 * min_segment // 12)
+        split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
         self.split = split
         self.split_onset = first_onset + split.onset if split.statistic > 0 else None
         # The split is kept when it beats its parameters (AR coefficients, variance, onset).
@@ -792,28 +797,28 @@ def _noise_findings(out: _Output, sig: Signals, first_onset: int, logn: float, d
 
 
 def _drift_onset(out: _Output, first_onset: int, grid: int = 120):
-    """Onset of an additive step + ramp on the output: least squares of the nominal one-step
-    error e on H^-1 [1, step(t - k), ramp(t - k)] for k on a grid (the AR correction is left
-    out: it would whiten the drift away). Returns (k, drop of the residual sum of squares in
-    units of the early error variance)."""
-    e = np.nan_to_num(out.e)
-    ok = out.weight > 0
+    """Onset of an additive step + ramp on the output (see ``_trend_fit``), with the drop of
+    the residual sum of squares in units of the early error variance."""
+    k, drop, _ = _trend_fit(np.nan_to_num(out.e), out.weight > 0, out.noise.inverse(), first_onset, grid)
+    return k, drop / out.sigma[0] ** 2
+
+
+def _trend_fit(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, first_onset: int, grid: int):
+    """Least squares of the one-step error e on H^-1 [1, step(t - k), ramp(t - k)] for onsets
+    k on a grid (the AR correction is left out: it would whiten a drift away). Returns the best
+    k, the drop of the residual sum of squares and the fitted step + ramp part."""
     n = len(e)
-    hinv = out.noise.inverse()
     t = np.arange(n, dtype=float)
     step0, ramp0 = hinv.filter(np.ones(n)), hinv.filter(t / n)
     base = np.ones(n)
-    scale = out.sigma[0] ** 2
     rss0 = np.sum((e[ok] - e[ok].mean()) ** 2)
-    best = (first_onset, 0.0)
+    best = (first_onset, 0.0, np.zeros(n))
     for k in range(max(first_onset, 2 * SETTLE), n - 2 * grid, grid):
-        step = np.r_[np.zeros(k), step0[: n - k]]
-        ramp = np.r_[np.zeros(k), ramp0[: n - k]]
-        x = np.column_stack([base, step, ramp])[ok]
-        coef = np.linalg.solve(x.T @ x + 1e-12 * np.eye(3), x.T @ e[ok])
-        drop = (rss0 - np.sum((e[ok] - x @ coef) ** 2)) / scale
+        x = np.column_stack([base, np.r_[np.zeros(k), step0[: n - k]], np.r_[np.zeros(k), ramp0[: n - k]]])
+        coef = np.linalg.solve(x[ok].T @ x[ok] + 1e-12 * np.eye(3), x[ok].T @ e[ok])
+        drop = rss0 - np.sum((e[ok] - x[ok] @ coef) ** 2)
         if drop > best[1]:
-            best = (k, float(drop))
+            best = (k, float(drop), x[:, 1:] @ coef[1:])
     return best
 
 

@@ -15,17 +15,20 @@ error of the nominal model and e = H_i^-1 v its one-step prediction error:
    (``time_constant``) or delay (``delay``), a unit-gain first-order-plus-delay channel from an
    input the model says has none (``missing_coupling``) or from an extra data column
    (``unmodeled_input``), or the channel driven through an actuator backlash
-   (``input_nonlinearity``). ``scan_onset`` gives the best onset and theta per shape (exact
-   two-segment least squares), shapes are searched on grids.
-3. Held-out scoring. Post-onset data are cut into 1 h blocks; theta is refitted on the even
-   blocks and scored on the odd ones and vice versa. The score is the held-out drop of the
-   whitened squared error (a likelihood-ratio statistic) minus log(N) per fitted parameter
-   (BIC-like; the onset and grid choices count as parameters). Only a positive score is a
-   finding; findings are accepted greedily, the residual updated after each.
+   (``input_nonlinearity``, no free scale), or an additive ramp/step (``output_drift``).
+   ``scan_onset`` gives the best onset and theta per shape (exact two-segment least squares),
+   shapes are searched on grids.
+3. Held-out scoring. The record is cut into 1 h blocks; shape, onset and theta are chosen on
+   the even blocks and scored on the odd ones and vice versa. The score is the held-out drop
+   of the whitened squared error (a likelihood-ratio statistic) minus log(N)/2 per parameter
+   (theta, grid value, onset). A finding needs a positive score, a held-out drop of at least
+   ``min_effect`` of the error variance, an effect present in both halves after its onset and
+   a lower held-out error for the model ``update`` writes; findings are accepted greedily, the
+   residual updated after each.
 4. Noise candidates, on outputs without a process finding: ``noise_change`` (new noise model
-   H / A_after, or an innovation-level change) and ``output_drift`` (a slow pole
-   H / (1 - rho q^-1) after the onset), scored the same way in the nominal model's
-   one-step-error domain.
+   H / A_after, or an innovation-level change) and ``output_drift`` (a slow drift component
+   H (1 - c q^-1) / (1 - rho q^-1) after the onset), scored the same way in the nominal
+   model's one-step-error domain. A drift that wins in the process pool is written the same way.
 
 error_before / error_after: RMS of the one-step prediction error of the affected output
 (output units, signals as deviations from the record mean), on the held-out blocks after the
@@ -63,7 +66,6 @@ ACTUATOR_KINDS = ("backlash", "stick_slip")
 DRIFT_GRID_S = 1800.0
 DRIFT_COLUMN = "(drift)"
 MAX_FINDINGS_PER_OUTPUT = 3
-DEBUG = False
 
 
 # --------------------------------------------------------------------------------------------
@@ -471,10 +473,6 @@ def _process_findings(out: _Output, sig: Signals, first_onset, min_segment, step
         fits = [_fit_shape(out, r, s, first_onset, min_segment, step, cache)
                 for s in shapes if s.column not in taken]
         fits = _best_per_channel(fits, logn)
-        if DEBUG:
-            for f in sorted(fits, key=lambda f: -f.score)[:6]:
-                print(f"   {out.name} {f.shape.effect} {f.shape.column} label={f.shape.label} onset={f.onset} "
-                      f"stat={f.statistic:.1f} heldout={f.heldout:.1f} score={f.score:.1f} theta={f.theta:.3f}")
         fits = [f for f in fits if _present_in_both_halves(out, r, f, cache)]
         if not fits:
             break
@@ -617,7 +615,7 @@ def _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, m
             width = width_factor * scale
             moved = getattr(_core, kind)(u, width)
             ub = moved - np.mean(moved)
-            total, heldout, per_out = 0.0, 0.0, []
+            heldout, per_out = 0.0, []
             for out in outputs:
                 g = out.row[j]
                 if g is None:
@@ -641,7 +639,6 @@ def _nonlinearity_findings(outputs, sig, first_onset, min_segment, step, logn, m
                 for k in (0, 1):
                     on_k, _ = best_onset(out.fold[k])
                     h += float(np.sum((drop * out.fold[1 - k])[on_k:]))
-                total += stat
                 heldout += h
                 per_out.append((out, shape, onset, 1.0, 1.0, h))
             if not per_out:

@@ -11,3 +11,6 @@ from . import identify
 from .svm import OneClassSVM, cross_validate_outlier_fraction, resample
 from .simulate import simulate
 from . import scenarios
+from .compare import compare
+from .diagnose import diagnose
+from .update import update

@@ -19,10 +19,10 @@ COMMANDS: dict[str, tuple[str, str | None]] = {
     "demo": ("reproduce the paper's example end to end (simulate, detect, plot)", None),
     "simulate": ("closed-loop simulation with MPC and scheduled plant/noise changes", "mpmpp.commands.simulate"),
     "evaluate": ("Monte Carlo: detection and false-alarm rates, delays, against baselines", None),
-    "compare": ("model vs measurements: fit per output, residual tests, where it fails", None),
+    "compare": ("model vs measurements: fit per output, residual tests, where it fails", "mpmpp.commands.compare"),
     "detect": ("moving-window MPM and noise-change detection per channel", None),
-    "diagnose": ("ranked findings: which physical effect is missing, where, when", None),
-    "update": ("add/refit the effect(s), write the new model, print error before and after", None),
+    "diagnose": ("ranked findings: which physical effect is missing, where, when", "mpmpp.commands.diagnose"),
+    "update": ("add/refit the effect(s), write the new model, print error before and after", "mpmpp.commands.update"),
     "check": ("validate a model file (and a data file against it) and summarise them", "mpmpp.commands.check"),
 }
 

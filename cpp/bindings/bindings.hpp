@@ -14,4 +14,5 @@ void bind_change_scan(pybind11::module_& m);
 void bind_one_class_svm(pybind11::module_& m);
 void bind_mpc(pybind11::module_& m);
 void bind_closed_loop(pybind11::module_& m);
+void bind_detector(pybind11::module_& m);
 }  // namespace mpmpp::bindings

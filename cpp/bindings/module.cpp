@@ -14,4 +14,5 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_one_class_svm(m);
   mpmpp::bindings::bind_mpc(m);
   mpmpp::bindings::bind_closed_loop(m);
+  mpmpp::bindings::bind_detector(m);
 }

@@ -14,3 +14,4 @@ from . import scenarios
 from .compare import compare
 from .diagnose import diagnose
 from .update import update
+from .detect import DetectionResult, Detector, DetectorConfig, detect

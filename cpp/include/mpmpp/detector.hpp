@@ -1,0 +1,111 @@
+#pragma once
+// Moving-window model-plant mismatch (MPM) and noise-change detector (paper Sections 2, 4).
+//
+// A Detector holds, per monitored channel (window_features.hpp: every process channel of the
+// nominal model, and the noise model of every output), the trained one-class SVM that bounds
+// the "normal" cluster of estimates from the training period, with the feature
+// standardisation it was trained in. Training (resampling, cross-validated outlier fraction,
+// SVM fit) is orchestrated by Python (mpmpp.detect), which builds the Detector from the
+// trained parts; everything a plant needs afterwards is here, in C++ alone:
+//   * score_window: ARX-OE on one window -> SVM score h(x) per channel (eq. 20, paper scale);
+//   * monitor: every window of a series -> scores (0 inside the training period, as in the
+//     paper's Figs 4, 7, 8; NaN for skipped windows), the indicator of eq. 23 and the
+//     alarms per channel (mismatch_indicator.hpp) with their start times;
+//   * save / load: a versioned JSON file ("format": "mpmpp-detector", "version": 1),
+//     written atomically; a missing, truncated, corrupt or newer file is a clear InputError.
+// The streaming front end of issue 9 is WindowFeatures + ChannelScorer + MismatchIndicator.
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "mpmpp/detector_config.hpp"
+#include "mpmpp/model.hpp"
+#include "mpmpp/one_class_svm.hpp"
+#include "mpmpp/window_features.hpp"
+
+namespace mpmpp {
+
+// The trained SVM of one channel and the standardisation of its features:
+// z = (x - feature_mean) / feature_scale,  h(x) = (sum_i dual_coef_i k(sv_i, z) - offset) / (nu l)
+// (eq. 20 in the paper's scaling: same sign as scikit-learn's decision_function).
+struct ChannelScorer {
+  Eigen::VectorXd feature_mean, feature_scale;
+  RowMatrixXd support_vectors;  // in the standardised space
+  Eigen::VectorXd dual_coef;    // libsvm scaling, in (0, 1]
+  double offset = 0;            // libsvm scaling, after the outlier-fraction shift
+  double kernel_scale = 1;      // c of eq. 15
+  double nu = 0.5;
+  int n_train = 0;              // l: resampled models the SVM was fitted on
+  // Training report (not needed to score).
+  int training_windows = 0;
+  double outlier_fraction = 0;
+  double cv_accuracy = -1;      // -1: the outlier fraction was fixed, not cross-validated
+
+  double score(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  Eigen::VectorXd score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X) const;  // NaN rows -> NaN
+  void validate(int feature_length, const std::string& where) const;  // InputError on bad shapes
+};
+
+struct DetectionAlarm {
+  int channel = 0;      // index into channels
+  int window = 0;       // the window at which the indicator first reached s_T
+  double start_s = 0;   // that window's end time
+};
+
+struct DetectionResult {
+  std::vector<MonitoredChannel> channels;
+  std::vector<FeatureWindow> windows;
+  std::vector<bool> training;  // per window: ends inside the training period (scores 0)
+  Eigen::MatrixXd scores;      // windows x channels
+  Eigen::MatrixXd indicator;   // windows x channels, eq. 23
+  std::vector<DetectionAlarm> alarms;  // in window order, then channel order
+};
+
+class Detector {
+ public:
+  // scorers[k] belongs to monitored_channels(nominal)[k]. train_end_s is counted from the
+  // first sample of a monitored series: windows ending at or before time_s[0] + train_end_s
+  // are training windows.
+  Detector(Model nominal, DetectorConfig config, double train_end_s, std::vector<ChannelScorer> scorers);
+
+  // Every window of (time_s, u, y): ARX-OE features, scores, indicator, alarms.
+  DetectionResult monitor(const Eigen::Ref<const Eigen::VectorXd>& time_s,
+                          const Eigen::Ref<const Eigen::MatrixXd>& u,
+                          const Eigen::Ref<const Eigen::MatrixXd>& y) const;
+  // The same from features already extracted (the training run reuses its ARX-OE estimates).
+  DetectionResult monitor(const WindowFeatures::Series& series) const;
+
+  // One window (window_samples rows): score per channel; all NaN when the window is skipped.
+  // `features` (from make_features()) is the caller's ARX-OE workspace, reused across windows.
+  Eigen::VectorXd score_window(WindowFeatures& features, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                               const Eigen::Ref<const Eigen::MatrixXd>& y,
+                               std::string* skip_reason = nullptr) const;
+
+  const Model& model() const { return model_; }
+  const DetectorConfig& config() const { return config_; }
+  double train_end_s() const { return train_end_s_; }
+  const std::vector<MonitoredChannel>& channels() const { return channels_; }
+  const std::vector<ChannelScorer>& scorers() const { return scorers_; }
+  // A fresh feature extractor for this detector's model and config (own workspace).
+  WindowFeatures make_features() const { return WindowFeatures(model_, config_); }
+
+  std::string to_json() const;
+  // `source` names the text in error messages (the file path for load).
+  static Detector from_json(const std::string& text, const std::string& source);
+  void save(const std::string& path) const;  // atomic: temporary file + rename
+  static Detector load(const std::string& path);
+
+  static constexpr int kFormatVersion = 1;
+
+ private:
+  Model model_;
+  DetectorConfig config_;
+  double train_end_s_;
+  std::vector<ChannelScorer> scorers_;
+  std::vector<MonitoredChannel> channels_;
+};
+
+// Short channel name for messages and plots: "G[y <- u]" or "H[y]".
+std::string channel_label(const Model& model, const MonitoredChannel& channel);
+
+}  // namespace mpmpp

@@ -1,0 +1,86 @@
+#pragma once
+// What the detector compares, window by window (paper Sections 3 and 4.2): closed-loop
+// ARX-OE (arx_oe.hpp) on each moving window, turned into one feature vector per monitored
+// channel:
+//   process channel G_ij (every channel the nominal model has): the FIR coefficients
+//     g_0 .. g_m of the estimated G_ij after the nominal delay (eq. 21);
+//   noise channel H_i (one per output): a_1 .. a_na of the estimated A_i(q) = 1/H_i (Remark 5).
+// Each output is one MISO ARX-OE problem over the inputs its model channels use (Sec. 3.3).
+// Choices: the ARX uses the paper's order n_b for B_ij, i.e. n_b + 1 coefficients
+// b_0..b_nb (eq. 12 writes B = 1 + b_1 q^-1 + ... + b_n q^-n), and the nominal delays;
+// the FIR length m + 1 is config.fir_length or, when 0, where the nominal impulse response
+// falls below 1% of its peak (fir_length_to_one_percent), so a gain or pole change shows in
+// every coefficient the nominal model deems significant.
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "mpmpp/arx_oe.hpp"
+#include "mpmpp/detector_config.hpp"
+#include "mpmpp/model.hpp"
+
+namespace mpmpp {
+
+// A monitored channel: the process model G_ij (output i <- input j) or the noise model H_i.
+struct MonitoredChannel {
+  enum class Kind { Process, Noise };
+  Kind kind = Kind::Process;
+  int output = 0;
+  int input = -1;  // -1 for a noise channel
+};
+
+// Every process channel the model has (output-major), then one noise channel per output.
+std::vector<MonitoredChannel> monitored_channels(const Model& model);
+
+// One moving window [first, first + window_samples) of a series.
+struct FeatureWindow {
+  int first = 0;                  // index of its first sample
+  double start_s = 0, end_s = 0;  // first sample's time; last sample's time + sample time
+  bool skipped = false;           // NaN in the window, or ARX-OE could not estimate
+  std::string skip_reason;
+};
+
+class WindowFeatures {
+ public:
+  WindowFeatures(const Model& nominal, const DetectorConfig& config);
+
+  const std::vector<MonitoredChannel>& channels() const { return channels_; }
+  int feature_length(int channel) const { return feature_length_[channel]; }
+  int window_samples() const { return window_; }
+  int step_samples() const { return step_; }
+
+  // One window: u (window_samples x inputs), y (window_samples x outputs), columns in the
+  // model's order. Fills features[k] for every channel k and returns true, or returns false
+  // with the reason when the window holds a NaN or is not informative (NumericalError of
+  // ARX-OE); InputError on wrong shapes.
+  bool extract(const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y,
+               std::vector<Eigen::VectorXd>& features, std::string* skip_reason = nullptr);
+
+  // All windows of a series (windows start at 0, step, 2 step, ... while they fit).
+  struct Series {
+    std::vector<FeatureWindow> windows;
+    std::vector<Eigen::MatrixXd> features;  // per channel: windows x feature_length, NaN rows when skipped
+  };
+  Series extract_series(const Eigen::Ref<const Eigen::VectorXd>& time_s,
+                        const Eigen::Ref<const Eigen::MatrixXd>& u,
+                        const Eigen::Ref<const Eigen::MatrixXd>& y);
+
+ private:
+  struct OutputProblem {
+    std::vector<int> inputs;    // model inputs in this output's MISO problem
+    std::vector<int> channels;  // monitored process channel per entry of inputs
+    std::vector<int> skip;      // leading FIR samples (the nominal delay) dropped per input
+    int noise_channel = 0;
+    ArxOeEstimator estimator;
+    Eigen::MatrixXd u;          // window workspace: the problem's input columns
+  };
+  double sample_time_s_;
+  int num_inputs_, num_outputs_;
+  int window_, step_;
+  std::vector<MonitoredChannel> channels_;
+  std::vector<int> feature_length_;
+  std::vector<OutputProblem> problems_;
+  ArxOeResult result_;
+};
+
+}  // namespace mpmpp

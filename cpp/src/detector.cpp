@@ -1,0 +1,275 @@
+#include "mpmpp/detector.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "detector_config_json.hpp"
+#include "mpmpp/error.hpp"
+#include "mpmpp/mismatch_indicator.hpp"
+#include "mpmpp/model_io.hpp"
+#include "text_file.hpp"
+
+namespace mpmpp {
+
+using nlohmann::json;
+
+// ---------------------------------------------------------------------------- ChannelScorer
+
+double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  RowMatrixXd z = ((x - feature_mean).array() / feature_scale.array()).matrix().transpose();
+  const double f = gaussian_kernel_expansion(support_vectors, dual_coef, kernel_scale, z)[0] - offset;
+  return f / (nu * n_train);  // eq. 20: h = f / (nu l)
+}
+
+Eigen::VectorXd ChannelScorer::score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  // Row by row through score(): a blocked kernel product would sum in a different order than
+  // the one-window (streaming) path, and batch and streaming scores must be bit-identical.
+  Eigen::VectorXd h = Eigen::VectorXd::Constant(X.rows(), std::numeric_limits<double>::quiet_NaN());
+  for (Eigen::Index r = 0; r < X.rows(); ++r)
+    if (X.row(r).allFinite()) h[r] = score(X.row(r).transpose());
+  return h;
+}
+
+void ChannelScorer::validate(int feature_length, const std::string& where) const {
+  auto fail = [&](const std::string& what) { throw InputError(where + ": " + what); };
+  if (feature_mean.size() != feature_length || feature_scale.size() != feature_length)
+    fail("feature_mean/feature_scale must have " + std::to_string(feature_length) + " entries");
+  if (!feature_mean.allFinite() || !feature_scale.allFinite() || (feature_scale.array() <= 0).any())
+    fail("feature_scale must be finite and positive, feature_mean finite");
+  if (support_vectors.rows() < 1 || support_vectors.cols() != feature_length)
+    fail("support_vectors must be n_sv x " + std::to_string(feature_length));
+  if (dual_coef.size() != support_vectors.rows()) fail("dual_coef must have one entry per support vector");
+  if (!support_vectors.allFinite() || !dual_coef.allFinite() || !std::isfinite(offset))
+    fail("support_vectors, dual_coef and offset must be finite");
+  if (!(kernel_scale > 0) || !std::isfinite(kernel_scale)) fail("kernel_scale must be positive");
+  if (!(nu > 0 && nu <= 1)) fail("nu must be in (0, 1]");
+  if (n_train < 1) fail("n_train must be >= 1");
+}
+
+// -------------------------------------------------------------------------------- Detector
+
+std::string channel_label(const Model& model, const MonitoredChannel& c) {
+  if (c.kind == MonitoredChannel::Kind::Noise) return "H[" + model.outputs[c.output] + "]";
+  return "G[" + model.outputs[c.output] + " <- " + model.inputs[c.input] + "]";
+}
+
+Detector::Detector(Model nominal, DetectorConfig config, double train_end_s,
+                   std::vector<ChannelScorer> scorers)
+    : model_(std::move(nominal)), config_(std::move(config)), train_end_s_(train_end_s),
+      scorers_(std::move(scorers)) {
+  config_.validate();
+  if (!std::isfinite(train_end_s_) || train_end_s_ <= 0)
+    throw InputError("detector: train_end_s must be a positive number of seconds");
+  const WindowFeatures features(model_, config_);  // checks the model against the config
+  channels_ = features.channels();
+  if (scorers_.size() != channels_.size())
+    throw InputError("detector: " + std::to_string(scorers_.size()) + " channel scorers given, the model has " +
+                     std::to_string(channels_.size()) + " monitored channels");
+  for (size_t k = 0; k < channels_.size(); ++k)
+    scorers_[k].validate(features.feature_length(static_cast<int>(k)),
+                         "detector: channel " + channel_label(model_, channels_[k]));
+}
+
+DetectionResult Detector::monitor(const Eigen::Ref<const Eigen::VectorXd>& time_s,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& y) const {
+  WindowFeatures features = make_features();
+  return monitor(features.extract_series(time_s, u, y));
+}
+
+DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
+  const int n_windows = static_cast<int>(series.windows.size());
+  const int n_channels = static_cast<int>(channels_.size());
+  if (static_cast<int>(series.features.size()) != n_channels)
+    throw InputError("detector: features for " + std::to_string(series.features.size()) +
+                     " channels given, expected " + std::to_string(n_channels));
+  DetectionResult r;
+  r.channels = channels_;
+  r.windows = series.windows;
+  r.training.assign(n_windows, false);
+  r.scores.setZero(n_windows, n_channels);
+  r.indicator.setZero(n_windows, n_channels);
+  if (n_windows == 0) return r;
+  // Training windows end at or before the first window's start + train_end_s (half a sample
+  // of slack so that times read back from a CSV compare as intended).
+  const double train_end_abs = series.windows[0].start_s + train_end_s_ + 0.5 * model_.sample_time_s;
+  for (int w = 0; w < n_windows; ++w) r.training[w] = series.windows[w].end_s <= train_end_abs;
+  for (int k = 0; k < n_channels; ++k) {
+    if (series.features[k].rows() != n_windows)
+      throw InputError("detector: features of channel " + std::to_string(k) + " have " +
+                       std::to_string(series.features[k].rows()) + " rows, expected " +
+                       std::to_string(n_windows));
+    r.scores.col(k) = scorers_[k].score_rows(series.features[k]);
+    MismatchIndicator indicator(config_.inspection_windows(), config_.alarm_count());
+    for (int w = 0; w < n_windows; ++w) {
+      if (r.training[w]) r.scores(w, k) = 0.0;  // as in the paper: 0 while the SVM is trained
+      const auto update = indicator.push(r.scores(w, k));
+      r.indicator(w, k) = update.indicator;
+      if (update.started) r.alarms.push_back({k, w, series.windows[w].end_s});
+    }
+  }
+  std::stable_sort(r.alarms.begin(), r.alarms.end(),
+                   [](const DetectionAlarm& a, const DetectionAlarm& b) { return a.window < b.window; });
+  return r;
+}
+
+Eigen::VectorXd Detector::score_window(WindowFeatures& features, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                       const Eigen::Ref<const Eigen::MatrixXd>& y,
+                                       std::string* skip_reason) const {
+  std::vector<Eigen::VectorXd> f;
+  Eigen::VectorXd h = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(channels_.size()),
+                                                std::numeric_limits<double>::quiet_NaN());
+  if (!features.extract(u, y, f, skip_reason)) return h;
+  for (size_t k = 0; k < channels_.size(); ++k) h[k] = scorers_[k].score(f[k]);
+  return h;
+}
+
+// ------------------------------------------------------------------------------ file format
+
+namespace {
+
+json vector_json(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
+
+// Reads the detector file with every problem named by its JSON path.
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const {
+    throw InputError(source_ + ": " + path + ": " + what);
+  }
+  const json& field(const json& j, const std::string& path, const char* key) const {
+    if (!j.is_object()) fail(path, "expected an object");
+    auto it = j.find(key);
+    if (it == j.end()) fail(path, std::string("missing field '") + key + "'");
+    return *it;
+  }
+  double number(const json& j, const std::string& path) const {
+    if (!j.is_number()) fail(path, "expected a number");
+    return j.get<double>();
+  }
+  int integer(const json& j, const std::string& path) const {
+    if (!j.is_number_integer()) fail(path, "expected an integer");
+    return j.get<int>();
+  }
+  Eigen::VectorXd vector(const json& j, const std::string& path) const {
+    if (!j.is_array()) fail(path, "expected an array of numbers");
+    Eigen::VectorXd v(j.size());
+    for (size_t k = 0; k < j.size(); ++k) v[k] = number(j[k], path + "[" + std::to_string(k) + "]");
+    return v;
+  }
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+const char* kind_name(MonitoredChannel::Kind k) {
+  return k == MonitoredChannel::Kind::Process ? "process" : "noise";
+}
+
+}  // namespace
+
+std::string Detector::to_json() const {
+  json channels = json::array();
+  for (size_t k = 0; k < channels_.size(); ++k) {
+    const MonitoredChannel& c = channels_[k];
+    const ChannelScorer& s = scorers_[k];
+    json sv = json::array();
+    for (Eigen::Index r = 0; r < s.support_vectors.rows(); ++r)
+      sv.push_back(vector_json(s.support_vectors.row(r).transpose()));
+    json jc{{"kind", kind_name(c.kind)}, {"output", model_.outputs[c.output]}};
+    if (c.kind == MonitoredChannel::Kind::Process) jc["input"] = model_.inputs[c.input];
+    jc["training_windows"] = s.training_windows;
+    jc["outlier_fraction"] = s.outlier_fraction;
+    jc["cv_accuracy"] = s.cv_accuracy < 0 ? json(nullptr) : json(s.cv_accuracy);
+    jc["feature_mean"] = vector_json(s.feature_mean);
+    jc["feature_scale"] = vector_json(s.feature_scale);
+    jc["svm"] = json{{"kernel_scale", s.kernel_scale}, {"nu", s.nu},     {"n_train", s.n_train},
+                     {"offset", s.offset},             {"dual_coef", vector_json(s.dual_coef)},
+                     {"support_vectors", sv}};
+    channels.push_back(std::move(jc));
+  }
+  // nlohmann writes doubles in their shortest round-trip form: a reload scores identically.
+  json j{{"format", "mpmpp-detector"},
+         {"version", kFormatVersion},
+         {"train_end_s", train_end_s_},
+         {"config", detail::config_to_json(config_)},
+         {"model", json::parse(model_to_json(model_))},
+         {"channels", channels}};
+  return j.dump(1);
+}
+
+Detector Detector::from_json(const std::string& text, const std::string& source) {
+  Reader rd(source);
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw InputError(source + ": not a complete JSON document (truncated or corrupt file?): " + e.what());
+  }
+  const json& format = rd.field(j, "(top level)", "format");
+  if (!format.is_string() || format.get<std::string>() != "mpmpp-detector")
+    rd.fail("format", "not an mpmpp detector file (expected \"mpmpp-detector\")");
+  const int version = rd.integer(rd.field(j, "(top level)", "version"), "version");
+  if (version < 1 || version > kFormatVersion)
+    rd.fail("version", "format version " + std::to_string(version) + " is not supported (this mpmpp reads " +
+                           std::to_string(kFormatVersion) + "); upgrade mpmpp or retrain");
+  const double train_end_s = rd.number(rd.field(j, "(top level)", "train_end_s"), "train_end_s");
+  DetectorConfig config = detail::config_from_json(rd.field(j, "(top level)", "config"), source + ": config");
+  Model model = parse_model(rd.field(j, "(top level)", "model").dump(), source + ": model");
+  const json& jch = rd.field(j, "(top level)", "channels");
+  if (!jch.is_array()) rd.fail("channels", "expected an array");
+  const std::vector<MonitoredChannel> expected = monitored_channels(model);
+  if (jch.size() != expected.size())
+    rd.fail("channels", std::to_string(jch.size()) + " channels, the model has " +
+                            std::to_string(expected.size()) + " monitored channels");
+  std::vector<ChannelScorer> scorers;
+  for (size_t k = 0; k < jch.size(); ++k) {
+    const std::string p = "channels[" + std::to_string(k) + "]";
+    const json& c = jch[k];
+    const MonitoredChannel& e = expected[k];
+    const json& kind = rd.field(c, p, "kind");
+    const bool same = kind.is_string() && kind.get<std::string>() == kind_name(e.kind) &&
+                      rd.field(c, p, "output") == model.outputs[e.output] &&
+                      (e.kind == MonitoredChannel::Kind::Noise || rd.field(c, p, "input") == model.inputs[e.input]);
+    if (!same) rd.fail(p, "does not match the model's channel " + channel_label(model, e));
+    ChannelScorer s;
+    s.training_windows = rd.integer(rd.field(c, p, "training_windows"), p + ".training_windows");
+    s.outlier_fraction = rd.number(rd.field(c, p, "outlier_fraction"), p + ".outlier_fraction");
+    const json& cv = rd.field(c, p, "cv_accuracy");
+    s.cv_accuracy = cv.is_null() ? -1.0 : rd.number(cv, p + ".cv_accuracy");
+    s.feature_mean = rd.vector(rd.field(c, p, "feature_mean"), p + ".feature_mean");
+    s.feature_scale = rd.vector(rd.field(c, p, "feature_scale"), p + ".feature_scale");
+    const std::string ps = p + ".svm";
+    const json& svm = rd.field(c, p, "svm");
+    s.kernel_scale = rd.number(rd.field(svm, ps, "kernel_scale"), ps + ".kernel_scale");
+    s.nu = rd.number(rd.field(svm, ps, "nu"), ps + ".nu");
+    s.n_train = rd.integer(rd.field(svm, ps, "n_train"), ps + ".n_train");
+    s.offset = rd.number(rd.field(svm, ps, "offset"), ps + ".offset");
+    s.dual_coef = rd.vector(rd.field(svm, ps, "dual_coef"), ps + ".dual_coef");
+    const json& sv = rd.field(svm, ps, "support_vectors");
+    if (!sv.is_array() || sv.empty()) rd.fail(ps + ".support_vectors", "expected a non-empty array of rows");
+    const Eigen::Index m = s.feature_mean.size();
+    s.support_vectors.resize(sv.size(), m);
+    for (size_t r = 0; r < sv.size(); ++r) {
+      const std::string pr = ps + ".support_vectors[" + std::to_string(r) + "]";
+      Eigen::VectorXd row = rd.vector(sv[r], pr);
+      if (row.size() != m) rd.fail(pr, "expected " + std::to_string(m) + " numbers");
+      s.support_vectors.row(r) = row.transpose();
+    }
+    scorers.push_back(std::move(s));
+  }
+  try {
+    return Detector(std::move(model), std::move(config), train_end_s, std::move(scorers));
+  } catch (const InputError& e) {
+    throw InputError(source + ": " + e.what());
+  }
+}
+
+void Detector::save(const std::string& path) const { detail::write_file_atomic(path, to_json()); }
+
+Detector Detector::load(const std::string& path) { return from_json(detail::read_text_file(path), path); }
+
+}  // namespace mpmpp

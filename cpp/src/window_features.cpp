@@ -1,0 +1,145 @@
+#include "mpmpp/window_features.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "mpmpp/error.hpp"
+
+namespace mpmpp {
+
+std::vector<MonitoredChannel> monitored_channels(const Model& model) {
+  std::vector<MonitoredChannel> channels;
+  for (int i = 0; i < model.num_outputs(); ++i)
+    for (int j = 0; j < model.num_inputs(); ++j)
+      if (model.has_channel(i, j)) channels.push_back({MonitoredChannel::Kind::Process, i, j});
+  for (int i = 0; i < model.num_outputs(); ++i)
+    channels.push_back({MonitoredChannel::Kind::Noise, i, -1});
+  return channels;
+}
+
+namespace {
+
+ArxOeConfig output_problem_config(const Model& model, const DetectorConfig& config, int i,
+                                  const std::vector<int>& inputs, std::vector<int>& fir_after_delay) {
+  ArxOeConfig c;
+  c.arx.na = config.arx_order_a;
+  c.detrend = Detrend::Mean;
+  c.arx_options.delta = config.arx_regularisation;
+  for (int j : inputs) {
+    const TransferFunction& g = *model.process[i][j];
+    const int d = g.delay();
+    c.arx.nb.push_back(config.arx_order_b + 1);  // b_0..b_nb: paper order n_b
+    c.arx.delays.push_back(d);
+    // FIR length with the delay's leading zeros (what ArxOeEstimator returns).
+    const int length = config.fir_length > 0 ? d + config.fir_length : fir_length_to_one_percent(g);
+    fir_after_delay.push_back(length - d);
+    c.fir_length.push_back(length);
+    c.structures.push_back(config.oe_structure == OeStructure::Foptd
+                               ? OeChannel::foptd(d)
+                               : OeChannel::fir(length - d, d));
+  }
+  return c;
+}
+
+}  // namespace
+
+WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& config)
+    : sample_time_s_(nominal.sample_time_s),
+      num_inputs_(nominal.num_inputs()),
+      num_outputs_(nominal.num_outputs()) {
+  config.validate();
+  window_ = config.window_samples(nominal.sample_time_s);
+  step_ = config.step_samples(nominal.sample_time_s);
+  channels_ = monitored_channels(nominal);
+  feature_length_.assign(channels_.size(), 0);
+  for (int i = 0; i < num_outputs_; ++i) {
+    std::vector<int> inputs, channels;
+    for (size_t k = 0; k < channels_.size(); ++k)
+      if (channels_[k].kind == MonitoredChannel::Kind::Process && channels_[k].output == i) {
+        inputs.push_back(channels_[k].input);
+        channels.push_back(static_cast<int>(k));
+      }
+    if (inputs.empty())
+      throw InputError("detector: output '" + nominal.outputs[i] +
+                       "' has no process channel in the model; nothing to monitor it against");
+    std::vector<int> fir_after_delay;
+    ArxOeConfig c = output_problem_config(nominal, config, i, inputs, fir_after_delay);
+    std::vector<int> skip;
+    for (size_t e = 0; e < inputs.size(); ++e) {
+      skip.push_back(c.arx.delays[e]);
+      feature_length_[channels[e]] = fir_after_delay[e];
+    }
+    int noise_channel = 0;
+    for (size_t k = 0; k < channels_.size(); ++k)
+      if (channels_[k].kind == MonitoredChannel::Kind::Noise && channels_[k].output == i)
+        noise_channel = static_cast<int>(k);
+    feature_length_[noise_channel] = config.arx_order_a;
+    problems_.push_back(OutputProblem{inputs, channels, skip, noise_channel, ArxOeEstimator(std::move(c)),
+                                      Eigen::MatrixXd(window_, static_cast<Eigen::Index>(inputs.size()))});
+  }
+}
+
+bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
+                             const Eigen::Ref<const Eigen::MatrixXd>& y,
+                             std::vector<Eigen::VectorXd>& features, std::string* skip_reason) {
+  if (u.rows() != window_ || y.rows() != window_ || u.cols() != num_inputs_ || y.cols() != num_outputs_)
+    throw InputError("detector: a window must be " + std::to_string(window_) + " samples of " +
+                     std::to_string(num_inputs_) + " inputs and " + std::to_string(num_outputs_) +
+                     " outputs, got u " + std::to_string(u.rows()) + "x" + std::to_string(u.cols()) +
+                     ", y " + std::to_string(y.rows()) + "x" + std::to_string(y.cols()));
+  // A gap makes the window unusable: FORMATS.md forbids interpolating missing values.
+  if (!u.allFinite() || !y.allFinite()) {
+    if (skip_reason) *skip_reason = "missing values in the window";
+    return false;
+  }
+  features.resize(channels_.size());
+  for (auto& p : problems_) {
+    const int i = channels_[p.noise_channel].output;
+    for (size_t e = 0; e < p.inputs.size(); ++e) p.u.col(e) = u.col(p.inputs[e]);
+    try {
+      p.estimator.estimate(y.col(i), p.u, result_);
+    } catch (const NumericalError& err) {
+      if (skip_reason) *skip_reason = err.what();
+      return false;
+    }
+    for (size_t e = 0; e < p.inputs.size(); ++e) {
+      const Eigen::VectorXd& g = result_.channels[e].fir;
+      features[p.channels[e]] = g.tail(g.size() - p.skip[e]);
+    }
+    features[p.noise_channel] = result_.noise;
+  }
+  return true;
+}
+
+WindowFeatures::Series WindowFeatures::extract_series(const Eigen::Ref<const Eigen::VectorXd>& time_s,
+                                                      const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                                      const Eigen::Ref<const Eigen::MatrixXd>& y) {
+  const Eigen::Index n = time_s.size();
+  if (u.rows() != n || y.rows() != n)
+    throw InputError("detector: time, u and y must have the same number of samples (" +
+                     std::to_string(n) + ", " + std::to_string(u.rows()) + ", " +
+                     std::to_string(y.rows()) + ")");
+  Series s;
+  const int count = n >= window_ ? static_cast<int>((n - window_) / step_) + 1 : 0;
+  s.windows.resize(count);
+  for (size_t k = 0; k < channels_.size(); ++k)
+    s.features.emplace_back(count, feature_length_[k]);
+  std::vector<Eigen::VectorXd> f;
+  for (int w = 0; w < count; ++w) {
+    FeatureWindow& win = s.windows[w];
+    win.first = w * step_;
+    win.start_s = time_s[win.first];
+    win.end_s = time_s[win.first + window_ - 1] + sample_time_s_;
+    win.skipped = !extract(u.middleRows(win.first, window_), y.middleRows(win.first, window_), f,
+                           &win.skip_reason);
+    for (size_t k = 0; k < channels_.size(); ++k) {
+      if (win.skipped)
+        s.features[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());
+      else
+        s.features[k].row(w) = f[k].transpose();
+    }
+  }
+  return s;
+}
+
+}  // namespace mpmpp

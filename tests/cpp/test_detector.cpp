@@ -1,0 +1,191 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "mpmpp/detector.hpp"
+#include "mpmpp/error.hpp"
+#include "mpmpp/mismatch_indicator.hpp"
+#include "mpmpp/model_io.hpp"
+
+using namespace mpmpp;
+
+namespace {
+
+Model siso_model() {
+  Eigen::VectorXd b(1), a(2), hn(2), hd(2);
+  b << 0.1003;
+  a << 1.0, -0.9048;
+  hn << 1.0, -0.3;
+  hd << 1.0, 0.6;
+  return make_model("siso", 5.0, {"u"}, {"y"}, {{"y", {{"u", TransferFunction(b, a, 17)}}}},
+                    {{"y", TransferFunction(hn, hd)}});
+}
+
+// A scorer with random support vectors: the file format does not care how it was trained.
+ChannelScorer random_scorer(int d, std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  ChannelScorer s;
+  s.feature_mean = Eigen::VectorXd::NullaryExpr(d, [&] { return 0.01 * n(rng); });
+  s.feature_scale = Eigen::VectorXd::NullaryExpr(d, [&] { return 0.001 + std::abs(n(rng)); });
+  s.support_vectors = RowMatrixXd::NullaryExpr(7, d, [&] { return n(rng) / 3.0; });
+  s.dual_coef = Eigen::VectorXd::NullaryExpr(7, [&] { return 0.1 + 0.9 * std::abs(std::tanh(n(rng))); });
+  s.offset = 0.123456789012345678;
+  s.kernel_scale = 1.0;
+  s.nu = 0.5;
+  s.n_train = 14;
+  s.training_windows = 13;
+  s.outlier_fraction = 0.05;
+  s.cv_accuracy = 0.9498;
+  return s;
+}
+
+Detector random_detector() {
+  std::mt19937_64 rng(42);
+  Model m = siso_model();
+  DetectorConfig c = DetectorConfig::paper_siso();
+  WindowFeatures f(m, c);
+  std::vector<ChannelScorer> scorers;
+  for (size_t k = 0; k < f.channels().size(); ++k) scorers.push_back(random_scorer(f.feature_length(k), rng));
+  return Detector(m, c, 10800.0, scorers);
+}
+
+std::string temp_path(const char* name) { return std::string(::testing::TempDir()) + name; }
+
+}  // namespace
+
+TEST(Detector, ChannelsAndFeatureLengths) {
+  WindowFeatures f(siso_model(), DetectorConfig::paper_siso());
+  ASSERT_EQ(f.channels().size(), 2u);
+  EXPECT_EQ(f.channels()[0].kind, MonitoredChannel::Kind::Process);
+  EXPECT_EQ(f.channels()[1].kind, MonitoredChannel::Kind::Noise);
+  // 0.1003 * 0.9048^k >= 1% of 0.1003 for k <= 46: 47 coefficients after the delay.
+  EXPECT_EQ(f.feature_length(0), 47);
+  EXPECT_EQ(f.feature_length(1), 9);
+}
+
+TEST(Detector, SaveLoadRoundTripIsExact) {
+  Detector d = random_detector();
+  const std::string path = temp_path("detector_roundtrip.json");
+  d.save(path);
+  Detector back = Detector::load(path);
+  EXPECT_EQ(back.to_json(), d.to_json());
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> n(0.0, 0.02);
+  for (size_t k = 0; k < d.scorers().size(); ++k) {
+    const int m = static_cast<int>(d.scorers()[k].feature_mean.size());
+    Eigen::MatrixXd X = Eigen::MatrixXd::NullaryExpr(20, m, [&] { return n(rng); });
+    Eigen::VectorXd a = d.scorers()[k].score_rows(X), b = back.scorers()[k].score_rows(X);
+    for (int r = 0; r < X.rows(); ++r) EXPECT_EQ(a[r], b[r]);  // bit-identical
+    // eq. 20 written out: h = (sum_i a_i exp(-||sv_i - z||^2 / c) - offset) / (nu l)
+    const ChannelScorer& s = d.scorers()[k];
+    Eigen::VectorXd z = (X.row(3).transpose() - s.feature_mean).cwiseQuotient(s.feature_scale);
+    double sum = 0;
+    for (int i = 0; i < s.support_vectors.rows(); ++i)
+      sum += s.dual_coef[i] * std::exp(-(s.support_vectors.row(i).transpose() - z).squaredNorm() / s.kernel_scale);
+    EXPECT_NEAR(a[3], (sum - s.offset) / (s.nu * s.n_train), 1e-12);
+  }
+  std::remove(path.c_str());
+}
+
+TEST(Detector, CorruptTruncatedOrNewerFilesAreClearErrors) {
+  const std::string text = random_detector().to_json();
+  auto expect_error = [](const std::string& body, const std::string& needle) {
+    try {
+      Detector::from_json(body, "det.json");
+      FAIL() << "no error, expected " << needle;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
+    }
+  };
+  expect_error(text.substr(0, text.size() / 2), "truncated or corrupt");
+  expect_error("", "truncated or corrupt");
+  std::string newer = text;
+  newer.replace(newer.find("\"version\": 1"), 12, "\"version\": 7");
+  expect_error(newer, "version 7");
+  std::string foreign = text;
+  foreign.replace(foreign.find("mpmpp-detector"), 14, "something-else");
+  expect_error(foreign, "not an mpmpp detector file");
+  std::string missing = text;
+  missing.replace(missing.find("\"offset\""), 8, "\"offzet\"");
+  expect_error(missing, "missing field 'offset'");
+  EXPECT_THROW(Detector::load(temp_path("does_not_exist.json")), InputError);
+}
+
+TEST(Detector, MonitorScoresZeroInTrainingAndAlarmsFollowIndicator) {
+  Detector d = random_detector();
+  const int n_windows = 60, n_ch = 2;
+  WindowFeatures::Series s;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int w = 0; w < n_windows; ++w) {
+    FeatureWindow fw;
+    fw.first = 60 * w;
+    fw.start_s = 300.0 * w;
+    fw.end_s = fw.start_s + 7200.0;
+    fw.skipped = (w == 40);
+    s.windows.push_back(fw);
+  }
+  for (int k = 0; k < n_ch; ++k) {
+    const int m = static_cast<int>(d.scorers()[k].feature_mean.size());
+    Eigen::MatrixXd F = Eigen::MatrixXd::NullaryExpr(n_windows, m, [&] { return n(rng); });
+    F.row(40).setConstant(std::nan(""));
+    s.features.push_back(F);
+  }
+  DetectionResult r = d.monitor(s);
+  for (int w = 0; w < n_windows; ++w) {
+    EXPECT_EQ(r.training[w], s.windows[w].end_s <= 10800.0);
+    if (r.training[w]) EXPECT_EQ(r.scores(w, 0), 0.0);
+  }
+  EXPECT_TRUE(std::isnan(r.scores(40, 0)));
+  for (int k = 0; k < n_ch; ++k) {
+    MismatchIndicator ind(24, 23);
+    for (int w = 0; w < n_windows; ++w) {
+      auto u = ind.push(r.scores(w, k));
+      EXPECT_EQ(r.indicator(w, k), u.indicator);
+      bool listed = false;
+      for (const auto& a : r.alarms) listed |= (a.channel == k && a.window == w);
+      EXPECT_EQ(listed, u.started);
+    }
+  }
+}
+
+// The streaming path (score_window per window with the caller's workspace) gives exactly the
+// batch monitor() scores on simulated open-loop data (white-noise input through G, H e noise).
+TEST(Detector, ScoreWindowEqualsBatchMonitor) {
+  Detector d = random_detector();
+  const Model& m = d.model();
+  const int n = 1440 + 40 * 60;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::VectorXd u = Eigen::VectorXd::NullaryExpr(n, [&] { return normal(rng); });
+  Eigen::VectorXd e = Eigen::VectorXd::NullaryExpr(n, [&] { return 0.05 * normal(rng); });
+  Eigen::VectorXd y = m.process[0][0]->filter(u) + m.noise[0].filter(e);
+  Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(n, 0.0, 5.0 * (n - 1));
+  DetectionResult batch = d.monitor(t, u, y);
+  ASSERT_EQ(batch.windows.size(), 41u);
+  int scored = 0;
+  WindowFeatures features = d.make_features();
+  for (size_t w = 0; w < batch.windows.size(); ++w) {
+    const int first = batch.windows[w].first;
+    Eigen::VectorXd h = d.score_window(features, u.segment(first, 1440), y.segment(first, 1440));
+    for (int k = 0; k < h.size(); ++k) {
+      if (batch.training[w]) EXPECT_EQ(batch.scores(w, k), 0.0);
+      else {
+        EXPECT_EQ(h[k], batch.scores(w, k)) << w << " " << k;  // bit-identical
+        ++scored;
+      }
+    }
+  }
+  EXPECT_EQ(scored, 2 * 28);  // windows ending after 3 h: 41 - 13
+  // A window with a gap is skipped with a reason.
+  y[100] = std::nan("");
+  std::string reason;
+  Eigen::VectorXd h = d.score_window(features, u.head(1440), y.head(1440), &reason);
+  EXPECT_TRUE(std::isnan(h[0]) && std::isnan(h[1]));
+  EXPECT_NE(reason.find("missing"), std::string::npos);
+}

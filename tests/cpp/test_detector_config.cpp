@@ -1,0 +1,54 @@
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "mpmpp/detector_config.hpp"
+#include "mpmpp/error.hpp"
+
+using mpmpp::DetectorConfig;
+
+TEST(DetectorConfig, PaperPresetsGiveTableValues) {
+  auto siso = DetectorConfig::paper_siso();
+  EXPECT_EQ(siso.window_samples(5.0), 1440);
+  EXPECT_EQ(siso.step_samples(5.0), 60);
+  EXPECT_EQ(siso.inspection_windows(), 24);
+  EXPECT_EQ(siso.alarm_count(), 23);  // 23/24 = 0.958 >= 0.95 > 22/24
+  EXPECT_EQ(siso.arx_order_a, 9);
+  EXPECT_DOUBLE_EQ(siso.train_duration_s, 10800.0);
+  auto mimo = DetectorConfig::paper_mimo();
+  EXPECT_EQ(mimo.arx_order_a, 18);
+  EXPECT_EQ(mimo.arx_order_b, 10);
+  EXPECT_DOUBLE_EQ(mimo.train_duration_s, 14400.0);
+}
+
+TEST(DetectorConfig, JsonRoundTripAndPresetOverrides) {
+  auto c = DetectorConfig::paper_mimo();
+  c.alpha = 2.25;
+  c.outlier_fraction = 0.05;
+  c.seed = 123456789012345ULL;
+  auto back = DetectorConfig::from_json(c.to_json());
+  EXPECT_EQ(back.to_json(), c.to_json());
+  auto o = DetectorConfig::from_json(R"({"preset": "paper_mimo", "alpha": 2.0})");
+  EXPECT_EQ(o.arx_order_a, 18);
+  EXPECT_DOUBLE_EQ(o.alpha, 2.0);
+}
+
+TEST(DetectorConfig, BadFieldsNameTheField) {
+  auto expect_msg = [](const std::string& text, const std::string& field) {
+    try {
+      DetectorConfig::from_json(text);
+      FAIL() << "no error for " << text;
+    } catch (const mpmpp::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  expect_msg(R"({"alpah": 1})", "alpah");
+  expect_msg(R"({"nu": 0})", "nu");
+  expect_msg(R"({"threshold": 1.5})", "threshold");
+  expect_msg(R"({"step_s": 7})", "inspection_s");  // 7200 s is not a whole number of 7 s steps
+  expect_msg(R"({"arx_order_a": 2.5})", "arx_order_a");
+  expect_msg(R"({"oe_structure": "bj"})", "oe_structure");
+  expect_msg(R"({"preset": "paper_x"})", "paper_x");
+  expect_msg(R"({"window_s": 1)", "JSON");
+  EXPECT_THROW(DetectorConfig::paper_siso().window_samples(7.0), mpmpp::InputError);
+}

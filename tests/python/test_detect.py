@@ -1,0 +1,184 @@
+"""Detector: indicator/alarms against a plain NumPy eq. 23, file round trip, JSON shape,
+a short end-to-end run on a simulated SISO loop, and the Monte Carlo on a Dask LocalCluster."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import mpmpp
+from mpmpp import _core
+from mpmpp.detect import Detector, detect, make_config
+
+TF = mpmpp.TransferFunction
+
+
+def numpy_indicator(scores, n_T):
+    """Eq. 23: share of negative scores among the last n_T windows (earlier windows absent)."""
+    neg = (np.asarray(scores) < 0).astype(float)  # NaN < 0 is False: a skipped window is not negative
+    return np.array([neg[max(0, t - n_T + 1):t + 1].sum() / n_T for t in range(len(neg))])
+
+
+def numpy_alarm_starts(indicator, s_T):
+    above = indicator >= s_T
+    return [t for t in range(len(above)) if above[t] and (t == 0 or not above[t - 1])]
+
+
+@pytest.mark.parametrize("n_T,s_T", [(24, 0.95), (5, 0.6), (1, 1.0), (10, 0.3)])
+def test_indicator_and_alarms_match_numpy(n_T, s_T):
+    rng = np.random.default_rng(n_T)
+    # Blocks of mostly-negative and mostly-positive scores, with zeros (training) and NaN (skipped).
+    scores = rng.normal(0, 1, 600) + np.repeat(rng.choice([-2.0, 1.5], 12), 50)
+    scores[rng.choice(600, 30, replace=False)] = np.nan
+    scores[:40] = 0.0
+    cfg = mpmpp.DetectorConfig()
+    cfg.step_s, cfg.inspection_s, cfg.threshold = 300.0, 300.0 * n_T, s_T
+    ind = _core.MismatchIndicator(cfg.inspection_windows(), cfg.alarm_count())
+    got = [ind.push(float(s)) for s in scores]
+    ref = numpy_indicator(scores, n_T)
+    np.testing.assert_array_equal([g[0] for g in got], ref)
+    assert [t for t, g in enumerate(got) if g[2]] == numpy_alarm_starts(ref, s_T)
+    assert [g[1] for g in got] == list(ref >= s_T)
+
+
+def test_config_presets_and_errors(tmp_path):
+    siso, mimo = make_config("paper_siso"), make_config("paper_mimo")
+    assert (siso.arx_order_a, mimo.arx_order_a, mimo.arx_order_b) == (9, 18, 10)
+    assert siso.window_samples(5.0) == 1440 and siso.inspection_windows() == 24
+    p = tmp_path / "cfg.json"
+    p.write_text(json.dumps({"preset": "paper_mimo", "alpha": 3.0}))
+    assert make_config(str(p)).alpha == 3.0
+    with pytest.raises(ValueError, match="alpah"):
+        make_config({"alpah": 1})
+    with pytest.raises(ValueError, match="threshold"):
+        make_config({"threshold": 2})
+
+
+def siso_data(seed, hours=7.0, gain_change_h=None):
+    """A small closed loop (the paper's SISO plant under the MPC), optionally with a gain change."""
+    scen = mpmpp.scenarios.paper_siso()
+    scen["duration_s"] = hours * 3600
+    scen["events"] = [] if gain_change_h is None else [
+        {"time_s": gain_change_h * 3600, "type": "gain", "output": "dry_weight", "input": "stock_flow",
+         "factor": 2.0}]
+    from mpmpp.evaluate import nominal_model
+
+    return nominal_model(scen), mpmpp.simulate(scen, seed=seed)
+
+
+@pytest.fixture(scope="module")
+def trained():
+    model, data = siso_data(3, hours=7.5, gain_change_h=4.0)
+    result, detector = detect(model, data, 3 * 3600, "paper_siso", return_detector=True)
+    return model, data, result, detector
+
+
+def test_end_to_end_gain_change_alarms_after_change_only(trained):
+    model, data, result, _ = trained
+    starts = result.alarm_starts(0)  # G[dry_weight <- stock_flow]
+    assert starts.size >= 1 and starts.min() >= 4 * 3600
+    assert result.alarm_starts(1).size == 0  # the noise model never changed
+    # Training windows score 0, later windows are scored.
+    tr = result.windows["training"].to_numpy()
+    assert np.all(result.scores[tr] == 0) and np.all(result.scores[~tr] != 0)
+    # Indicator = eq. 23 over the scores.
+    for k in range(result.scores.shape[1]):
+        np.testing.assert_array_equal(result.indicator[:, k], numpy_indicator(result.scores[:, k], 24))
+
+
+def test_json_shape(trained):
+    _, _, result, _ = trained
+    d = json.loads(json.dumps(result.to_dict()))
+    assert set(d) >= {"train_end_s", "channels", "windows", "alarms"}
+    assert d["channels"] == [{"kind": "process", "output": "dry_weight", "input": "stock_flow"},
+                             {"kind": "noise", "output": "dry_weight"}]
+    w = d["windows"][0]
+    assert set(w) == {"start_s", "end_s", "scores", "indicator"} and len(w["scores"]) == 2
+    assert w["end_s"] - w["start_s"] == 7200.0 and w["scores"] == [0.0, 0.0]
+    for a in d["alarms"]:
+        assert set(a) <= {"kind", "output", "input", "start_s"} and a["kind"] in ("process", "noise")
+
+
+def test_nan_windows_are_skipped_and_reported(trained):
+    model, data, _, detector = trained
+    gap = data.copy()
+    gap.loc[5000:5010, "dry_weight"] = np.nan
+    r = detector.monitor(gap)
+    skipped = r.windows["skipped"].to_numpy()
+    first = r.windows["first"].to_numpy()
+    expect = (first <= 5010) & (first + 1440 > 5000)
+    np.testing.assert_array_equal(skipped, expect)
+    assert np.isnan(r.scores[skipped & ~r.windows["training"].to_numpy()]).all()
+    assert len(r.to_dict()["skipped_windows"]) == expect.sum()
+
+
+def test_save_load_new_process_identical_scores(trained, tmp_path):
+    model, data, result, detector = trained
+    path = tmp_path / "detector.json"
+    detector.save(path)
+    csv = tmp_path / "data.csv"
+    mpmpp.save_data(csv, data)
+    script = (
+        "import json, sys, numpy as np, mpmpp\n"
+        "from mpmpp.detect import Detector\n"
+        f"d = Detector.load({str(path)!r})\n"
+        f"r = d.monitor(mpmpp.load_data({str(csv)!r}, d.model))\n"
+        "print(json.dumps({'scores': r.scores.tolist(), 'alarms': r.to_dict()['alarms']}))\n")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    got = json.loads(out.stdout)
+    np.testing.assert_array_equal(np.array(got["scores"]), result.scores)  # bit-identical
+    assert got["alarms"] == result.to_dict()["alarms"]
+    # Round trip of the file itself is exact.
+    assert Detector.load(path)._core.to_json() == detector._core.to_json()
+
+
+def test_corrupt_and_truncated_detector_files_are_clear_errors(trained, tmp_path):
+    _, _, _, detector = trained
+    path = tmp_path / "d.json"
+    detector.save(path)
+    text = path.read_text()
+    bad = tmp_path / "bad.json"
+    bad.write_text(text[: len(text) // 2])
+    with pytest.raises(ValueError, match="truncated or corrupt"):
+        Detector.load(bad)
+    doc = json.loads(text)
+    doc["version"] = 99
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match="version 99"):
+        Detector.load(bad)
+    doc = json.loads(text)
+    del doc["channels"][0]["svm"]["offset"]
+    bad.write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match=r"channels\[0\]\.svm: missing field 'offset'"):
+        Detector.load(bad)
+    with pytest.raises(ValueError, match="cannot read"):
+        Detector.load(tmp_path / "absent.json")
+
+
+def test_too_short_training_is_an_error():
+    model, data = siso_data(0, hours=3.0)
+    with pytest.raises(ValueError, match="train_end_s"):
+        detect(model, data, 2 * 3600 + 60, "paper_siso")
+
+
+def test_cli_detect_json(trained, tmp_path):
+    model, data, result, _ = trained
+    mpmpp.save_model(model, tmp_path / "m.json")
+    mpmpp.save_data(tmp_path / "d.csv", data)
+    from mpmpp.cli import main
+
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "10800",
+                     "--json", "--save-detector", str(tmp_path / "det.json")])
+    assert code == 0
+    d = json.loads(buf.getvalue())
+    assert d["alarms"] == result.to_dict()["alarms"]
+    assert (tmp_path / "det.json").exists()
+    assert main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "-5"]) == 2

@@ -73,7 +73,10 @@ class ArxEstimator {
   std::vector<detail::LaggedColumn> columns_;
   detail::NormalEquationsSolver solver_;
   Eigen::MatrixXd G_;
-  Eigen::VectorXd h_, residual_;
+  Eigen::VectorXd h_;
+  // ArxOeEstimator checks the raw window once and turns the per-call check off.
+  bool check_signals_ = true;
+  friend class ArxOeEstimator;
 };
 
 ArxResult arx(const Eigen::Ref<const Eigen::VectorXd>& y,

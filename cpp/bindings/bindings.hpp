@@ -4,5 +4,11 @@
 
 namespace mpmpp::bindings {
 void bind_transfer_function(pybind11::module_& m);
+void bind_model_io(pybind11::module_& m);
+void bind_data_io(pybind11::module_& m);
+void bind_qp(pybind11::module_& m);
 void bind_identification(pybind11::module_& m);
+void bind_one_class_svm(pybind11::module_& m);
+void bind_mpc(pybind11::module_& m);
+void bind_closed_loop(pybind11::module_& m);
 }  // namespace mpmpp::bindings

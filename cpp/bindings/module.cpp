@@ -4,5 +4,11 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "mpmpp C++/Eigen engine";
   m.attr("__version__") = MPMPP_VERSION;
   mpmpp::bindings::bind_transfer_function(m);
+  mpmpp::bindings::bind_model_io(m);
+  mpmpp::bindings::bind_data_io(m);
+  mpmpp::bindings::bind_qp(m);
   mpmpp::bindings::bind_identification(m);
+  mpmpp::bindings::bind_one_class_svm(m);
+  mpmpp::bindings::bind_mpc(m);
+  mpmpp::bindings::bind_closed_loop(m);
 }

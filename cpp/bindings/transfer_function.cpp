@@ -32,6 +32,7 @@ void bind_transfer_function(py::module_& m) {
       .def("parallel", &TransferFunction::parallel)
       .def("inverse", &TransferFunction::inverse)
       .def(py::self == py::self)
+      .def("__str__", [](const TransferFunction& g) { return to_string(g); })
       .def("__repr__", [](const TransferFunction& g) {
         return "TransferFunction(num=" + py::repr(py::cast(g.num())).cast<std::string>() +
                ", den=" + py::repr(py::cast(g.den())).cast<std::string>() +

@@ -1,6 +1,7 @@
 #include "mpmpp/transfer_function.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "mpmpp/error.hpp"
@@ -17,6 +18,21 @@ Eigen::VectorXd trim_zeros(const Eigen::Ref<const Eigen::VectorXd>& c) {
   while (last >= first && c[last] == 0.0) --last;
   if (first > last) return Eigen::VectorXd();
   return c.segment(first, last - first + 1);
+}
+
+// c0 + c1 q^-1 + ... with zero terms left out, e.g. "1 - 0.93 q^-1".
+std::string polynomial_string(const Eigen::VectorXd& c) {
+  std::string out;
+  char buf[32];
+  for (Eigen::Index k = 0; k < c.size(); ++k) {
+    if (c[k] == 0.0) continue;
+    const double magnitude = out.empty() ? c[k] : std::abs(c[k]);
+    std::snprintf(buf, sizeof buf, "%.6g", magnitude);
+    if (!out.empty()) out += c[k] < 0 ? " - " : " + ";
+    out += buf;
+    if (k > 0) out += " q^-" + std::to_string(k);
+  }
+  return out.empty() ? "0" : out;
 }
 
 bool all_inside_unit_circle(const Eigen::VectorXcd& roots) {
@@ -71,6 +87,7 @@ TransferFunction TransferFunction::from_foptd(double gain, double time_constant_
   if (!(dead_time_s >= 0.0) || !std::isfinite(dead_time_s))
     throw InputError("dead_time_s must be >= 0");
   const double samples = dead_time_s / sample_time_s;
+  if (samples > 1e6) throw InputError("dead_time_s must be at most 1e6 samples");
   // Snap to an integer when the dead time is a multiple of Ts up to rounding.
   double whole = std::floor(samples + 1e-9);
   double frac = samples - whole;
@@ -199,6 +216,13 @@ TransferFunction TransferFunction::inverse() const {
 bool TransferFunction::operator==(const TransferFunction& o) const {
   return delay_ == o.delay_ && num_.size() == o.num_.size() && den_.size() == o.den_.size() &&
          num_ == o.num_ && den_ == o.den_;
+}
+
+std::string to_string(const TransferFunction& g) {
+  std::string out = g.delay() > 0 ? "q^-" + std::to_string(g.delay()) + " " : "";
+  out += "(" + polynomial_string(g.num()) + ")";
+  if (g.den().size() > 1) out += " / (" + polynomial_string(g.den()) + ")";
+  return out;
 }
 
 }  // namespace mpmpp

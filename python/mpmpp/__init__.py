@@ -3,7 +3,11 @@
 The numerics live in the C++/Eigen engine ``mpmpp._core``; this package orchestrates,
 reads and writes the user's files, plots and talks to the user.
 """
-from ._core import TransferFunction, __version__
+from ._core import __version__
+from ._core import TransferFunction
+from ._core import QpResult, QpSolver, solve_qp
+from .io import Model, load_data, load_model, save_data, save_model
 from . import identify
-
-__all__ = ["TransferFunction", "__version__", "identify"]
+from .svm import OneClassSVM, cross_validate_outlier_fraction, resample
+from .simulate import simulate
+from . import scenarios

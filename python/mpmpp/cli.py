@@ -17,12 +17,13 @@ from . import __version__
 # name -> (one-line help, module implementing it or None while not built yet)
 COMMANDS: dict[str, tuple[str, str | None]] = {
     "demo": ("reproduce the paper's example end to end (simulate, detect, plot)", None),
-    "simulate": ("closed-loop simulation with MPC and scheduled plant/noise changes", None),
+    "simulate": ("closed-loop simulation with MPC and scheduled plant/noise changes", "mpmpp.commands.simulate"),
     "evaluate": ("Monte Carlo: detection and false-alarm rates, delays, against baselines", None),
     "compare": ("model vs measurements: fit per output, residual tests, where it fails", None),
     "detect": ("moving-window MPM and noise-change detection per channel", None),
     "diagnose": ("ranked findings: which physical effect is missing, where, when", None),
     "update": ("add/refit the effect(s), write the new model, print error before and after", None),
+    "check": ("validate a model file (and a data file against it) and summarise them", "mpmpp.commands.check"),
 }
 
 

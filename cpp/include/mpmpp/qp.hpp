@@ -21,6 +21,14 @@ struct QpSettings {
   int max_iterations = 1000;
   double feasibility_tol = 1e-9;   // primal constraint violation accepted as feasible
   double optimality_tol = 1e-9;    // dual (multiplier sign) tolerance
+  // A constraint normal n counts as linearly dependent on the active ones when the part of it
+  // that the active set leaves free is this small: |J2'n|^2 <= dependency_tol |J'n|^2 (J'PJ = I),
+  // i.e. the sine of its angle to their span in the P^{-1} metric is below sqrt(dependency_tol).
+  double dependency_tol = 1e-14;
+  // P counts as positive definite when every Cholesky pivot L_ii^2 > definiteness_tol max|P_ii|.
+  double definiteness_tol = 1e-14;
+  // Bounds with |l_i| or |u_i| >= infinite_bound are infinite (Maros-Meszaros files use 1e20).
+  double infinite_bound = 1e20;
 };
 
 struct QpResult {
@@ -31,6 +39,10 @@ struct QpResult {
   double objective = 0.0;
 };
 
+// Algorithm: the dual active-set method of Goldfarb & Idnani (1983), see cpp/src/qp.cpp.
+// P must be positive definite (status NonConvex otherwise; no regularisation is attempted).
+// Inputs are checked: wrong sizes, NaN, or l_i > u_i throw InputError.
+//
 // A solver for a sequence of QPs with fixed P and A whose q, l, u change (MPC):
 // the factorisation of P is kept and each solve starts from the previous active set.
 class QpSolver {

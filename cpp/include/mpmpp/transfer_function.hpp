@@ -2,6 +2,8 @@
 // Discrete transfer function in the backward shift q^-1:
 //   G(q) = q^-delay * (b0 + b1 q^-1 + ... + bm q^-m) / (1 + a1 q^-1 + ... + an q^-n)
 // The denominator is normalised so that den[0] == 1 on construction.
+#include <string>
+
 #include <Eigen/Dense>
 
 namespace mpmpp {
@@ -30,6 +32,8 @@ class TransferFunction {
   Eigen::VectorXd step(int n) const;
   // G(1) = sum(num) / sum(den); InputError-free, returns inf for a pole at z = 1.
   double dc_gain() const;
+  // Finite non-zero poles / zeros in z. Roots at the origin are left out: in q^-1 form
+  // they come only from delays and trailing zero coefficients and never decide stability.
   Eigen::VectorXcd poles() const;
   Eigen::VectorXcd zeros() const;
   bool is_stable() const;          // all poles strictly inside the unit circle
@@ -46,6 +50,9 @@ class TransferFunction {
   Eigen::VectorXd num_, den_;
   int delay_;
 };
+
+// For people: "q^-14 (0.063) / (1 - 0.93 q^-1)", coefficients to 6 significant digits.
+std::string to_string(const TransferFunction& g);
 
 // out = q^-delay num/den x with zero initial state, den monic (den[0] == 1), written into
 // a caller-owned buffer of x's size (x and out must not overlap): the allocation-free

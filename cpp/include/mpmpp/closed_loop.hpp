@@ -1,0 +1,108 @@
+#pragma once
+// Closed-loop simulation: true plant = MIMO Box-Jenkins
+//   y_i(t) = y0_i + sum_j G0_ij (ua_j - u0_j)(t) + sum_k X_ik (x_k - x0_k)(t) + H0_i (sigma_i e_i)(t) + drift_i(t)
+// (e white Gaussian, unit variance, from a seeded generator), controlled by the MPC on the
+// nominal model. ua is the actuators' actual position: the commanded MV after the optional
+// actuator nonlinearity. x_k are measured extra variables (x_k = x0_k + Hx_k (sigma_k e)),
+// entering outputs through channels X_ik the model lacks. Every filter keeps incremental state,
+// so a run costs O(samples * channels * order) plus one QP per sample.
+//
+// Events change the truth or the controller's targets at a given sample (applied before
+// y(t) is formed). A replaced channel or noise model acts as if it had always been in place
+// on the recorded input (or innovation) history, in deviation units around the operating
+// point: it is replayed over that history once, so the change shows without an artificial
+// transient from a filter-state mismatch.
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "mpmpp/model.hpp"
+#include "mpmpp/mpc.hpp"
+#include "mpmpp/qp.hpp"
+#include "mpmpp/transfer_function.hpp"
+
+namespace mpmpp {
+
+// Actuator between the MV command and the plant (applied in this order):
+// deadband: the position stays put until the command differs from it by more than
+//   `deadband`, then jumps to the command (stiction-like stick-slip);
+// backlash: play of width `backlash`; the position follows the command only when pushed,
+//   lagging it by half the width;
+// saturation: the position is clipped to [min, max].
+struct ActuatorNonlinearity {
+  double deadband = 0.0;
+  double backlash = 0.0;
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+};
+
+// A measured variable outside the model: x = operating_point + noise (sigma e).
+struct ExtraVariable {
+  std::string name;
+  double operating_point = 0.0;
+  double sigma = 0.0;
+  TransferFunction noise;  // default H = 1
+};
+
+struct Plant {
+  std::vector<std::vector<std::optional<TransferFunction>>> process;        // [output][input]
+  std::vector<TransferFunction> noise;                                        // [output]
+  Eigen::VectorXd sigma;                                                      // [output]
+  std::vector<ExtraVariable> extra;                                           // measured, not in the model
+  std::vector<std::vector<std::optional<TransferFunction>>> extra_process;  // [output][extra]; empty = none
+  std::vector<ActuatorNonlinearity> actuators;                                // [input]; empty = linear
+};
+
+enum class EventKind {
+  Process,       // replace truth channel (output, input) by `model`; nullopt removes it
+  ExtraProcess,  // replace the channel (output, extra index in `input`) from an extra variable
+  Noise,         // replace output's H0 by `model`
+  Sigma,         // output's noise standard deviation becomes `value`
+  Drift,         // output: add the step `value` and set the slope to `rate` (units/sample)
+  Actuator,      // input's actuator nonlinearity becomes `actuator`
+  CvTarget,      // output's CV target (setpoint) becomes `value`
+  MvTarget,      // input's MV target becomes `value`
+};
+
+struct Event {
+  int sample = 0;
+  EventKind kind = EventKind::Process;
+  int output = -1;
+  int input = -1;
+  std::optional<TransferFunction> model;
+  double value = 0.0;
+  double rate = 0.0;
+  ActuatorNonlinearity actuator;
+};
+
+struct ClosedLoopConfig {
+  Model model;    // nominal: what the MPC uses
+  MpcTuning tuning;
+  Plant plant;    // truth
+  Eigen::VectorXd u_operating;  // u0 (start inputs); default: tuning.mv_target
+  Eigen::VectorXd y_operating;  // y0; default: tuning.cv_target
+  int num_samples = 0;
+  std::uint64_t seed = 0;
+  std::vector<Event> events;    // any order; applied in sample order, ties in list order
+  bool record_qps = false;
+  QpSettings qp_settings;
+};
+
+struct SimulationResult {
+  Eigen::MatrixXd u;         // [samples x inputs] MV commands (what a historian records)
+  Eigen::MatrixXd u_actual;  // [samples x inputs] actuator positions after the nonlinearity
+  Eigen::MatrixXd y;         // [samples x outputs]
+  Eigen::MatrixXd setpoint;  // [samples x outputs] CV targets in force
+  Eigen::MatrixXd extra;     // [samples x extra variables]
+  int failed_solves = 0;
+  // With record_qps: every QP (P, A fixed; one row of q, l, u per sample).
+  Eigen::MatrixXd qp_P, qp_A, qp_q, qp_l, qp_u;
+};
+
+SimulationResult simulate_closed_loop(const ClosedLoopConfig& config);
+
+}  // namespace mpmpp

@@ -1,0 +1,436 @@
+#include "mpmpp/data_io.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <optional>
+
+#include "mpmpp/error.hpp"
+#include "text_file.hpp"
+
+namespace mpmpp {
+
+namespace {
+
+constexpr double kSpacingTolerance = 1e-6;  // relative to sample_time_s
+
+std::string quoted(const std::string& s) { return "\"" + detail::printable(s) + "\""; }
+std::string row_name(std::size_t row) { return "row " + std::to_string(row); }
+
+std::string format_number(double x) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x);
+  return std::string(buf, r.ptr);
+}
+
+std::string trim(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t");
+  if (first == std::string::npos) return "";
+  return s.substr(first, s.find_last_not_of(" \t") - first + 1);
+}
+
+bool is_nan_word(const std::string& s) {
+  if (s.size() != 3) return false;
+  return (s[0] == 'n' || s[0] == 'N') && (s[1] == 'a' || s[1] == 'A') && (s[2] == 'n' || s[2] == 'N');
+}
+
+// A decimal number (no hex, no words), optional leading '+'.
+std::optional<double> parse_number(const std::string& cell) {
+  const char* first = cell.data();
+  const char* last = first + cell.size();
+  if (first != last && *first == '+') ++first;
+  if (first == last || !(std::isdigit(static_cast<unsigned char>(*first)) || *first == '-' || *first == '.'))
+    return std::nullopt;
+  double x = 0.0;
+  const auto r = std::from_chars(first, last, x);
+  if (r.ec != std::errc() || r.ptr != last || !std::isfinite(x)) return std::nullopt;
+  return x;
+}
+
+// One CSV line split into trimmed fields (RFC 4180 quoting: "a,b" and "" for ").
+std::vector<std::string> split_fields(const std::string& line, std::size_t row, const std::string& source) {
+  std::vector<std::string> fields;
+  std::size_t i = 0;
+  while (true) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    std::string field;
+    if (i < line.size() && line[i] == '"') {
+      ++i;
+      while (true) {
+        if (i >= line.size())
+          throw InputError(source + ": " + row_name(row) + ": unterminated quoted field (line breaks inside quotes are not supported)");
+        if (line[i] == '"') {
+          if (i + 1 < line.size() && line[i + 1] == '"') {
+            field += '"';
+            i += 2;
+            continue;
+          }
+          ++i;
+          break;
+        }
+        field += line[i++];
+      }
+      while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+      if (i < line.size() && line[i] != ',')
+        throw InputError(source + ": " + row_name(row) + ": text after a closing quote in field " +
+                         std::to_string(fields.size() + 1));
+    } else {
+      const std::size_t end = line.find(',', i);
+      field = trim(line.substr(i, end == std::string::npos ? std::string::npos : end - i));
+      i = end == std::string::npos ? line.size() : end;
+    }
+    fields.push_back(field);
+    if (i >= line.size()) break;
+    ++i;  // the comma
+  }
+  return fields;
+}
+
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(start, end - start);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    lines.push_back(line);
+    start = end + 1;
+  }
+  while (!lines.empty() && trim(lines.back()).empty()) lines.pop_back();  // trailing blank lines
+  return lines;
+}
+
+// ---- ISO-8601 timestamps -------------------------------------------------------
+
+struct Timestamp {
+  std::int64_t seconds;  // whole seconds since 1970-01-01 (UTC if an offset was given)
+  double fraction;       // [0, 1)
+  bool has_offset;
+};
+
+// Days since 1970-01-01 of a proleptic Gregorian date (the civil-from-days
+// relation: years counted from March so that the leap day is last).
+std::int64_t days_from_civil(int y, int m, int d) {
+  y -= m <= 2;
+  const std::int64_t era = (y >= 0 ? y : y - 399) / 400;
+  const int yoe = static_cast<int>(y - era * 400);
+  const int doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
+  const int doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+  return era * 146097 + doe - 719468;
+}
+
+int days_in_month(int y, int m) {
+  static const int days[] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  const bool leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+  return m == 2 && leap ? 29 : days[m - 1];
+}
+
+// YYYY-MM-DD[(T| )hh:mm[:ss[.f+]]][Z|(+|-)hh[:mm]]
+std::optional<Timestamp> parse_timestamp(const std::string& s) {
+  std::size_t i = 0;
+  auto digits = [&](int n, int& out) {
+    if (i + n > s.size()) return false;
+    out = 0;
+    for (int k = 0; k < n; ++k) {
+      const char c = s[i + k];
+      if (c < '0' || c > '9') return false;
+      out = out * 10 + (c - '0');
+    }
+    i += n;
+    return true;
+  };
+  auto literal = [&](char c) {
+    if (i < s.size() && s[i] == c) {
+      ++i;
+      return true;
+    }
+    return false;
+  };
+  int year, month, day, hour = 0, minute = 0, second = 0;
+  double fraction = 0.0;
+  if (!digits(4, year) || !literal('-') || !digits(2, month) || !literal('-') || !digits(2, day)) return std::nullopt;
+  if (month < 1 || month > 12 || day < 1 || day > days_in_month(year, month)) return std::nullopt;
+  if (literal('T') || literal(' ')) {
+    if (!digits(2, hour) || !literal(':') || !digits(2, minute)) return std::nullopt;
+    if (literal(':')) {
+      if (!digits(2, second)) return std::nullopt;
+      if (literal('.') || literal(',')) {
+        double scale = 0.1;
+        const std::size_t start = i;
+        while (i < s.size() && s[i] >= '0' && s[i] <= '9') {
+          fraction += (s[i++] - '0') * scale;
+          scale /= 10;
+        }
+        if (i == start) return std::nullopt;
+      }
+    }
+    if (hour > 23 || minute > 59 || second > 59) return std::nullopt;
+  }
+  std::int64_t offset_s = 0;
+  bool has_offset = false;
+  if (literal('Z')) {
+    has_offset = true;
+  } else if (i < s.size() && (s[i] == '+' || s[i] == '-')) {
+    const int sign = s[i++] == '-' ? -1 : 1;
+    int oh, om = 0;
+    if (!digits(2, oh)) return std::nullopt;
+    if (literal(':')) {
+      if (!digits(2, om)) return std::nullopt;
+    } else if (i < s.size()) {
+      if (!digits(2, om)) return std::nullopt;
+    }
+    if (oh > 23 || om > 59) return std::nullopt;
+    offset_s = sign * (oh * 3600 + om * 60);
+    has_offset = true;
+  }
+  if (i != s.size()) return std::nullopt;
+  const std::int64_t secs = days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second - offset_s;
+  return Timestamp{secs, fraction, has_offset};
+}
+
+// ---- the time column --------------------------------------------------------------
+
+// Reads the time column: numbers of seconds, or timestamps turned into seconds
+// since the first row; which of the two is decided by the first row.
+Eigen::VectorXd read_time(const std::vector<std::string>& cells, const std::string& source, std::string& origin) {
+  const std::size_t n = cells.size();
+  Eigen::VectorXd t(static_cast<Eigen::Index>(n));
+  auto where = [&](std::size_t k) { return source + ": " + row_name(k + 2) + ", column time: "; };
+  for (std::size_t k = 0; k < n; ++k)
+    if (cells[k].empty() || is_nan_word(cells[k])) throw InputError(where(k) + "time is missing");
+  const bool numeric = parse_number(cells[0]).has_value();
+  if (numeric) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto x = parse_number(cells[k]);
+      if (!x) throw InputError(where(k) + quoted(cells[k]) + " is not a number of seconds (row 2 is)");
+      t[static_cast<Eigen::Index>(k)] = *x;
+    }
+    return t;
+  }
+  const auto first = parse_timestamp(cells[0]);
+  if (!first) throw InputError(where(0) + quoted(cells[0]) + " is neither seconds nor an ISO-8601 timestamp");
+  origin = cells[0];
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto ts = parse_timestamp(cells[k]);
+    if (!ts) throw InputError(where(k) + quoted(cells[k]) + " is not an ISO-8601 timestamp (row 2 is)");
+    if (ts->has_offset != first->has_offset)
+      throw InputError(where(k) + quoted(cells[k]) + (first->has_offset ? " has no UTC offset but row 2 has one"
+                                                                        : " has a UTC offset but row 2 has none"));
+    // Whole seconds subtracted as integers first, so the result keeps sub-microsecond precision.
+    t[static_cast<Eigen::Index>(k)] = static_cast<double>(ts->seconds - first->seconds) + (ts->fraction - first->fraction);
+  }
+  return t;
+}
+
+void check_increasing(const Eigen::VectorXd& t, const std::string& source) {
+  for (Eigen::Index k = 1; k < t.size(); ++k)
+    if (!(t[k] > t[k - 1]))
+      throw InputError(source + ": " + row_name(static_cast<std::size_t>(k) + 2) + ", column time: " +
+                       format_number(t[k]) + " s is not after the previous row's " + format_number(t[k - 1]) +
+                       " s (time must be strictly increasing)");
+}
+
+void check_column_names(const std::vector<std::string>& names, const std::string& where) {
+  std::map<std::string, std::size_t> seen;
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    if (names[c].empty()) throw InputError(where + "column " + std::to_string(c + 1) + " has an empty name");
+    if (names[c].find_first_of("\r\n") != std::string::npos)
+      throw InputError(where + "column " + std::to_string(c + 1) + " has a line break in its name");
+    const auto [it, fresh] = seen.emplace(names[c], c);
+    if (!fresh)
+      throw InputError(where + "duplicate column " + quoted(names[c]) + " (columns " + std::to_string(it->second + 1) +
+                       " and " + std::to_string(c + 1) + ")");
+  }
+}
+
+std::string list(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+// A CSV field, quoted when it would otherwise not read back as the same text.
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"") == std::string::npos && s == trim(s)) return s;
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+}  // namespace
+
+int DataTable::column(const std::string& name) const {
+  for (std::size_t c = 0; c < columns.size(); ++c)
+    if (columns[c] == name) return static_cast<int>(c);
+  return -1;
+}
+
+namespace {
+
+// What every table must satisfy to be written and read back.
+void check_parts(const Eigen::VectorXd& time_s, const std::vector<std::string>& columns,
+                 const Eigen::MatrixXd& values) {
+  if (values.rows() != time_s.size() || values.cols() != static_cast<Eigen::Index>(columns.size()))
+    throw InputError("values: shape " + std::to_string(values.rows()) + "x" + std::to_string(values.cols()) +
+                     ", expected " + std::to_string(time_s.size()) + " samples x " + std::to_string(columns.size()) +
+                     " columns");
+  std::vector<std::string> all{"time"};
+  all.insert(all.end(), columns.begin(), columns.end());
+  check_column_names(all, "");
+  if (!time_s.allFinite()) throw InputError("time: must be finite");
+  check_increasing(time_s, "time");
+  for (Eigen::Index c = 0; c < values.cols(); ++c)
+    for (Eigen::Index k = 0; k < values.rows(); ++k)
+      if (std::isinf(values(k, c))) throw InputError("column " + columns[c] + ": infinite value at sample " + std::to_string(k));
+}
+
+}  // namespace
+
+DataTable make_data_table(Eigen::VectorXd time_s, std::vector<std::string> columns, Eigen::MatrixXd values) {
+  check_parts(time_s, columns, values);
+  DataTable d;
+  d.missing.resize(columns.size());
+  for (std::size_t c = 0; c < columns.size(); ++c)
+    d.missing[c] = static_cast<int>(values.col(static_cast<Eigen::Index>(c)).array().isNaN().count());
+  d.time_s = std::move(time_s);
+  d.columns = std::move(columns);
+  d.values = std::move(values);
+  return d;
+}
+
+namespace {
+
+DataTable parse_csv_text(const std::string& text, const std::string& source) {
+  const std::string where = source + ": ";
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(where + "file is empty");
+  if (text.find('\0') != std::string::npos) throw InputError(where + "not a CSV file (binary content)");
+  std::vector<std::string> lines = split_lines(text);
+  if (lines[0].rfind("\xEF\xBB\xBF", 0) == 0) lines[0].erase(0, 3);  // UTF-8 byte order mark
+
+  const std::vector<std::string> header = split_fields(lines[0], 1, source);
+  std::size_t time_col = header.size();
+  for (std::size_t c = 0; c < header.size(); ++c)
+    if (header[c] == "time") time_col = c;
+  if (time_col == header.size()) {
+    if (header.size() == 1)
+      throw InputError(where + "not a CSV file with a header row: row 1 is " + quoted(header[0]) +
+                       " (expected comma-separated column names including \"time\")");
+    throw InputError(where + "row 1: no \"time\" column (columns: " + detail::printable(list(header), 200) + ")");
+  }
+  check_column_names(header, where + "row 1: ");
+  if (lines.size() < 2) throw InputError(where + "no data rows after the header");
+
+  const std::size_t n = lines.size() - 1;
+  std::vector<std::string> time_cells(n);
+  DataTable d;
+  for (std::size_t c = 0; c < header.size(); ++c)
+    if (c != time_col) d.columns.push_back(header[c]);
+  d.values.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(d.columns.size()));
+  d.missing.assign(d.columns.size(), 0);
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t row = k + 2;
+    if (trim(lines[k + 1]).empty()) throw InputError(where + row_name(row) + ": empty line");
+    const std::vector<std::string> fields = split_fields(lines[k + 1], row, source);
+    if (fields.size() != header.size())
+      throw InputError(where + row_name(row) + ": " + std::to_string(fields.size()) + " fields, the header has " +
+                       std::to_string(header.size()));
+    Eigen::Index j = 0;
+    for (std::size_t c = 0; c < fields.size(); ++c) {
+      if (c == time_col) {
+        time_cells[k] = fields[c];
+        continue;
+      }
+      double x = std::numeric_limits<double>::quiet_NaN();
+      if (fields[c].empty() || is_nan_word(fields[c])) {
+        ++d.missing[static_cast<std::size_t>(j)];
+      } else if (const auto v = parse_number(fields[c])) {
+        x = *v;
+      } else {
+        throw InputError(where + row_name(row) + ", column " + detail::printable(header[c]) + ": " +
+                         quoted(fields[c]) + " is not a number");
+      }
+      d.values(static_cast<Eigen::Index>(k), j++) = x;
+    }
+  }
+  d.time_s = read_time(time_cells, source, d.time_origin);
+  check_increasing(d.time_s, source);
+  return d;
+}
+
+void check_against_model(const DataTable& data, const Model& model, const std::string& source) {
+  auto require = [&](const std::vector<std::string>& names, const char* kind) {
+    for (const auto& name : names)
+      if (data.column(name) < 0)
+        throw InputError(source + ": column " + quoted(name) + " (model " + kind + ") is missing (columns: time" +
+                         (data.columns.empty() ? "" : ", ") + detail::printable(list(data.columns), 200) + ")");
+  };
+  require(model.inputs, "input");
+  require(model.outputs, "output");
+  const double ts = model.sample_time_s;
+  for (Eigen::Index k = 1; k < data.time_s.size(); ++k) {
+    const double step = data.time_s[k] - data.time_s[k - 1];
+    if (std::abs(step - ts) > kSpacingTolerance * ts)
+      throw InputError(source + ": " + row_name(static_cast<std::size_t>(k) + 2) + ", column time: time step " +
+                       format_number(step) + " s from the previous row, expected the model's sample_time_s = " +
+                       format_number(ts) + " s");
+  }
+}
+
+// Runs `check` with every InputError it throws made one line.
+template <class Check>
+auto one_line_errors(Check check) -> decltype(check()) {
+  try {
+    return check();
+  } catch (const InputError& e) {
+    throw InputError(detail::one_line(e.what()));
+  }
+}
+
+}  // namespace
+
+DataTable parse_csv(const std::string& text, const std::string& source) {
+  return one_line_errors([&] { return parse_csv_text(text, source); });
+}
+
+DataTable read_csv(const std::string& path) { return parse_csv(detail::read_text_file(path), path); }
+
+void validate_data(const DataTable& data, const Model& model, const std::string& source) {
+  one_line_errors([&] { check_against_model(data, model, source); });
+}
+
+DataTable load_data(const std::string& path, const Model& model) {
+  DataTable d = read_csv(path);
+  validate_data(d, model, path);
+  return d;
+}
+
+std::string data_to_csv(const DataTable& d) {
+  check_parts(d.time_s, d.columns, d.values);  // every file written reads back
+  std::string out = "time";
+  for (const auto& c : d.columns) out += "," + csv_field(c);
+  out += "\n";
+  for (Eigen::Index k = 0; k < d.time_s.size(); ++k) {
+    out += format_number(d.time_s[k]);
+    for (Eigen::Index c = 0; c < d.values.cols(); ++c) {
+      out += ",";
+      if (!std::isnan(d.values(k, c))) out += format_number(d.values(k, c));
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+void write_csv(const DataTable& data, const std::string& path) {
+  std::string text;
+  try {
+    text = data_to_csv(data);
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  detail::write_file_atomic(path, text);
+}
+
+}  // namespace mpmpp

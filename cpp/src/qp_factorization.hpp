@@ -1,0 +1,63 @@
+#pragma once
+// Internal to the QP solver: the Goldfarb-Idnani factorisation of the active set.
+//
+// With P = L L' (Cholesky, once per solver) and N = [n_1 ... n_k] the normals of the active
+// constraints (n_j'x >= b_j), Goldfarb & Idnani (Math. Prog. 27, 1983) keep
+//     J = L^{-T} Q   (n x n, so J' P J = I)   and   J' N = [R; 0]   (R k x k upper triangular).
+// J1 (first k columns) spans the active normals in the P^{-1} metric, J2 (the rest) the
+// directions that keep every active constraint fixed. Adding or dropping one constraint is an
+// O(n^2) update (a Householder reflection to add, Givens rotations to drop); nothing here
+// allocates after construction.
+#include <Eigen/Dense>
+
+namespace mpmpp::detail {
+
+class ActiveSetFactorization {
+ public:
+  explicit ActiveSetFactorization(int n);
+
+  // Empty active set: J = L^{-T}.
+  void reset(const Eigen::MatrixXd& L_inv_transpose);
+
+  int size() const { return k_; }
+
+  // The products and solves of the method. The triangular solves are written out (column axpys
+  // and dot products): k is small and Eigen's blocked triangular kernels cost more to set up.
+  // out = J' a.
+  void J_transpose_times(const Eigen::Ref<const Eigen::VectorXd>& a, Eigen::Ref<Eigen::VectorXd> out) const {
+    out.noalias() = J_.transpose() * a;
+  }
+  // out = J(:, first .. first+c.size()-1) c.
+  void J_columns_times(int first, const Eigen::Ref<const Eigen::VectorXd>& c, Eigen::Ref<Eigen::VectorXd> out) const {
+    out.noalias() = J_.middleCols(first, c.size()) * c;
+  }
+  // v <- R^{-1} v (back substitution by columns of R), v of length size().
+  template <typename V>
+  void solve_R(V&& v) const {
+    for (int j = k_ - 1; j >= 0; --j) {
+      v[j] /= R_(j, j);
+      v.head(j) -= v[j] * R_.col(j).head(j);
+    }
+  }
+  // v <- R^{-T} v (forward substitution, dot products with columns of R).
+  template <typename V>
+  void solve_R_transpose(V&& v) const {
+    for (int i = 0; i < k_; ++i) v[i] = (v[i] - R_.col(i).head(i).dot(v.head(i))) / R_(i, i);
+  }
+
+  // Appends a constraint whose normal n gives d = J' n and z = J2 J2' n (computed with the
+  // current J; z is GI's primal step direction). Both are overwritten. The caller has checked
+  // that d.tail(n - size()) is not ~0.
+  void add(Eigen::Ref<Eigen::VectorXd> d, Eigen::Ref<Eigen::VectorXd> z);
+
+  // Removes the constraint at position `position` (0-based, in order of addition).
+  void drop(int position);
+
+ private:
+  int n_;
+  int k_ = 0;
+  Eigen::MatrixXd J_;
+  Eigen::MatrixXd R_;
+};
+
+}  // namespace mpmpp::detail

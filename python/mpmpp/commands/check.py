@@ -1,0 +1,105 @@
+"""``mpmpp check MODEL [DATA]``: validate the user's files and summarise them.
+
+The first thing to run on a new pair of files: every problem is reported as one
+line naming the file and the field, column or row (exit code 2).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from ..io import load_data, load_model
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("model", metavar="MODEL", help="model file (JSON, FORMATS.md 'Model file')")
+    parser.add_argument("data", metavar="DATA", nargs="?", help="data file (CSV) to check against the model")
+    parser.add_argument("--json", action="store_true", help="print one JSON document instead of the summary")
+
+
+def _finite_or_none(x: float):
+    """JSON has no infinity: an integrating channel's dc gain is reported as null."""
+    return x if np.isfinite(x) else None
+
+
+def _model_summary(path: str, model) -> dict:
+    channels = []
+    for output, input_ in model.channels():
+        g = model.process(output, input_)
+        channels.append({"output": output, "input": input_, "num": g.num.tolist(), "den": g.den.tolist(),
+                         "delay": g.delay, "dc_gain": _finite_or_none(g.dc_gain()), "text": str(g)})
+    noise = []
+    for output in model.outputs:
+        h = model.noise(output)
+        noise.append({"output": output, "num": h.num.tolist(), "den": h.den.tolist(), "text": str(h)})
+    return {"path": path, "name": model.name, "sample_time_s": model.sample_time_s,
+            "inputs": list(model.inputs), "outputs": list(model.outputs), "channels": channels, "noise": noise}
+
+
+def _data_summary(path: str, df, model) -> dict:
+    time = df["time"].to_numpy()
+    others = [c for c in df.columns if c != "time" and c not in model.inputs and c not in model.outputs]
+    setpoints = [c for c in others if c.endswith("_sp") and c[:-3] in model.outputs]
+    return {
+        "path": path,
+        "samples": int(len(df)),
+        "start_s": float(time[0]),
+        "end_s": float(time[-1]),
+        # Each sample stands for one sample interval, so n samples span n * Ts.
+        "duration_s": float(len(df) * model.sample_time_s),
+        "time_origin": df.attrs["time_origin"],
+        "columns": [c for c in df.columns if c != "time"],
+        "missing": {c: int(n) for c, n in df.attrs["missing"].items()},
+        "setpoints": setpoints,
+        "candidates": [c for c in others if c not in setpoints],
+        "rows_with_missing": int(np.isnan(df.drop(columns="time").to_numpy()).any(axis=1).sum()),
+    }
+
+
+def _hours(seconds: float) -> str:
+    return f"{seconds / 3600:.3g} h"
+
+
+def _print_summary(report: dict) -> None:
+    m = report["model"]
+    print(f"model {m['path']}: '{m['name']}', {len(m['inputs'])} input(s), {len(m['outputs'])} output(s), "
+          f"sample time {m['sample_time_s']:g} s")
+    print(f"  inputs: {', '.join(m['inputs'])}; outputs: {', '.join(m['outputs'])}")
+    for ch in m["channels"]:
+        gain = "infinite (integrating)" if ch["dc_gain"] is None else f"{ch['dc_gain']:.6g}"
+        print(f"  channel {ch['output']} <- {ch['input']}: {ch['text']}, dc gain {gain}")
+    if not m["channels"]:
+        print("  no process channels (the model claims no coupling at all)")
+    for h in m["noise"]:
+        print(f"  noise {h['output']}: {h['text']}")
+    d = report.get("data")
+    if d is None:
+        return
+    origin = f" from {d['time_origin']}" if d["time_origin"] else ""
+    print(f"data {d['path']}: {d['samples']} samples, t = {d['start_s']:g} .. {d['end_s']:g} s{origin} "
+          f"({_hours(d['duration_s'])})")
+    if d["setpoints"]:
+        print(f"  setpoints: {', '.join(d['setpoints'])}")
+    if d["candidates"]:
+        print(f"  other measured columns (candidates for diagnose): {', '.join(d['candidates'])}")
+    missing = {c: n for c, n in d["missing"].items() if n}
+    if missing:
+        listed = ", ".join(f"{c} {n}" for c, n in missing.items())
+        print(f"  missing values: {listed} ({d['rows_with_missing']} rows affected; "
+              f"windows containing them are skipped)")
+    else:
+        print("  missing values: none")
+
+
+def run(args: argparse.Namespace) -> int:
+    model = load_model(args.model)
+    report = {"model": _model_summary(args.model, model)}
+    if args.data is not None:
+        report["data"] = _data_summary(args.data, load_data(args.data, model), model)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        _print_summary(report)
+    return 0

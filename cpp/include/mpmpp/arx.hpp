@@ -28,7 +28,7 @@ struct ArxOptions {
   // plain least squares (the paper asks for a "small" delta; asymptotically it does not
   // matter). 0 disables the rule.
   double delta = 1e-4;
-  // lambda_min <= rank_tolerance * lambda_max of the scaled R: exactly collinear
+  // lambda_min <= rank_tolerance * trace of the scaled R (trace >= lambda_max): collinear
   // regressors, a NumericalError (the window is not informative), never a ridge guess.
   double rank_tolerance = 1e-10;
 };

@@ -10,8 +10,8 @@ Writes docs/consistency.md (tables) and docs/consistency.png (figure). Studies:
   2. the same plant with a 2-sample delay (noise correlated across the loop delay);
   3. how the ARX order n must grow with the plant pole (time constant);
   4. MISO ARX-OE on the paper's MIMO scenario (Section 5.2): every G_ij gain.
-Closed-loop data: the stand-in loop of tests/python/identification_reference.py (PI with
-clipped moves, i.e. a nonlinear controller), vectorised over seeds.
+Closed-loop data: the project's MPC simulator (mpmpp.simulate) on the paper's scenarios
+(mpmpp.scenarios) with their events removed, one seed per Monte Carlo run.
 """
 from __future__ import annotations
 
@@ -26,27 +26,67 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "python"))
 
 import identification_reference as ref  # noqa: E402
+import mpmpp  # noqa: E402
 from mpmpp import identify  # noqa: E402
 
-SOURCE = "stand-in closed loop (PI, clipped moves; tests/python/identification_reference.py)"
-PAPER_G0 = ([0.1003], [1.0, -0.9048], 17)
-PAPER_H0 = ([1.0, -0.3], [1.0, 0.6])
+SOURCE = "MPC closed loop (mpmpp.simulate, paper scenarios without their events)"
+STAND_IN = ("stand-in loop: velocity PI with moves clipped at 0.04 (a strongly nonlinear "
+            "controller; tests/python/identification_reference.py)")
+
+
+def without_changes(spec: dict, N: int) -> dict:
+    """The scenario with no plant/noise events, N samples long."""
+    spec = dict(spec, events=[])
+    spec["duration_s"] = N * spec["sample_time_s"]
+    return spec
+
+
+def records(spec: dict, N: int, seeds):
+    """y, u of shape (len(seeds), N, n) from the MPC simulator, one run per seed."""
+    spec = without_changes(spec, N)
+    runs = [mpmpp.simulate(spec, seed=seed) for seed in seeds]
+    y = np.stack([r[spec["outputs"]].to_numpy() for r in runs])
+    u = np.stack([r[spec["inputs"]].to_numpy() for r in runs])
+    return y, u
 
 
 def paper_siso_record(N: int, seed: int):
     """One closed-loop record of the paper's SISO scenario: (y, u, description)."""
-    y, u = ref.closed_loop(N=N, seeds=[seed], **ref.PAPER_SISO)
+    y, u = records(mpmpp.scenarios.paper_siso(), N, [seed])
     return y[0, :, 0], u[0, :, 0], SOURCE
 
 
-def foptd_loop(pole: float, delay: int, gain: float = 0.1003 / (1 - 0.9048)):
-    """The paper's SISO loop with another pole/delay, same steady-state gain, PI retuned
-    with the same IMC rule (kc = tau / (K (2 theta)), Ti = tau, theta = delay + 1)."""
+def foptd_siso(pole: float, delay: int):
+    """The paper's SISO scenario with another pole/delay and the same steady-state gain
+    (controller model = plant: no mismatch)."""
+    gain = 0.1003 / (1 - 0.9048)
+    spec = mpmpp.scenarios.paper_siso()
+    spec["process"] = {"dry_weight": {"stock_flow": {
+        "num": [gain * (1 - pole)], "den": [1.0, -pole], "delay": delay}}}
+    return spec
+
+
+def stand_in_pi(pole: float, delay: int):
+    """Records from the stand-in clipped-PI loop with the paper's H0 and sigma, plant
+    G = K (1 - pole) q^-delay / (1 - pole q^-1), K the paper's gain, PI by the IMC rule
+    (kc = tau / (K 2 (delay + 1)), Ti = tau)."""
+    gain = 0.1003 / (1 - 0.9048)
     tau = -1.0 / np.log(pole)
     kc = tau / (gain * 2.0 * (delay + 1))
-    return dict(G=[[([gain * (1 - pole)], [1.0, -pole], delay)]], H=[PAPER_H0],
-                sigma=np.array([0.05]), kp=np.array([kc]), ki=np.array([kc / tau]),
-                move_limit=np.array([0.04]))
+    loop = dict(ref.PAPER_SISO, G=[[([gain * (1 - pole)], [1.0, -pole], delay)]],
+                kp=np.array([kc]), ki=np.array([kc / tau]))
+
+    def get(N, seeds):
+        return ref.closed_loop(N=N, seeds=seeds, **loop)
+    return get, (gain, pole, delay)
+
+
+def mpc_siso(spec: dict):
+    g = spec["process"]["dry_weight"]["stock_flow"]
+
+    def get(N, seeds):
+        return records(spec, N, seeds)
+    return get, (g["num"][0] / sum(g["den"]), -g["den"][1], g["delay"])
 
 
 def siso_estimates(y, u, delay, n):
@@ -75,10 +115,9 @@ def summarise(values, truth):
                 se=ok.std(ddof=1) / np.sqrt(len(ok)), failed=int(len(v) - len(ok)))
 
 
-def length_study(loop, delay, lengths, seeds, n=9):
-    gain0 = loop["G"][0][0][0][0] / sum(loop["G"][0][0][1])
-    pole0 = -loop["G"][0][0][1][1]
-    y, u = ref.closed_loop(N=max(lengths), seeds=seeds, **loop)
+def length_study(source, lengths, seeds, n=9):
+    get, (gain0, pole0, delay) = source
+    y, u = get(max(lengths), seeds)
     rows = []
     for N in lengths:
         per_method: dict[str, list] = {}
@@ -95,9 +134,8 @@ def length_study(loop, delay, lengths, seeds, n=9):
 def order_study(poles, orders, seeds, N, delay):
     rows = []
     for pole in poles:
-        loop = foptd_loop(pole, delay)
-        gain0 = loop["G"][0][0][0][0] / (1 - pole)
-        y, u = ref.closed_loop(N=N, seeds=seeds, **loop)
+        get, (gain0, _, _) = stand_in_pi(pole, delay)
+        y, u = get(N, seeds)
         for n in orders:
             g = []
             for s in range(len(seeds)):
@@ -110,42 +148,29 @@ def order_study(poles, orders, seeds, N, delay):
     return rows
 
 
-# The paper's MIMO example (Section 5.2): lower-triangular G, diagonal H.
-MIMO_G = [[([0.0763], [1, -0.0723], 15), None, None],
-          [([0.0305], [1, -0.0130], 19), ([-0.0026], [1, -0.0183], 23), None],
-          [([0.0239], [1, -0.0318], 9), ([-0.0056], [1, -0.0234], 7), ([-0.0101], [1, -0.1823], 19)]]
-MIMO_H = [([1, -0.5], [1, 0.5]), ([1, -0.3], [1, 0.6]), ([1, 0.2], [1, 0.7])]
-
-
-def mimo_loop():
-    """Decentralised integral control u_i -> y_i (G is lower triangular): ki K_ii = 0.5 /
-    (d_ii + 1) keeps each delay loop stable; moves clipped at ki * 0.05 (about the
-    typical move at sigma = 0.05, so the clip is often active)."""
-    K = np.array([MIMO_G[i][i][0][0] / sum(MIMO_G[i][i][1]) for i in range(3)])
-    d = np.array([MIMO_G[i][i][2] for i in range(3)])
-    ki = 0.5 / (K * (d + 1))
-    return dict(G=MIMO_G, H=MIMO_H, sigma=np.full(3, 0.05), kp=np.zeros(3), ki=ki,
-                move_limit=np.abs(ki) * 0.05)
-
-
 def mimo_study(seeds, N):
-    y, u = ref.closed_loop(N=N, seeds=seeds, **mimo_loop())
+    """MISO ARX-OE per output of the paper's MIMO scenario through arx_oe_model (model +
+    data), the paper's Table 3 orders na = 18, nb = 10, FOPTD channels."""
+    spec = mpmpp.scenarios.paper_mimo()
+    model = mpmpp.Model.from_json(__import__("json").dumps(
+        {k: spec[k] for k in ("name", "sample_time_s", "inputs", "outputs", "process", "noise")}))
+    runs = [mpmpp.simulate(without_changes(spec, N), seed=seed) for seed in seeds]
     rows = []
-    for i in range(3):
-        inputs = [j for j in range(3) if MIMO_G[i][j] is not None]
-        delays = [MIMO_G[i][j][2] for j in inputs]
+    for i, output in enumerate(spec["outputs"]):
+        inputs = identify.channel_inputs(model, output)
         gains = []
-        for s in range(len(seeds)):
+        for run in runs:
             try:
-                r = identify.arx_oe(y[s, :, i], u[s][:, inputs], 18, 10, delays, fir_length=1)
+                r = identify.arx_oe_model(model, run, output, na=18, nb=10, structure="foptd",
+                                          fir_length=1)
                 gains.append([c.gain for c in r.channels])
             except RuntimeError:
                 gains.append([np.nan] * len(inputs))
         gains = np.array(gains)
-        for k, j in enumerate(inputs):
-            b, f, _ = MIMO_G[i][j]
-            rows.append(dict(channel=f"G{i + 1}{j + 1}", gain0=b[0] / sum(f),
-                             gain=summarise(gains[:, k], b[0] / sum(f))))
+        for k, name in enumerate(inputs):
+            g0 = model.process(output, name).dc_gain()
+            j = spec["inputs"].index(name)
+            rows.append(dict(channel=f"G{i + 1}{j + 1}", gain0=g0, gain=summarise(gains[:, k], g0)))
     return rows
 
 
@@ -153,13 +178,14 @@ def _fmt(x, digits=4):
     return f"{x:.{digits}f}"
 
 
-def write_report(out: pathlib.Path, seeds, paper, short, orders, mimo, timing):
-    (paper_rows, g0, p0), (short_rows, _, _) = paper, short
+def write_report(out: pathlib.Path, seeds, paper, short, short_mpc, orders, mimo, timing):
+    (paper_rows, g0, p0), (short_rows, _, _), (short_mpc_rows, _, _) = paper, short, short_mpc
     lines = [
         "# ARX-OE consistency study",
         "",
         "Generated by `PYTHONPATH=python python bench/consistency_study.py "
-        f"--seeds {len(seeds)}` ({timing:.0f} s). Data: {SOURCE}. "
+        f"--seeds {len(seeds)}` ({timing:.0f} s). Data: {SOURCE}, except where a "
+        "section says stand-in. "
         "Each cell: mean over seeds, bias = mean - true, std = spread over seeds, "
         "|bias|/se = bias in standard errors of the mean (> 3: a bias the Monte Carlo "
         "resolves). ARX-OE: ARX na = 9, nb = 10 (paper Table 1) then FOPTD OE on "
@@ -182,11 +208,13 @@ def write_report(out: pathlib.Path, seeds, paper, short, orders, mimo, timing):
         lines.append("")
 
     siso_table(paper_rows, g0, p0, "1. Paper SISO scenario (delay 17), no changes")
-    siso_table(short_rows, g0, p0, "2. Same plant and noise, delay 2 (noise correlated across the loop delay)")
+    siso_table(short_rows, g0, p0, "2. Same plant and noise, delay 2 (noise correlated across the "
+               "loop delay), " + STAND_IN)
+    siso_table(short_mpc_rows, g0, p0, "2b. Delay 2 under the paper's MPC (Table 2 tuning)")
 
     lines.extend(["## 3. ARX order n (na = n, nb = n + 1) against the plant pole",
                   "",
-                  "Delay-2 loop (as in 2), N = 5760, gain bias of ARX-OE in % of the true gain "
+                  "Delay-2 stand-in loop (as in 2), N = 5760, gain bias of ARX-OE in % of the true gain "
                   "(std in parentheses). B0 = A0 G0 decays like the plant pole, so a slow pole "
                   "needs a long B.", ""])
     poles = sorted({r["pole"] for r in orders})
@@ -204,7 +232,7 @@ def write_report(out: pathlib.Path, seeds, paper, short, orders, mimo, timing):
     lines.extend(["## 4. Paper MIMO scenario, MISO ARX-OE per output",
                   "",
                   f"na = 18, nb = 10 (paper Table 3), FOPTD per channel, N = 5760, {len(seeds)} seeds; "
-                  "decentralised integral control with clipped moves.", "",
+                  "the paper's MIMO MPC (Table 4), events removed.", "",
                   "| channel | true gain | mean | bias | std | \\|bias\\| <= std | \\|bias\\|/se | failed |",
                   "|---|---:|---:|---:|---:|:---:|---:|---:|"])
     for r in mimo:
@@ -222,17 +250,20 @@ def plot(out: pathlib.Path, paper, short, orders):
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
-    for ax, (rows, g0, _), title in [(axes[0], paper, "paper SISO (delay 17)"),
-                                     (axes[1], short, "same loop, delay 2")]:
+    panels = [(axes[0], paper, "gain", "paper SISO, MPC (delay 17): gain"),
+              (axes[1], short, "pole", "delay 2, clipped-PI stand-in: pole")]
+    for ax, (rows, g0, p0), key, title in panels:
         for k, method in enumerate(["ARX-OE", "direct OE", "ARX(1,1)"]):
             rs = [r for r in rows if r["method"] == method]
             N = np.array([r["N"] for r in rs]) * (1 + 0.04 * (k - 1))
-            ax.errorbar(N, [r["gain"]["mean"] for r in rs], yerr=[r["gain"]["std"] for r in rs],
+            ax.errorbar(N, [r[key]["mean"] for r in rs], yerr=[r[key]["std"] for r in rs],
                         marker="o", capsize=3, label=method)
-        ax.axhline(g0, color="k", lw=0.8, ls="--", label="true gain")
+        ax.axhline(g0 if key == "gain" else p0, color="k", lw=0.8, ls="--", label=f"true {key}")
+        if key == "pole":
+            ax.set_ylim(p0 - 0.02, p0 + 0.02)  # ARX(1,1)'s pole (about -0.6) is off the scale
         ax.set_xscale("log")
         ax.set_xlabel("data length N (samples)")
-        ax.set_ylabel("gain estimate (mean ± std)")
+        ax.set_ylabel(f"{key} estimate (mean ± std)")
         ax.set_title(title)
         ax.legend(fontsize=8)
     ax = axes[2]
@@ -243,7 +274,7 @@ def plot(out: pathlib.Path, paper, short, orders):
     ax.set_xlabel("ARX order n")
     ax.set_ylabel("|gain bias| of ARX-OE (% of true)")
     ax.set_yscale("log")
-    ax.set_title("ARX order vs plant pole (delay 2, N = 5760)")
+    ax.set_title("ARX order vs plant pole (stand-in, delay 2, N = 5760)")
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(out / "consistency.png", dpi=110)
@@ -260,12 +291,13 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     lengths = [1440, 2880, 5760, 11520]
-    paper = length_study(ref.PAPER_SISO, 17, lengths, seeds)
-    short = length_study(foptd_loop(0.9048, 2), 2, lengths, seeds)
+    paper = length_study(mpc_siso(mpmpp.scenarios.paper_siso()), lengths, seeds)
+    short = length_study(stand_in_pi(0.9048, 2), lengths, seeds)
+    short_mpc = length_study(mpc_siso(foptd_siso(0.9048, 2)), lengths, seeds)
     orders = order_study([0.5, 0.8, 0.9048, 0.95, 0.98], [2, 4, 9, 15, 25, 40], seeds, 5760, 2)
     mimo = mimo_study(seeds, 5760)
     timing = time.perf_counter() - t0
-    write_report(args.out, seeds, paper, short, orders, mimo, timing)
+    write_report(args.out, seeds, paper, short, short_mpc, orders, mimo, timing)
     plot(args.out, paper, short, orders)
     print((args.out / "consistency.md").read_text())
     return 0

@@ -48,13 +48,11 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
   }
 }
 
-void lagged_residual(const std::vector<LaggedColumn>& columns, const double* target,
-                     Eigen::Index t0, Eigen::Index n, const Eigen::VectorXd& theta,
-                     Eigen::VectorXd& residual) {
-  residual = ConstSegment(target + t0, n);
-  for (std::size_t k = 0; k < columns.size(); ++k)
-    residual -= (columns[k].sign * theta[static_cast<Eigen::Index>(k)]) *
-                column_segment(columns[k], t0, n);
+bool NormalEquationsSolver::positive_definite_above(double shift) {
+  shifted_ = scaled_;
+  shifted_.diagonal().array() -= shift;
+  llt_.compute(shifted_);
+  return llt_.info() == Eigen::Success;
 }
 
 NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixXd& G,
@@ -66,7 +64,7 @@ NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixX
   const Eigen::Index p = G.rows();
   scale_.resize(p);
   for (Eigen::Index k = 0; k < p; ++k) {
-    // A regressor with (numerically) no energy: a constant input after mean removal.
+    // A regressor with no energy: an input that is zero over the equations.
     if (!(G(k, k) > 0.0)) {
       out.status = Status::ZeroColumn;
       out.zero_column = k;
@@ -75,31 +73,25 @@ NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixX
     scale_[k] = 1.0 / std::sqrt(G(k, k));
   }
   scaled_ = scale_.asDiagonal() * G * scale_.asDiagonal();
-  eig_.compute(scaled_, Eigen::ComputeEigenvectors);
-  const Eigen::VectorXd& lambda = eig_.eigenvalues();  // ascending
-  out.min_scaled_eigenvalue = lambda[0];
-  if (!(lambda[0] > rank_tolerance * lambda[p - 1])) {
+  if (!positive_definite_above(rank_tolerance * static_cast<double>(p))) {
     out.status = Status::Singular;
     return out;
   }
   // Section 3.1: ||Rs^-1||_2 >= 2/delta  <=>  lambda_min(Rs) <= delta/2.
-  out.regularised = delta > 0.0 && lambda[0] <= 0.5 * delta;
+  out.regularised = delta > 0.0 && !positive_definite_above(0.5 * delta);
   shift_ = out.regularised ? 0.5 * delta : 0.0;
-  const Eigen::MatrixXd& V = eig_.eigenvectors();
-  work_.noalias() = V.transpose() * scale_.cwiseProduct(h);
-  work_.array() /= lambda.array() + shift_;
-  theta.noalias() = V * work_;
+  positive_definite_above(-shift_);  // factor of Rs + shift I (positive definite here)
+  theta = llt_.solve(scale_.cwiseProduct(h));
   theta.array() *= scale_.array();
   return out;
 }
 
 void NormalEquationsSolver::covariance_factor(Eigen::MatrixXd& C) const {
-  // theta = S (Rs + cI)^-1 S h and cov(h) = sigma^2 G give
-  // cov(theta) = sigma^2 S V diag(lambda / (lambda + c)^2) V^T S.
-  const Eigen::MatrixXd& V = eig_.eigenvectors();
-  const Eigen::ArrayXd lambda = eig_.eigenvalues().array();
-  const Eigen::VectorXd w = lambda / (lambda + shift_).square();
-  C.noalias() = V * w.asDiagonal() * V.transpose();
+  // theta = S (Rs + cI)^-1 S h and cov(h) = sigma^2 G = sigma^2 S^-1 Rs S^-1 give
+  // cov(theta) = sigma^2 S (Rs + cI)^-1 Rs (Rs + cI)^-1 S.
+  const Eigen::Index p = scaled_.rows();
+  C = llt_.solve(Eigen::MatrixXd::Identity(p, p));
+  if (shift_ > 0.0) C = (C * scaled_ * C).eval();
   C = scale_.asDiagonal() * C * scale_.asDiagonal();
 }
 

@@ -35,7 +35,7 @@ struct OeOptions {
   int max_iterations = 200;
   // Converged when an accepted step has |dtheta|_inf <= step_tolerance (|theta|_inf + step_tolerance)
   // or every gradient component's cosine |J_k' eps| / (|J_k| |eps|) <= gradient_tolerance.
-  double step_tolerance = 1e-9;
+  double step_tolerance = 1e-8;
   double gradient_tolerance = 1e-12;
   double max_pole_radius = 0.9999;
   // FIR length per channel for the start when no impulse response is given; 0 = automatic
@@ -107,6 +107,9 @@ class OutputErrorEstimator {
   std::vector<Eigen::VectorXd> yhat_, w_, v_;
   OeResult candidate_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  // ArxOeEstimator checks the raw window once and turns the per-call check off.
+  bool check_signals_ = true;
+  friend class ArxOeEstimator;
 };
 
 OeResult oe(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,

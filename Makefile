@@ -36,7 +36,7 @@ test-python: install
 test: test-cpp test-python
 
 demo: install
-	$(VENV)/bin/mpmpp check ../shared/cases/P1/model.json ../shared/cases/P1/data.csv
+	$(VENV)/bin/mpmpp demo siso --out $(OUT)/demo-siso
 
 sanitize: system-deps
 	cmake -S . -B build/sanitize -DMPMPP_BUILD_TESTS=ON -DMPMPP_SANITIZE=ON -DCMAKE_BUILD_TYPE=Debug

@@ -9,10 +9,6 @@ namespace py = pybind11;
 
 namespace mpmpp::bindings {
 
-using ProcessMatrix = std::vector<std::vector<std::optional<TransferFunction>>>;
-Model make_model(const ProcessMatrix& process, const std::vector<TransferFunction>& noise,
-                 std::vector<std::string> inputs, std::vector<std::string> outputs, double sample_time_s);
-
 void bind_closed_loop(py::module_& m) {
   py::class_<ActuatorNonlinearity>(m, "ActuatorNonlinearity")
       .def(py::init<>())
@@ -60,13 +56,7 @@ void bind_closed_loop(py::module_& m) {
 
   py::class_<ClosedLoopConfig>(m, "ClosedLoopConfig")
       .def(py::init<>())
-      .def("set_model",
-           [](ClosedLoopConfig& c, const ProcessMatrix& process, const std::vector<TransferFunction>& noise,
-              std::vector<std::string> inputs, std::vector<std::string> outputs, double sample_time_s) {
-             c.model = make_model(process, noise, std::move(inputs), std::move(outputs), sample_time_s);
-           },
-           py::arg("process"), py::arg("noise"), py::arg("inputs"), py::arg("outputs"),
-           py::arg("sample_time_s"), "the nominal model the MPC uses")
+      .def_readwrite("model", &ClosedLoopConfig::model, "the nominal model the MPC uses")
       .def_readwrite("tuning", &ClosedLoopConfig::tuning)
       .def_readwrite("plant", &ClosedLoopConfig::plant)
       .def_readwrite("u_operating", &ClosedLoopConfig::u_operating)

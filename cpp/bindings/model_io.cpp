@@ -71,7 +71,8 @@ void bind_model_io(py::module_& m) {
       .def("noise_dict", &noise_dict, "{output: TransferFunction} for every output")
       .def("to_json", &model_to_json)
       .def_static("from_json", &parse_model, py::arg("text"), py::arg("source") = "<string>")
-      .def("__eq__", [](const Model& a, const Model& b) { return model_to_json(a) == model_to_json(b); })
+      .def("__eq__", [](const Model& a, const Model& b) { return model_to_json(a) == model_to_json(b); },
+           py::is_operator())
       .def("__repr__", [](const Model& self) {
         return "<mpmpp.Model '" + self.name + "': " + std::to_string(self.num_inputs()) + " inputs, " +
                std::to_string(self.num_outputs()) + " outputs, Ts = " + py::repr(py::float_(self.sample_time_s)).cast<std::string>() + " s>";

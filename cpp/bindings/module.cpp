@@ -8,6 +8,9 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_data_io(m);
   mpmpp::bindings::bind_qp(m);
   mpmpp::bindings::bind_identification(m);
+  mpmpp::bindings::bind_prediction(m);
+  mpmpp::bindings::bind_residual_analysis(m);
+  mpmpp::bindings::bind_change_scan(m);
   mpmpp::bindings::bind_one_class_svm(m);
   mpmpp::bindings::bind_mpc(m);
   mpmpp::bindings::bind_closed_loop(m);

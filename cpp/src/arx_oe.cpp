@@ -53,6 +53,8 @@ ArxOeEstimator::ArxOeEstimator(ArxOeConfig config)
     if (config_.fir_length[j] < 1)
       throw InputError("fir_length[" + std::to_string(j) + "] must be >= 1");
   start_impulse_.resize(m);
+  arx_.check_signals_ = false;  // estimate() checks the raw window and the detrended one
+  oe_.check_signals_ = false;   // A(q)-filtering a non-constant signal keeps it non-constant
 }
 
 void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -69,6 +71,14 @@ void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   u_ = u;
   detrend_in_place(y_, config_.detrend);
   for (Eigen::Index j = 0; j < m; ++j) detrend_in_place(u_.col(j), config_.detrend);
+  // A signal that was a pure line is rounding noise after a linear detrend.
+  const auto require_left = [](const auto& raw, const auto& left, const std::string& name) {
+    if (left.cwiseAbs().maxCoeff() <= 1e-9 * raw.cwiseAbs().maxCoeff())
+      throw NumericalError("window not informative: " + name +
+                           " is a pure trend (nothing left after detrending)");
+  };
+  require_left(y, y_, "y");
+  for (Eigen::Index j = 0; j < m; ++j) require_left(u.col(j), u_.col(j), "u[" + std::to_string(j) + "]");
 
   // 2. high-order ARX.
   arx_.estimate(y_, u_, out.arx);

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <string_view>
 
 #include "mpmpp/error.hpp"
 #include "text_file.hpp"
@@ -19,15 +20,11 @@ constexpr double kSpacingTolerance = 1e-6;  // relative to sample_time_s
 std::string quoted(const std::string& s) { return "\"" + detail::printable(s) + "\""; }
 std::string row_name(std::size_t row) { return "row " + std::to_string(row); }
 
-std::string format_number(double x) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, r.ptr);
-}
+using detail::format_number;
 
-std::string trim(const std::string& s) {
+std::string_view trim(std::string_view s) {
   const auto first = s.find_first_not_of(" \t");
-  if (first == std::string::npos) return "";
+  if (first == std::string_view::npos) return {};
   return s.substr(first, s.find_last_not_of(" \t") - first + 1);
 }
 
@@ -50,12 +47,14 @@ std::optional<double> parse_number(const std::string& cell) {
 }
 
 // One CSV line split into trimmed fields (RFC 4180 quoting: "a,b" and "" for ").
-std::vector<std::string> split_fields(const std::string& line, std::size_t row, const std::string& source) {
-  std::vector<std::string> fields;
+// Fills `fields`, reused from row to row so that reading allocates little.
+void split_fields(std::string_view line, std::size_t row, const std::string& source,
+                  std::vector<std::string>& fields) {
+  fields.clear();
   std::size_t i = 0;
   while (true) {
     while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-    std::string field;
+    std::string& field = fields.emplace_back();
     if (i < line.size() && line[i] == '"') {
       ++i;
       while (true) {
@@ -75,31 +74,29 @@ std::vector<std::string> split_fields(const std::string& line, std::size_t row, 
       while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
       if (i < line.size() && line[i] != ',')
         throw InputError(source + ": " + row_name(row) + ": text after a closing quote in field " +
-                         std::to_string(fields.size() + 1));
+                         std::to_string(fields.size()));
     } else {
-      const std::size_t end = line.find(',', i);
-      field = trim(line.substr(i, end == std::string::npos ? std::string::npos : end - i));
-      i = end == std::string::npos ? line.size() : end;
+      const std::size_t end = std::min(line.find(',', i), line.size());
+      field = trim(line.substr(i, end - i));
+      i = end;
     }
-    fields.push_back(field);
     if (i >= line.size()) break;
     ++i;  // the comma
   }
-  return fields;
 }
 
-std::vector<std::string> split_lines(const std::string& text) {
-  std::vector<std::string> lines;
+// Lines without their "\r\n" / "\n", trailing blank lines dropped; views into `text`.
+std::vector<std::string_view> split_lines(std::string_view text) {
+  std::vector<std::string_view> lines;
   std::size_t start = 0;
   while (start <= text.size()) {
-    std::size_t end = text.find('\n', start);
-    if (end == std::string::npos) end = text.size();
-    std::string line = text.substr(start, end - start);
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    std::string_view line = text.substr(start, end - start);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     lines.push_back(line);
     start = end + 1;
   }
-  while (!lines.empty() && trim(lines.back()).empty()) lines.pop_back();  // trailing blank lines
+  while (!lines.empty() && trim(lines.back()).empty()) lines.pop_back();
   return lines;
 }
 
@@ -246,12 +243,6 @@ void check_column_names(const std::vector<std::string>& names, const std::string
   }
 }
 
-std::string list(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
 // A CSV field, quoted when it would otherwise not read back as the same text.
 std::string csv_field(const std::string& s) {
   if (s.find_first_of(",\"") == std::string::npos && s == trim(s)) return s;
@@ -301,14 +292,17 @@ DataTable make_data_table(Eigen::VectorXd time_s, std::vector<std::string> colum
   return d;
 }
 
-DataTable parse_csv(const std::string& text, const std::string& source) {
+namespace {
+
+DataTable parse_csv_text(const std::string& text, const std::string& source) {
   const std::string where = source + ": ";
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(where + "file is empty");
   if (text.find('\0') != std::string::npos) throw InputError(where + "not a CSV file (binary content)");
-  std::vector<std::string> lines = split_lines(text);
-  if (lines[0].rfind("\xEF\xBB\xBF", 0) == 0) lines[0].erase(0, 3);  // UTF-8 byte order mark
+  std::vector<std::string_view> lines = split_lines(text);
+  if (lines[0].substr(0, 3) == "\xEF\xBB\xBF") lines[0].remove_prefix(3);  // UTF-8 byte order mark
 
-  const std::vector<std::string> header = split_fields(lines[0], 1, source);
+  std::vector<std::string> header;
+  split_fields(lines[0], 1, source, header);
   std::size_t time_col = header.size();
   for (std::size_t c = 0; c < header.size(); ++c)
     if (header[c] == "time") time_col = c;
@@ -316,7 +310,7 @@ DataTable parse_csv(const std::string& text, const std::string& source) {
     if (header.size() == 1)
       throw InputError(where + "not a CSV file with a header row: row 1 is " + quoted(header[0]) +
                        " (expected comma-separated column names including \"time\")");
-    throw InputError(where + "row 1: no \"time\" column (columns: " + detail::printable(list(header), 200) + ")");
+    throw InputError(where + "row 1: no \"time\" column (columns: " + detail::printable(detail::comma_list(header), 200) + ")");
   }
   check_column_names(header, where + "row 1: ");
   if (lines.size() < 2) throw InputError(where + "no data rows after the header");
@@ -328,10 +322,11 @@ DataTable parse_csv(const std::string& text, const std::string& source) {
     if (c != time_col) d.columns.push_back(header[c]);
   d.values.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(d.columns.size()));
   d.missing.assign(d.columns.size(), 0);
+  std::vector<std::string> fields;
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t row = k + 2;
     if (trim(lines[k + 1]).empty()) throw InputError(where + row_name(row) + ": empty line");
-    const std::vector<std::string> fields = split_fields(lines[k + 1], row, source);
+    split_fields(lines[k + 1], row, source, fields);
     if (fields.size() != header.size())
       throw InputError(where + row_name(row) + ": " + std::to_string(fields.size()) + " fields, the header has " +
                        std::to_string(header.size()));
@@ -358,14 +353,12 @@ DataTable parse_csv(const std::string& text, const std::string& source) {
   return d;
 }
 
-DataTable read_csv(const std::string& path) { return parse_csv(detail::read_text_file(path), path); }
-
-void validate_data(const DataTable& data, const Model& model, const std::string& source) {
+void check_against_model(const DataTable& data, const Model& model, const std::string& source) {
   auto require = [&](const std::vector<std::string>& names, const char* kind) {
     for (const auto& name : names)
       if (data.column(name) < 0)
         throw InputError(source + ": column " + quoted(name) + " (model " + kind + ") is missing (columns: time" +
-                         (data.columns.empty() ? "" : ", ") + detail::printable(list(data.columns), 200) + ")");
+                         (data.columns.empty() ? "" : ", ") + detail::printable(detail::comma_list(data.columns), 200) + ")");
   };
   require(model.inputs, "input");
   require(model.outputs, "output");
@@ -377,6 +370,28 @@ void validate_data(const DataTable& data, const Model& model, const std::string&
                        format_number(step) + " s from the previous row, expected the model's sample_time_s = " +
                        format_number(ts) + " s");
   }
+}
+
+// Runs `check` with every InputError it throws made one line.
+template <class Check>
+auto one_line_errors(Check check) -> decltype(check()) {
+  try {
+    return check();
+  } catch (const InputError& e) {
+    throw InputError(detail::one_line(e.what()));
+  }
+}
+
+}  // namespace
+
+DataTable parse_csv(const std::string& text, const std::string& source) {
+  return one_line_errors([&] { return parse_csv_text(text, source); });
+}
+
+DataTable read_csv(const std::string& path) { return parse_csv(detail::read_text_file(path), path); }
+
+void validate_data(const DataTable& data, const Model& model, const std::string& source) {
+  one_line_errors([&] { check_against_model(data, model, source); });
 }
 
 DataTable load_data(const std::string& path, const Model& model) {

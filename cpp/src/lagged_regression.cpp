@@ -18,24 +18,41 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
   const Eigen::Index p = static_cast<Eigen::Index>(columns.size());
   G.resize(p, p);
   h.resize(p);
+  // Column k continues column k-1 when it is the same signal one lag further.
+  const auto continues = [&columns](Eigen::Index k) {
+    if (k == 0) return false;
+    const LaggedColumn &c = columns[k], &prev = columns[k - 1];
+    return c.signal == prev.signal && c.lag == prev.lag + 1 && c.sign == prev.sign;
+  };
   const ConstSegment y(target + t0, n);
   for (Eigen::Index i = 0; i < p; ++i) {
-    const ConstSegment xi = column_segment(columns[i], t0, n);
-    h[i] = columns[i].sign * xi.dot(y);
+    const LaggedColumn& ci = columns[i];
+    const ConstSegment xi = column_segment(ci, t0, n);
+    h[i] = ci.sign * xi.dot(y);
+    const bool ci_continues = continues(i);
     for (Eigen::Index j = 0; j <= i; ++j) {
-      const double s = columns[i].sign * columns[j].sign;
-      G(i, j) = G(j, i) = s * xi.dot(column_segment(columns[j], t0, n));
+      const LaggedColumn& cj = columns[j];
+      const double s = ci.sign * cj.sign;
+      if (ci_continues && continues(j)) {
+        // Both columns shift by one lag against (i-1, j-1): the sum over the rows
+        // gains the term at t0 and loses the one at t0 + n (Toeplitz recursion),
+        // O(1) instead of an O(n) dot product.
+        const double enter = ci.signal[t0 - ci.lag] * cj.signal[t0 - cj.lag];
+        const double leave = ci.signal[t0 + n - ci.lag] * cj.signal[t0 + n - cj.lag];
+        G(i, j) = G(i - 1, j - 1) + s * (enter - leave);
+      } else {
+        G(i, j) = s * xi.dot(column_segment(cj, t0, n));
+      }
+      G(j, i) = G(i, j);
     }
   }
 }
 
-void lagged_residual(const std::vector<LaggedColumn>& columns, const double* target,
-                     Eigen::Index t0, Eigen::Index n, const Eigen::VectorXd& theta,
-                     Eigen::VectorXd& residual) {
-  residual = ConstSegment(target + t0, n);
-  for (std::size_t k = 0; k < columns.size(); ++k)
-    residual -= (columns[k].sign * theta[static_cast<Eigen::Index>(k)]) *
-                column_segment(columns[k], t0, n);
+bool NormalEquationsSolver::positive_definite_above(double shift) {
+  shifted_ = scaled_;
+  shifted_.diagonal().array() -= shift;
+  llt_.compute(shifted_);
+  return llt_.info() == Eigen::Success;
 }
 
 NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixXd& G,
@@ -47,7 +64,7 @@ NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixX
   const Eigen::Index p = G.rows();
   scale_.resize(p);
   for (Eigen::Index k = 0; k < p; ++k) {
-    // A regressor with (numerically) no energy: a constant input after mean removal.
+    // A regressor with no energy: an input that is zero over the equations.
     if (!(G(k, k) > 0.0)) {
       out.status = Status::ZeroColumn;
       out.zero_column = k;
@@ -56,31 +73,25 @@ NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixX
     scale_[k] = 1.0 / std::sqrt(G(k, k));
   }
   scaled_ = scale_.asDiagonal() * G * scale_.asDiagonal();
-  eig_.compute(scaled_, Eigen::ComputeEigenvectors);
-  const Eigen::VectorXd& lambda = eig_.eigenvalues();  // ascending
-  out.min_scaled_eigenvalue = lambda[0];
-  if (!(lambda[0] > rank_tolerance * lambda[p - 1])) {
+  if (!positive_definite_above(rank_tolerance * static_cast<double>(p))) {
     out.status = Status::Singular;
     return out;
   }
   // Section 3.1: ||Rs^-1||_2 >= 2/delta  <=>  lambda_min(Rs) <= delta/2.
-  out.regularised = delta > 0.0 && lambda[0] <= 0.5 * delta;
+  out.regularised = delta > 0.0 && !positive_definite_above(0.5 * delta);
   shift_ = out.regularised ? 0.5 * delta : 0.0;
-  const Eigen::MatrixXd& V = eig_.eigenvectors();
-  work_.noalias() = V.transpose() * scale_.cwiseProduct(h);
-  work_.array() /= lambda.array() + shift_;
-  theta.noalias() = V * work_;
+  positive_definite_above(-shift_);  // factor of Rs + shift I (positive definite here)
+  theta = llt_.solve(scale_.cwiseProduct(h));
   theta.array() *= scale_.array();
   return out;
 }
 
 void NormalEquationsSolver::covariance_factor(Eigen::MatrixXd& C) const {
-  // theta = S (Rs + cI)^-1 S h and cov(h) = sigma^2 G give
-  // cov(theta) = sigma^2 S V diag(lambda / (lambda + c)^2) V^T S.
-  const Eigen::MatrixXd& V = eig_.eigenvectors();
-  const Eigen::ArrayXd lambda = eig_.eigenvalues().array();
-  const Eigen::VectorXd w = lambda / (lambda + shift_).square();
-  C.noalias() = V * w.asDiagonal() * V.transpose();
+  // theta = S (Rs + cI)^-1 S h and cov(h) = sigma^2 G = sigma^2 S^-1 Rs S^-1 give
+  // cov(theta) = sigma^2 S (Rs + cI)^-1 Rs (Rs + cI)^-1 S.
+  const Eigen::Index p = scaled_.rows();
+  C = llt_.solve(Eigen::MatrixXd::Identity(p, p));
+  if (shift_ > 0.0) C = (C * scaled_ * C).eval();
   C = scale_.asDiagonal() * C * scale_.asDiagonal();
 }
 

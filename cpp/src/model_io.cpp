@@ -1,10 +1,8 @@
 #include "mpmpp/model_io.hpp"
 
 #include <cmath>
-#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sstream>
 
 #include "mpmpp/error.hpp"
 #include "text_file.hpp"
@@ -40,18 +38,7 @@ auto at(const std::string& path, Make make) -> decltype(make()) {
 
 std::string quoted(const std::string& s) { return "\"" + s + "\""; }
 
-std::string format_number(double x) {
-  std::ostringstream s;
-  s.precision(std::numeric_limits<double>::max_digits10);
-  s << x;
-  return s.str();
-}
-
-std::string list(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
+using detail::format_number;
 
 void expect_type(const json& j, bool ok, const char* expected, const std::string& path) {
   if (!ok) fail(path, std::string("must be ") + expected + ", got " + j.type_name());
@@ -66,7 +53,7 @@ void check_keys(const json& obj, const std::string& path, const std::vector<std:
   for (const auto& item : obj.items()) {
     bool known = false;
     for (const auto& a : allowed) known = known || item.key() == a;
-    if (!known) fail(join(path, item.key()), "unknown key (expected one of: " + list(allowed) + ")");
+    if (!known) fail(join(path, item.key()), "unknown key (expected one of: " + detail::comma_list(allowed) + ")");
   }
 }
 
@@ -159,7 +146,7 @@ int position(const std::vector<std::string>& names, const std::string& name) {
 int lookup(const std::vector<std::string>& names, const std::string& name, const char* kind,
            const std::string& path) {
   const int i = position(names, name);
-  if (i < 0) fail(path, "unknown " + std::string(kind) + " " + quoted(name) + " (" + kind + "s: " + list(names) + ")");
+  if (i < 0) fail(path, "unknown " + std::string(kind) + " " + quoted(name) + " (" + kind + "s: " + detail::comma_list(names) + ")");
   return i;
 }
 
@@ -324,7 +311,7 @@ Model parse_model(const std::string& json_text, const std::string& source) {
     }
     return model_from_json(root);
   } catch (const InputError& e) {
-    throw InputError(source + ": " + e.what());
+    throw InputError(detail::one_line(source + ": " + e.what()));
   }
 }
 

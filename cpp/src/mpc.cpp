@@ -61,6 +61,10 @@ struct Mpc::Impl {
   MpcTuning tuning;
   std::vector<std::optional<detail::IncrementalFilter>> filters;  // [i*nu + j], advanced one sample
   detail::IncrementalFilter scratch;
+  // NoiseModel disturbance: H_i^-1 (innovations from Delta v) and H_i (their forecast).
+  std::vector<detail::IncrementalFilter> noise_inverse, noise_forward;
+  Eigen::VectorXd dist_prev;
+  bool started = false;
   Eigen::VectorXd u_lin, u_prev, u_out, mv_range;
   Eigen::VectorXi start;  // d_i
   Eigen::MatrixXd theta, q_from_f, q_from_u, P, A;
@@ -181,10 +185,23 @@ Mpc::Mpc(const Model& model, MpcTuning tuning, const Eigen::Ref<const Eigen::Vec
           if (n >= 0) s.theta(i * s.hp + k, m * nu + j) = step[n];
         }
     }
+  if (s.tuning.disturbance == DisturbanceModel::NoiseModel) {
+    if (static_cast<int>(model.noise.size()) != ny)
+      throw InputError("model noise must have one model per output for the noise-model disturbance");
+    for (int i = 0; i < ny; ++i) {
+      const TransferFunction& h = model.noise[i];
+      if (h.delay() != 0 || h.num()[0] != 1.0 || !h.is_minimum_phase())
+        throw InputError("model noise of " + model.outputs[i] +
+                         " must be monic and inversely stable for the noise-model disturbance");
+      s.noise_inverse.emplace_back(h.inverse());
+      s.noise_forward.emplace_back(h);
+    }
+  }
   s.build_qp();
   s.solver.emplace(s.P, s.A, qp_settings);
   s.f = Eigen::VectorXd::Zero(ny * s.hp);
   s.dist = Eigen::VectorXd::Zero(ny);
+  s.dist_prev = Eigen::VectorXd::Zero(ny);
   s.ref.resize(ny * s.hp);
   s.u_gap.resize(s.ndu);
   s.update_reference();
@@ -332,11 +349,25 @@ const Eigen::VectorXd& Mpc::step(const Eigen::Ref<const Eigen::VectorXd>& y) {
       if (auto& g = s.filters[i * nu + j]) ym += g->step(s.u_prev[j] - s.u_lin[j]);
     s.dist[i] = y[i] - ym;
   }
+  const bool noise_model = s.tuning.disturbance == DisturbanceModel::NoiseModel;
+  if (noise_model && !s.started) s.dist_prev = s.dist;  // Delta v(0) = 0: no history yet
+  s.started = true;
   // Free response: each channel's filter copied and run with u held at u(t-1).
   for (int i = 0; i < s.ny; ++i) {
     auto fi = s.f.segment(i * hp, hp);
     fi.setConstant(s.dist[i]);
     const int d = s.start[i];
+    if (noise_model) {
+      const double innovation = s.noise_inverse[i].step(s.dist[i] - s.dist_prev[i]);
+      s.noise_forward[i].step(innovation);
+      s.scratch = s.noise_forward[i];
+      double ahead = 0.0;  // sum of the forecast Delta v up to t + tau (future e = 0)
+      for (int tau = 1; tau < d + hp; ++tau) {
+        ahead += s.scratch.step(0.0);
+        if (tau >= d) fi[tau - d] += ahead;
+      }
+      s.dist_prev[i] = s.dist[i];
+    }
     for (int j = 0; j < nu; ++j) {
       const auto& g = s.filters[i * nu + j];
       if (!g) continue;

@@ -19,6 +19,234 @@ constexpr double kTau = 1e-12;
 
 using Eigen::Index;
 
+// The dot products and exponentials behind every kernel value (dot_tile, gaussian_column,
+// gaussian_sum) are compiled for three x86-64 levels (AVX-512, AVX2+FMA, baseline SSE2) and
+// picked at load time by the CPU (GCC function multi-versioning), since the package is built
+// without -march=native. -DMPMPP_NO_CPU_CLONES builds the baseline only.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
+    !defined(MPMPP_NO_CPU_CLONES)
+#define MPMPP_CPU_CLONES \
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define MPMPP_CPU_CLONES
+#endif
+
+// Points packed in panels of kPanel for the dot-product kernel: feature k of point j lives at
+// data[(j / kPanel) * kPanel * m + k * kPanel + j % kPanel], so a sweep over the features of one
+// panel reads memory contiguously (the layout a GEMM packs into). Padding points are zero.
+constexpr int kPanel = 8;
+
+class PackedPoints {
+ public:
+  explicit PackedPoints(const Eigen::Ref<const RowMatrixXd>& X)
+      : n_(static_cast<int>(X.rows())), m_(static_cast<int>(X.cols())),
+        n_pad_((n_ + kPanel - 1) / kPanel * kPanel),
+        data_(static_cast<size_t>(n_pad_) * m_, 0.0) {
+    for (int j = 0; j < n_; ++j)
+      for (int k = 0; k < m_; ++k) at(j, k) = X(j, k);
+  }
+  int size() const { return n_; }
+  int padded_size() const { return n_pad_; }
+  int features() const { return m_; }
+  const double* data() const { return data_.data(); }
+  double& at(int j, int k) { return data_[offset(j, k)]; }
+  double at(int j, int k) const { return data_[offset(j, k)]; }
+  void swap_points(int i, int j) {
+    for (int k = 0; k < m_; ++k) std::swap(at(i, k), at(j, k));
+  }
+
+ private:
+  size_t offset(int j, int k) const {
+    return static_cast<size_t>(j / kPanel) * kPanel * m_ + static_cast<size_t>(k) * kPanel +
+           j % kPanel;
+  }
+  int n_, m_, n_pad_;
+  std::vector<double> data_;
+};
+
+// out[p * ldo + j - j_first] = sum_k q[p * m + k] x_jk   for p < n_q and the packed points j
+// in panels [panel0, panel1), j_first = panel0 * kPanel. q: n_q query points, row-major. Every sum runs over k in increasing order, as
+// a plain dot product does. Register tile of 4 queries x 8 points in 4-wide vectors (GCC vector
+// extensions, lowered to each clone's ISA): per feature, two contiguous loads feed 32
+// multiply-adds.
+typedef double Vec4 __attribute__((vector_size(32)));
+#define MPMPP_LOAD4(v, ptr) __builtin_memcpy(&(v), (ptr), sizeof(Vec4))
+#define MPMPP_STORE4(ptr, v) __builtin_memcpy((ptr), &(v), sizeof(Vec4))
+
+MPMPP_CPU_CLONES
+void dot_tile(const double* q, int n_q, int m, const double* packed, int panel0, int panel1,
+              double* out, Index ldo) {
+  static_assert(kPanel == 8, "the register tile below spans one panel");
+  for (int p0 = 0; p0 < n_q; p0 += 4) {
+    const int nq = std::min(4, n_q - p0);
+    const double* q0 = q + static_cast<Index>(p0) * m;
+    double* o = out + p0 * ldo;
+    if (nq < 4) {
+      // Fewer than 4 queries (one kernel column): 4 panels at a time, so 8 independent
+      // accumulator chains hide the multiply-add latency.
+      for (int p = 0; p < nq; ++p) {
+        const double* qp = q0 + p * m;
+        double* op = o + p * ldo;
+        int panel = panel0;
+        for (; panel + 4 <= panel1; panel += 4) {
+          const double* c = packed + static_cast<Index>(panel) * kPanel * m;
+          const Index stride = static_cast<Index>(kPanel) * m;
+          Vec4 a00 = {}, a01 = {}, a10 = {}, a11 = {}, a20 = {}, a21 = {}, a30 = {}, a31 = {};
+          for (int k = 0; k < m; ++k, c += kPanel) {
+            Vec4 c00, c01, c10, c11, c20, c21, c30, c31;
+            MPMPP_LOAD4(c00, c);
+            MPMPP_LOAD4(c01, c + 4);
+            MPMPP_LOAD4(c10, c + stride);
+            MPMPP_LOAD4(c11, c + stride + 4);
+            MPMPP_LOAD4(c20, c + 2 * stride);
+            MPMPP_LOAD4(c21, c + 2 * stride + 4);
+            MPMPP_LOAD4(c30, c + 3 * stride);
+            MPMPP_LOAD4(c31, c + 3 * stride + 4);
+            const double b = qp[k];
+            a00 += c00 * b;
+            a01 += c01 * b;
+            a10 += c10 * b;
+            a11 += c11 * b;
+            a20 += c20 * b;
+            a21 += c21 * b;
+            a30 += c30 * b;
+            a31 += c31 * b;
+          }
+          double* dst = op + static_cast<Index>(panel - panel0) * kPanel;
+          MPMPP_STORE4(dst, a00);
+          MPMPP_STORE4(dst + 4, a01);
+          MPMPP_STORE4(dst + 8, a10);
+          MPMPP_STORE4(dst + 12, a11);
+          MPMPP_STORE4(dst + 16, a20);
+          MPMPP_STORE4(dst + 20, a21);
+          MPMPP_STORE4(dst + 24, a30);
+          MPMPP_STORE4(dst + 28, a31);
+        }
+        for (; panel < panel1; ++panel) {
+          const double* c = packed + static_cast<Index>(panel) * kPanel * m;
+          Vec4 a0 = {}, a1 = {};
+          for (int k = 0; k < m; ++k, c += kPanel) {
+            Vec4 c0, c1;
+            MPMPP_LOAD4(c0, c);
+            MPMPP_LOAD4(c1, c + 4);
+            a0 += c0 * qp[k];
+            a1 += c1 * qp[k];
+          }
+          double* dst = op + static_cast<Index>(panel - panel0) * kPanel;
+          MPMPP_STORE4(dst, a0);
+          MPMPP_STORE4(dst + 4, a1);
+        }
+      }
+      continue;
+    }
+    for (int panel = panel0; panel < panel1; ++panel) {
+      const double* c = packed + static_cast<Index>(panel) * kPanel * m;
+      const Index j0 = static_cast<Index>(panel - panel0) * kPanel;
+      Vec4 a00 = {}, a01 = {}, a10 = {}, a11 = {}, a20 = {}, a21 = {}, a30 = {}, a31 = {};
+      for (int k = 0; k < m; ++k, c += kPanel) {
+        Vec4 c0, c1;
+        MPMPP_LOAD4(c0, c);
+        MPMPP_LOAD4(c1, c + 4);
+        const double b0 = q0[k], b1 = q0[m + k], b2 = q0[2 * m + k], b3 = q0[3 * m + k];
+        a00 += c0 * b0;
+        a01 += c1 * b0;
+        a10 += c0 * b1;
+        a11 += c1 * b1;
+        a20 += c0 * b2;
+        a21 += c1 * b2;
+        a30 += c0 * b3;
+        a31 += c1 * b3;
+      }
+      MPMPP_STORE4(o + j0, a00);
+      MPMPP_STORE4(o + j0 + 4, a01);
+      MPMPP_STORE4(o + ldo + j0, a10);
+      MPMPP_STORE4(o + ldo + j0 + 4, a11);
+      MPMPP_STORE4(o + 2 * ldo + j0, a20);
+      MPMPP_STORE4(o + 2 * ldo + j0 + 4, a21);
+      MPMPP_STORE4(o + 3 * ldo + j0, a30);
+      MPMPP_STORE4(o + 3 * ldo + j0 + 4, a31);
+    }
+  }
+}
+
+// exp(x) on 4 lanes, within 1 ulp of the correctly rounded value for x in [-708, 709] (inputs
+// are clamped to that range; below it the result is 3e-308 instead of a denormal or 0, which
+// rounds to the same single-precision 0 and is negligible in a decision sum). Cody-Waite
+// reduction x = n ln2 + r, |r| <= ln2 / 2, and the degree-11 Taylor polynomial of e^r (truncation
+// error below 1e-21). Inlined into each CPU clone.
+typedef long long Vec4i __attribute__((vector_size(32)));
+
+__attribute__((always_inline)) inline void vexp(Vec4& x) {
+  const Vec4 lo = {-708.0, -708.0, -708.0, -708.0}, hi = {709.0, 709.0, 709.0, 709.0};
+  x = x < lo ? lo : x;
+  x = x > hi ? hi : x;
+  const double shifter = 0x1.8p52;  // adding it rounds to an integer held in the low bits
+  const Vec4 t = x * 1.4426950408889634 + shifter;
+  const Vec4 n = t - shifter;
+  const Vec4 r = (x - n * 6.93147180369123816490e-01) - n * 1.90821492927058770002e-10;
+  Vec4 p = r * (1.0 / 39916800) + 1.0 / 3628800;
+  p = p * r + 1.0 / 362880;
+  p = p * r + 1.0 / 40320;
+  p = p * r + 1.0 / 5040;
+  p = p * r + 1.0 / 720;
+  p = p * r + 1.0 / 120;
+  p = p * r + 1.0 / 24;
+  p = p * r + 1.0 / 6;
+  p = p * r + 0.5;
+  p = p * r + 1.0;
+  p = p * r + 1.0;
+  Vec4i bits;
+  __builtin_memcpy(&bits, &t, sizeof bits);
+  long long shifter_bits;
+  __builtin_memcpy(&shifter_bits, &shifter, sizeof shifter_bits);
+  bits = (bits - shifter_bits + 1023) << 52;  // 2^n
+  Vec4 scale;
+  __builtin_memcpy(&scale, &bits, sizeof scale);
+  x = p * scale;
+}
+
+// out[j] = exp(-gamma (sq_i + sq[j] - 2 dots[j])) rounded to single precision, j < n: one
+// kernel column from its dot products, the expression of libsvm's RBF kernel.
+MPMPP_CPU_CLONES
+void gaussian_column(const double* dots, const double* sq, double sq_i, double gamma, int n,
+                     float* out) {
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    Vec4 d, q;
+    MPMPP_LOAD4(d, dots + j);
+    MPMPP_LOAD4(q, sq + j);
+    Vec4 v = -gamma * ((sq_i + q) - 2 * d);
+    vexp(v);
+    for (int t = 0; t < 4; ++t) out[j + t] = static_cast<float>(v[t]);
+  }
+  for (; j < n; ++j)
+    out[j] = static_cast<float>(std::exp(-gamma * (sq_i + sq[j] - 2 * dots[j])));
+}
+
+// sum_j coef[j] exp(-gamma max(0, x_sq + sq[j] - 2 dots[j])), j < n: a decision-function term.
+MPMPP_CPU_CLONES
+double gaussian_sum(const double* dots, const double* sq, const double* coef, double x_sq,
+                    double gamma, int n) {
+  Vec4 acc = {};
+  const Vec4 zero = {};
+  int j = 0;
+  for (; j + 4 <= n; j += 4) {
+    Vec4 d, q, c;
+    MPMPP_LOAD4(d, dots + j);
+    MPMPP_LOAD4(q, sq + j);
+    MPMPP_LOAD4(c, coef + j);
+    Vec4 d2 = (x_sq + q) - 2 * d;
+    d2 = d2 < zero ? zero : d2;  // clamp round-off below 0
+    Vec4 v = -gamma * d2;
+    vexp(v);
+    acc += c * v;
+  }
+  double sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+  for (; j < n; ++j)
+    sum += coef[j] * std::exp(-gamma * std::max(0.0, x_sq + sq[j] - 2 * dots[j]));
+  return sum;
+}
+
 // Gaussian kernel matrix Q_ij = exp(-gamma ||x_i - x_j||^2), gamma = 1/c (eq 15), seen through
 // the solver's current permutation of the training points (shrinking moves inactive points to
 // the end). Columns are computed on demand with one matrix-vector product, stored in single
@@ -28,7 +256,7 @@ class KernelColumns {
  public:
   KernelColumns(const Eigen::Ref<const RowMatrixXd>& X, double gamma, double cache_mb)
       : x_(X), sq_norm_(X.rowwise().squaredNorm()), gamma_(gamma), l_(static_cast<int>(X.rows())),
-        columns_(static_cast<size_t>(l_) + 1), dots_(l_) {
+        columns_(static_cast<size_t>(l_) + 1), dots_(x_.padded_size()), point_(X.cols()) {
     const double bytes = cache_mb * 1024.0 * 1024.0;
     const double floats = bytes / sizeof(float) - 8.0 * l_;  // minus bookkeeping, like libsvm
     // At least two full columns, so fetching Q_j never evicts the Q_i fetched just before it.
@@ -38,9 +266,6 @@ class KernelColumns {
   }
 
   int size() const { return l_; }
-  double gamma() const { return gamma_; }
-  const RowMatrixXd& points() const { return x_; }
-  const Eigen::VectorXd& squared_norms() const { return sq_norm_; }
 
   // Q_i[0, len): the first len entries of column i in the current order.
   const float* column(int i, int len) {
@@ -59,11 +284,44 @@ class KernelColumns {
     return h.data.data();
   }
 
+  // Columns c0 .. c0 + nc - 1 over all l points (before any shrinking), by one matrix product.
+  void full_columns(int c0, int nc, Eigen::MatrixXf& out) const {
+    const int m = x_.features();
+    RowMatrixXd queries(nc, m);
+    for (int p = 0; p < nc; ++p)
+      for (int k = 0; k < m; ++k) queries(p, k) = x_.at(c0 + p, k);
+    const int ld = x_.padded_size();
+    RowMatrixXd tile(nc, ld);  // row p = dots of point c0 + p with all points
+    // ~200 kB of points at a time, so they stay in cache while every query passes over them.
+    const int chunk = std::max(1, 25600 / (kPanel * m));
+    for (int p0 = 0; p0 < ld / kPanel; p0 += chunk)
+      dot_tile(queries.data(), nc, m, x_.data(), p0, std::min(ld / kPanel, p0 + chunk),
+               tile.data() + p0 * kPanel, ld);
+    out.resize(l_, nc);
+    for (int k = 0; k < nc; ++k)
+      gaussian_column(tile.row(k).data(), sq_norm_.data(), sq_norm_[c0 + k], gamma_, l_,
+                      out.col(k).data());
+  }
+
+  // Cache a full column computed elsewhere (evicting the least recently used ones if needed).
+  void insert(int i, const float* data) {
+    Column& h = columns_[i];
+    if (h.len > 0) unlink(i);
+    const std::int64_t more = l_ - h.len;
+    if (more > 0) {
+      while (budget_ < more) evict(sentinel().next);
+      budget_ -= more;
+    }
+    h.data.assign(data, data + l_);
+    h.len = l_;
+    link_last(i);
+  }
+
   // Exchange points i and j in the solver order; cached columns follow (or are dropped when
   // they cover only one of the two positions).
   void swap_index(int i, int j) {
     if (i == j) return;
-    x_.row(i).swap(x_.row(j));
+    x_.swap_points(i, j);
     std::swap(sq_norm_[i], sq_norm_[j]);
     if (columns_[i].len > 0) unlink(i);
     if (columns_[j].len > 0) unlink(j);
@@ -112,22 +370,21 @@ class KernelColumns {
   }
 
   void fill(int i, int start, int len, float* out) {
-    const int n = len - start;
-    auto dots = dots_.head(n);
-    dots.noalias() = x_.middleRows(start, n) * x_.row(i).transpose();
+    for (int k = 0; k < x_.features(); ++k) point_[k] = x_.at(i, k);
+    dot_tile(point_.data(), 1, x_.features(), x_.data(), start / kPanel,
+             (len + kPanel - 1) / kPanel, dots_.data(), 0);
     // Same expression as libsvm's RBF kernel: exp(-gamma (|x_i|^2 + |x_j|^2 - 2 x_i.x_j)).
-    for (int t = 0; t < n; ++t)
-      out[start + t] =
-          static_cast<float>(std::exp(-gamma_ * (sq_norm_[i] + sq_norm_[start + t] - 2 * dots[t])));
+    gaussian_column(dots_.data() + start % kPanel, sq_norm_.data() + start, sq_norm_[i], gamma_,
+                    len - start, out + start);
   }
 
-  RowMatrixXd x_;
+  PackedPoints x_;
   Eigen::VectorXd sq_norm_;
   double gamma_;
   int l_;
   std::vector<Column> columns_;  // l_ heads plus the LRU list's sentinel at index l_
   std::int64_t budget_;          // floats still available
-  Eigen::VectorXd dots_;
+  Eigen::VectorXd dots_, point_;
 };
 
 // SMO for  min 1/2 alpha' Q alpha  s.t.  0 <= alpha_i <= 1,  sum alpha_i = nu l  (the libsvm
@@ -221,28 +478,18 @@ class SmoSolver {
     grad_bar_.setZero();
     int n_nonzero = 0;
     while (n_nonzero < l_ && alpha_[n_nonzero] > 0) ++n_nonzero;
-    const RowMatrixXd& x = q_.points();
-    const Eigen::VectorXd& sq = q_.squared_norms();
-    const double gamma = q_.gamma();
-    constexpr int kRows = 2048, kCols = 256;
-    Eigen::MatrixXd tile;
-    Eigen::VectorXd upper(kCols);
+    constexpr int kCols = 64;
+    Eigen::MatrixXf tile;
     for (int c0 = 0; c0 < n_nonzero; c0 += kCols) {
       const int nc = std::min(kCols, n_nonzero - c0);
-      for (int k = 0; k < nc; ++k) upper[k] = is_upper(c0 + k) ? 1.0 : 0.0;
-      for (int r0 = 0; r0 < l_; r0 += kRows) {
-        const int nr = std::min(kRows, l_ - r0);
-        tile.noalias() = x.middleRows(r0, nr) * x.middleRows(c0, nc).transpose();
-        // Same expression as in KernelColumns::fill, rounded to single precision like Q.
-        tile = ((-2.0 * tile).colwise() + sq.segment(r0, nr)).rowwise() +
-               sq.segment(c0, nc).transpose();
-        tile = (-gamma * tile.array()).exp().cast<float>().cast<double>().matrix();
+      q_.full_columns(c0, nc, tile);
+      for (int k = 0; k < nc; ++k) {
+        const int i = c0 + k;
         // Column by column, so every G_j accumulates alpha_i Q_ij in increasing i as libsvm
         // does: the iterates then follow libsvm's to the last bit wherever Q agrees.
-        for (int k = 0; k < nc; ++k) {
-          grad_.segment(r0, nr) += alpha_[c0 + k] * tile.col(k);
-          if (upper[k] != 0.0) grad_bar_.segment(r0, nr) += tile.col(k);
-        }
+        grad_ += alpha_[i] * tile.col(k).cast<double>();
+        if (is_upper(i)) grad_bar_ += tile.col(k).cast<double>();
+        q_.insert(i, tile.col(k).data());  // libsvm's start-up leaves these columns cached too
       }
     }
   }
@@ -503,27 +750,39 @@ Eigen::VectorXd gaussian_kernel_expansion(const Eigen::Ref<const RowMatrixXd>& s
   if (n == 0 || support_vectors.rows() == 0) return out;
 
   const double gamma = 1.0 / kernel_scale;
-  const Eigen::RowVectorXd sv_sq = support_vectors.rowwise().squaredNorm().transpose();
-  // Rows per block: keep the n_block x n_sv distance tile near 4 MB.
-  const Index block = std::max<Index>(16, std::min<Index>(1024, (1 << 19) / support_vectors.rows()));
-  const Index n_blocks = (n + block - 1) / block;
+  const PackedPoints sv(support_vectors);
+  const Eigen::VectorXd sv_sq = support_vectors.rowwise().squaredNorm();
+  const int m = static_cast<int>(X.cols());
+  const int n_panels = sv.padded_size() / kPanel;
+  // Tiles of kRows test points x kPanels * 8 support vectors (256 kB, cache resident).
+  constexpr Index kRows = 64;
+  constexpr int kPanels = 64;
+  const Index n_blocks = (n + kRows - 1) / kRows;
 
   auto run = [&](Index first_block, Index last_block) {
-    Eigen::MatrixXd d2;
+    std::vector<double> tile(static_cast<size_t>(kRows) * kPanels * kPanel);
+    RowMatrixXd xb;
     for (Index b = first_block; b < last_block; ++b) {
-      const Index r0 = b * block, nr = std::min(block, n - r0);
-      const auto xb = X.middleRows(r0, nr);
-      d2.noalias() = xb * support_vectors.transpose();
-      const Eigen::VectorXd x_sq = xb.rowwise().squaredNorm();
-      // ||x - sv||^2 = ||x||^2 + ||sv||^2 - 2 x.sv, clamped at 0 against cancellation.
-      d2 = ((-2.0 * d2).colwise() + x_sq).rowwise() + sv_sq;
-      out.segment(r0, nr).noalias() =
-          (-gamma * d2.array().max(0.0)).exp().matrix() * coef;
+      const Index r0 = b * kRows, nr = std::min(kRows, n - r0);
+      xb = X.middleRows(r0, nr);  // contiguous rows for dot_tile
+      for (int c0 = 0; c0 < n_panels; c0 += kPanels) {
+        const int c1 = std::min(n_panels, c0 + kPanels);
+        const int j0 = c0 * kPanel, nj = std::min(c1 * kPanel, sv.size()) - j0;
+        const Index ld = kPanels * kPanel;
+        dot_tile(xb.data(), static_cast<int>(nr), m, sv.data(), c0, c1, tile.data(), ld);
+        for (Index r = 0; r < nr; ++r) {
+          const double x_sq = xb.row(r).squaredNorm();
+          // ||x - sv||^2 = ||x||^2 + ||sv||^2 - 2 x.sv (clamped at 0 against cancellation).
+          out[r0 + r] += gaussian_sum(tile.data() + r * ld, sv_sq.data() + j0, coef.data() + j0,
+                                      x_sq, gamma, nj);
+        }
+      }
     }
   };
 
   int threads = n_threads;
-  if (threads <= 0) threads = static_cast<int>(std::min(8u, std::max(1u, std::thread::hardware_concurrency())));
+  if (threads <= 0)
+    threads = static_cast<int>(std::min(8u, std::max(1u, std::thread::hardware_concurrency())));
   threads = static_cast<int>(std::min<Index>(threads, n_blocks));
   if (threads <= 1) {
     run(0, n_blocks);

@@ -129,25 +129,64 @@ void OutputErrorEstimator::prony_start(std::size_t j, const Eigen::Ref<const Eig
   }
 }
 
+void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                           const double* y, Eigen::Index skip, Eigen::Index N,
+                                           OeResult& out) {
+  // A Prony fit to a noisy impulse response is pulled towards a pole at 0 (noise in the
+  // taps inflates its denominator), and the OE cost has a poor valley between fast and
+  // slow poles. For a first-order denominator the cost over the pole is one-dimensional
+  // once b_j is eliminated by least squares (other channels held), so a few poles are
+  // tried and Levenberg-Marquardt starts from the best: Prony's pole or a grid point.
+  static constexpr double kGrid[] = {-0.5, 0.0, 0.5, 0.8, 0.9, 0.95, 0.98};
+  const OeChannel& ch = channels_[j];
+  simulate(u, y, skip, N, out);
+  // Target for channel j: the data minus the other channels' simulation.
+  residual_ = error_ + yhat_[j].segment(pad_, N);
+  const double rr = residual_.tail(N - skip).squaredNorm();
+  double best = INFINITY;
+  const double prony_pole = -out.f[j][1];
+  for (int g = -1; g < static_cast<int>(std::size(kGrid)); ++g) {
+    const double pole = g < 0 ? prony_pole : std::min(kGrid[g], options_.max_pole_radius);
+    f1_ << 1.0, -pole;
+    filter_into(unit_, f1_, ch.delay, u.col(j), v_[j].segment(pad_, N));
+    grid_columns_.clear();
+    for (int k = 0; k < ch.nb; ++k) grid_columns_.push_back({v_[j].data() + pad_, k, 1.0});
+    detail::lagged_normal_equations(grid_columns_, residual_.data(), skip, N - skip, G_, h_);
+    ldlt_.compute(G_);
+    delta_ = ldlt_.solve(h_);
+    const double cost = 0.5 * (rr - h_.dot(delta_));  // LS cost with b_j eliminated
+    if (ldlt_.info() == Eigen::Success && delta_.allFinite() && cost < best) {
+      best = cost;
+      out.b[j] = delta_;
+      out.f[j] = f1_;
+    }
+  }
+}
+
 double OutputErrorEstimator::simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
                                       Eigen::Index skip, Eigen::Index N, const OeResult& par) {
   error_ = Eigen::Map<const Eigen::VectorXd>(y, N);
   for (std::size_t j = 0; j < channels_.size(); ++j) {
+    // w_j = q^-d_j / F_j u_j is both the b-sensitivity and, through yhat_j = B_j w_j,
+    // the simulation: one recursive filter per channel instead of two.
+    filter_into(unit_, par.f[j], channels_[j].delay, u.col(j), w_[j].segment(pad_, N));
     auto yhat = yhat_[j].segment(pad_, N);
-    filter_into(par.b[j], par.f[j], channels_[j].delay, u.col(j), yhat);
+    const double* w = w_[j].data() + pad_;
+    yhat = par.b[j][0] * Eigen::Map<const Eigen::VectorXd>(w, N);
+    for (Eigen::Index k = 1; k < par.b[j].size(); ++k)
+      yhat += par.b[j][k] * Eigen::Map<const Eigen::VectorXd>(w - k, N);  // pad_ >= nb - 1
     error_ -= yhat;
   }
   return 0.5 * error_.tail(N - skip).squaredNorm();
 }
 
-void OutputErrorEstimator::jacobian_columns(const Eigen::Ref<const Eigen::MatrixXd>& u,
-                                            Eigen::Index N, const OeResult& par) {
+void OutputErrorEstimator::jacobian_columns(Eigen::Index N, const OeResult& par) {
+  // Sensitivities at the parameters simulate() last saw: d yhat/d b_jk = w_j(t - k),
+  // d yhat/d f_jk = -v_j(t - k) with v_j = yhat_j / F_j.
   columns_.resize(static_cast<std::size_t>(p_));
   std::size_t c = 0;
   for (std::size_t j = 0; j < channels_.size(); ++j) {
     const OeChannel& ch = channels_[j];
-    // Sensitivity filters: w_j = q^-d_j / F_j u_j, v_j = 1 / F_j yhat_j.
-    filter_into(unit_, par.f[j], ch.delay, u.col(j), w_[j].segment(pad_, N));
     for (int k = 0; k < ch.nb; ++k) columns_[c++] = {w_[j].data() + pad_, k, 1.0};
     if (ch.nf == 0) continue;
     filter_into(unit_, par.f[j], 0, yhat_[j].segment(pad_, N), v_[j].segment(pad_, N));
@@ -208,7 +247,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     throw NumericalError("window too short for the OE structure: " + std::to_string(n_eq) +
                          " equations for " + std::to_string(p_) + " parameters (need >= " +
                          std::to_string(2 * p_) + ")");
-  require_informative_window(y, u);
+  if (check_signals_) require_informative_window(y, u);
 
   // History the lagged columns may reach before sample 0 (zero initial state).
   pad_ = 0;
@@ -236,6 +275,8 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   } else {
     fir_start(u, y.data(), skip, N, out);
   }
+  for (std::size_t j = 0; j < m; ++j)
+    if (channels_[j].nf == 1) pole_grid_start(j, u, y.data(), skip, N, out);
 
   double cost = simulate(u, y.data(), skip, N, out);
   out.converged = linear();  // the FIR least-squares start is then the optimum
@@ -243,7 +284,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   double lambda = 1e-3;
   while (!out.converged && out.iterations < options_.max_iterations) {
     ++out.iterations;
-    jacobian_columns(u, N, out);
+    jacobian_columns(N, out);
     detail::lagged_normal_equations(columns_, error_.data(), skip, n_eq, G_, h_);
     const double residual_norm = std::sqrt(2.0 * cost);
     bool stationary = true;  // every sensitivity is orthogonal to the residual
@@ -296,7 +337,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   }
 
   // Covariance sigma^2 (J'J)^-1 at the estimate; J'J also tells whether it is identified.
-  jacobian_columns(u, N, out);
+  jacobian_columns(N, out);
   detail::lagged_normal_equations(columns_, error_.data(), skip, n_eq, G_, h_);
   throw_if_not_informative(solver_.solve(G_, h_, 0.0, options_.rank_tolerance, delta_),
                            "the OE Jacobian at the estimate");

@@ -46,13 +46,16 @@ struct ActiveConstraint {
   int sigma;  // +1: lower bound (or equality), -1: upper bound
 };
 
-void check_finite_or_inf(const Eigen::Ref<const Eigen::VectorXd>& v, const char* name) {
-  for (Eigen::Index i = 0; i < v.size(); ++i)
-    if (std::isnan(v[i])) throw InputError(std::string(name) + "[" + std::to_string(i) + "] is NaN");
-}
-
 void check_finite(const Eigen::Ref<const Eigen::MatrixXd>& M, const char* name) {
   if (!M.allFinite()) throw InputError(std::string(name) + " has a NaN or infinite entry");
+}
+
+// Throws naming the first entry of `name` where `bad` holds (only called once a check failed).
+template <typename Mask>
+[[noreturn]] void reject_entry(const Mask& bad, const char* name, const char* what) {
+  Eigen::Index i = 0;
+  while (i + 1 < bad.size() && !bad[i]) ++i;
+  throw InputError(std::string(name) + "[" + std::to_string(i) + "] " + what);
 }
 
 }  // namespace
@@ -71,7 +74,7 @@ struct QpSolver::Impl {
   // The data of the current solve, copied in (O(n + m), no allocation), and its bound
   // classification (|bound| >= settings.infinite_bound is infinite).
   Eigen::VectorXd q, l, u;
-  std::vector<char> has_lower, has_upper, is_equality, previous_is_equality;
+  Eigen::Array<bool, Eigen::Dynamic, 1> is_equality, previous_is_equality;
   bool warm = false;
   // A row i is violated when A_i x < lower_trigger_i or A_i x > upper_trigger_i: its bound
   // moved by the feasibility tolerance, or +-inf while the row is active, an equality or absent.
@@ -102,8 +105,6 @@ struct QpSolver::Impl {
         q(n),
         l(m),
         u(m),
-        has_lower(m),
-        has_upper(m),
         is_equality(m),
         previous_is_equality(m),
         lower_trigger(m),
@@ -152,29 +153,47 @@ struct QpSolver::Impl {
     if (u_in.size() != m)
       throw InputError("u has " + std::to_string(u_in.size()) + " entries, expected " + std::to_string(m));
     check_finite(q_in, "q");
-    check_finite_or_inf(l_in, "l");
-    check_finite_or_inf(u_in, "u");
     q = q_in;
-    l = l_in;
-    u = u_in;
     const double inf = settings.infinite_bound;
+    // One pass: copy, classify, set the violation thresholds (as arm() does) and note any bad
+    // entry; which one and why is worked out only on failure.
+    bool bad = false;
     for (int i = 0; i < m; ++i) {
-      if (l[i] > u[i]) throw InputError("l[" + std::to_string(i) + "] > u[" + std::to_string(i) + "]");
-      if (l[i] >= inf) throw InputError("l[" + std::to_string(i) + "] is +infinite");
-      if (u[i] <= -inf) throw InputError("u[" + std::to_string(i) + "] is -infinite");
-      has_lower[i] = l[i] > -inf;
-      has_upper[i] = u[i] < inf;
-      is_equality[i] = l[i] == u[i];  // both finite here
+      const double li = l_in[i];
+      const double ui = u_in[i];
+      l[i] = li;
+      u[i] = ui;
+      bad |= !(li <= ui) || li >= inf || ui <= -inf;  // also catches NaN
+      is_equality[i] = li == ui;
       arm(i);
     }
+    if (bad) reject_bounds();
   }
 
-  // Violation thresholds of an inactive row (tolerance relative to 1 + |bound|).
+  [[noreturn]] void reject_bounds() const {
+    const double inf = settings.infinite_bound;
+    const auto L = l.array();
+    const auto U = u.array();
+    if (L.hasNaN()) reject_entry(L.isNaN(), "l", "is NaN");
+    if (U.hasNaN()) reject_entry(U.isNaN(), "u", "is NaN");
+    if ((L > U).any()) {
+      int i = 0;
+      while (!(l[i] > u[i])) ++i;
+      throw InputError("l[" + std::to_string(i) + "] > u[" + std::to_string(i) + "]");
+    }
+    if ((L >= inf).any()) reject_entry(L >= inf, "l", "is +infinite");
+    reject_entry(U <= -inf, "u", "is -infinite");
+  }
+
+  bool has_lower(int i) const { return l[i] > -settings.infinite_bound; }
+  bool has_upper(int i) const { return u[i] < settings.infinite_bound; }
+
+  // Violation thresholds of an inactive row (tolerance relative to 1 + |bound|), as in load().
   void arm(int i) {
     const double tol = settings.feasibility_tol;
     const bool inequality = !is_equality[i];
-    lower_trigger[i] = inequality && has_lower[i] ? l[i] - tol * (1.0 + std::abs(l[i])) : -kInfinity;
-    upper_trigger[i] = inequality && has_upper[i] ? u[i] + tol * (1.0 + std::abs(u[i])) : kInfinity;
+    lower_trigger[i] = inequality && has_lower(i) ? l[i] - tol * (1.0 + std::abs(l[i])) : -kInfinity;
+    upper_trigger[i] = inequality && has_upper(i) ? u[i] + tol * (1.0 + std::abs(u[i])) : kInfinity;
   }
   void disarm(int i) {
     lower_trigger[i] = -kInfinity;
@@ -182,7 +201,7 @@ struct QpSolver::Impl {
   }
 
   void add_active(int row, int sigma) {
-    factorization.add(d);
+    factorization.add(d, z);
     active.push_back({row, sigma});  // capacity n: the active normals are independent
     disarm(row);
   }
@@ -205,6 +224,8 @@ struct QpSolver::Impl {
       if (is_dependent()) {
         redundant_equalities.push_back(i);
       } else {
+        const int k = factorization.size();
+        factorization.J_columns_times(k, d.tail(n - k), z);
         add_active(i, +1);
       }
     }
@@ -216,7 +237,7 @@ struct QpSolver::Impl {
     for (const ActiveConstraint& c : active) disarm(c.row);
     for (int j = static_cast<int>(active.size()) - 1; j >= num_active_equalities; --j) {
       const ActiveConstraint& c = active[j];
-      if (!(c.sigma > 0 ? has_lower[c.row] : has_upper[c.row])) drop_active(j);
+      if (!(c.sigma > 0 ? has_lower(c.row) : has_upper(c.row))) drop_active(j);
     }
   }
 
@@ -247,7 +268,10 @@ struct QpSolver::Impl {
   // Most violated constraint (violation scaled by the row norm), or -1 when all hold.
   int most_violated(int& sigma) {
     if (m == 0) return -1;
-    Ax.noalias() = At.transpose() * x;
+    if (n <= detail::kLazyProductMaxSize)
+      Ax.noalias() = At.transpose().lazyProduct(x);
+    else
+      Ax.noalias() = At.transpose() * x;
     violation = (lower_trigger - Ax).cwiseMax(Ax - upper_trigger).cwiseProduct(row_inv_norm);
     Eigen::Index p;
     if (!(violation.maxCoeff(&p) > 0.0)) return -1;
@@ -307,7 +331,7 @@ struct QpSolver::Impl {
     }
 
     int iterations = 0;
-    if (warm && is_equality == previous_is_equality) {
+    if (warm && (is_equality == previous_is_equality).all()) {
       warm_start();
     } else {
       cold_start();

@@ -25,17 +25,17 @@ double givens(double a, double b, double& c, double& s) {
 }  // namespace
 
 ActiveSetFactorization::ActiveSetFactorization(int n)
-    : n_(n), J_(Eigen::MatrixXd::Zero(n, n)), R_(Eigen::MatrixXd::Zero(n, n)), J2v_(n) {}
+    : n_(n), J_(Eigen::MatrixXd::Zero(n, n)), R_(Eigen::MatrixXd::Zero(n, n)) {}
 
 void ActiveSetFactorization::reset(const Eigen::MatrixXd& L_inv_transpose) {
   J_ = L_inv_transpose;  // same size: Eigen copies without reallocating
   k_ = 0;
 }
 
-void ActiveSetFactorization::add(Eigen::Ref<Eigen::VectorXd> d) {
+void ActiveSetFactorization::add(Eigen::Ref<Eigen::VectorXd> d, Eigen::Ref<Eigen::VectorXd> z) {
   // One Householder reflection H (H d2 = alpha e1) applied to J2 = J(:, k..n-1) maps d = J'n to
   // [d1; alpha; 0], so J' [N n] = [R d1; 0 alpha; 0 0]. (GI use a sequence of Givens rotations;
-  // the reflection does the same in two vectorised passes over J2.)
+  // the reflection is the same orthogonal update in one vectorised pass over J2.)
   const int free = n_ - k_;
   auto v = d.tail(free);
   const double norm = v.norm();
@@ -43,9 +43,9 @@ void ActiveSetFactorization::add(Eigen::Ref<Eigen::VectorXd> d) {
   v[0] -= alpha;  // v = d2 - alpha e1, H = I - 2 v v' / v'v
   const double vv = v.squaredNorm();
   if (vv > 0.0) {
-    J_columns_times(k_, v, J2v_);
+    z -= alpha * J_.col(k_);  // J2 v = J2 d2 - alpha J2 e1, without another pass over J2
     const double scale = 2.0 / vv;
-    for (int j = 0; j < free; ++j) J_.col(k_ + j) -= (scale * v[j]) * J2v_;
+    for (int j = 0; j < free; ++j) J_.col(k_ + j) -= (scale * v[j]) * z;
   }
   R_.col(k_).head(k_) = d.head(k_);
   R_(k_, k_) = alpha;

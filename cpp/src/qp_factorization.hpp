@@ -12,6 +12,10 @@
 
 namespace mpmpp::detail {
 
+// Eigen's blocked matrix-vector kernels cost more to set up than the whole product for the
+// small matrices of MPC problems; up to this size the coefficient-wise (lazy) product is used.
+constexpr int kLazyProductMaxSize = 8;
+
 class ActiveSetFactorization {
  public:
   explicit ActiveSetFactorization(int n);
@@ -25,11 +29,17 @@ class ActiveSetFactorization {
   // and dot products): k is small and Eigen's blocked triangular kernels cost more to set up.
   // out = J' a.
   void J_transpose_times(const Eigen::Ref<const Eigen::VectorXd>& a, Eigen::Ref<Eigen::VectorXd> out) const {
-    out.noalias() = J_.transpose() * a;
+    if (n_ <= kLazyProductMaxSize)
+      out.noalias() = J_.transpose().lazyProduct(a);
+    else
+      out.noalias() = J_.transpose() * a;
   }
   // out = J(:, first .. first+c.size()-1) c.
   void J_columns_times(int first, const Eigen::Ref<const Eigen::VectorXd>& c, Eigen::Ref<Eigen::VectorXd> out) const {
-    out.noalias() = J_.middleCols(first, c.size()) * c;
+    if (n_ <= kLazyProductMaxSize)
+      out.noalias() = J_.middleCols(first, c.size()).lazyProduct(c);
+    else
+      out.noalias() = J_.middleCols(first, c.size()) * c;
   }
   // v <- R^{-1} v (back substitution by columns of R), v of length size().
   template <typename V>
@@ -45,9 +55,10 @@ class ActiveSetFactorization {
     for (int i = 0; i < k_; ++i) v[i] = (v[i] - R_.col(i).head(i).dot(v.head(i))) / R_(i, i);
   }
 
-  // Appends a constraint whose normal n gives d = J' n (computed with the current J).
-  // d is overwritten (rotated). The caller has checked that d.tail(n - size()) is not ~0.
-  void add(Eigen::Ref<Eigen::VectorXd> d);
+  // Appends a constraint whose normal n gives d = J' n and z = J2 J2' n (computed with the
+  // current J; z is GI's primal step direction). Both are overwritten. The caller has checked
+  // that d.tail(n - size()) is not ~0.
+  void add(Eigen::Ref<Eigen::VectorXd> d, Eigen::Ref<Eigen::VectorXd> z);
 
   // Removes the constraint at position `position` (0-based, in order of addition).
   void drop(int position);
@@ -57,7 +68,6 @@ class ActiveSetFactorization {
   int k_ = 0;
   Eigen::MatrixXd J_;
   Eigen::MatrixXd R_;
-  Eigen::VectorXd J2v_;  // workspace of add()
 };
 
 }  // namespace mpmpp::detail

@@ -108,21 +108,54 @@ TransferFunction TransferFunction::from_foptd(double gain, double time_constant_
   return TransferFunction(num, den, d + 1);
 }
 
+namespace {
+// y[t] = c[t] - a1 y[t-1] in place, four samples per step: given p = y[t-1],
+//   y[t+k] = d_k + (-a1)^(k+1) p,  d_0 = c[t],  d_k = c[t+k] - a1 d_(k-1),
+// so the loop-carried dependency is one multiply-add per four samples instead of one
+// per sample (the d_k of the next block overlap with it). Same result up to rounding.
+void first_order_recursion(double a1, double* y, Eigen::Index n) {
+  const double m1 = -a1, m2 = m1 * m1, m3 = m2 * m1, m4 = m2 * m2;
+  double p = 0.0;
+  Eigen::Index t = 0;
+  for (; t + 4 <= n; t += 4) {
+    const double d0 = y[t];
+    const double d1 = y[t + 1] - a1 * d0;
+    const double d2 = y[t + 2] - a1 * d1;
+    const double d3 = y[t + 3] - a1 * d2;
+    y[t] = d0 + m1 * p;
+    y[t + 1] = d1 + m2 * p;
+    y[t + 2] = d2 + m3 * p;
+    y[t + 3] = d3 + m4 * p;
+    p = y[t + 3];
+  }
+  for (; t < n; ++t) p = y[t] = y[t] - a1 * p;
+}
+}  // namespace
+
 void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
                  const Eigen::Ref<const Eigen::VectorXd>& den, int delay,
-                 const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y) {
+                 const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> out) {
   const Eigen::Index n = x.size();
-  if (y.size() != n) throw InputError("filter output must have the input's length");
-  const Eigen::Index nb = num.size(), na = den.size();
-  const Eigen::Index head = std::min<Eigen::Index>(delay, n);
-  y.head(head).setZero();
-  for (Eigen::Index t = head; t < n; ++t) {
-    double acc = 0.0;
-    const Eigen::Index src = t - delay;
-    const Eigen::Index kb = std::min<Eigen::Index>(nb, src + 1);
-    for (Eigen::Index k = 0; k < kb; ++k) acc += num[k] * x[src - k];
-    const Eigen::Index ka = std::min<Eigen::Index>(na, t + 1);
-    for (Eigen::Index k = 1; k < ka; ++k) acc -= den[k] * y[t - k];
+  if (out.size() != n) throw InputError("filter output must have the input's length");
+  // The identification's hot path (thousands of windows, several filters per
+  // Gauss-Newton iteration): the numerator as shifted vector updates (vectorised), then
+  // 1/den as an in-place recursion (c[t] is read before y[t] is written).
+  out.setZero();
+  for (Eigen::Index k = 0; k < num.size(); ++k) {
+    const Eigen::Index shift = delay + k;
+    if (shift >= n) break;
+    out.tail(n - shift) += num[k] * x.head(n - shift);
+  }
+  const Eigen::Index na = den.size();
+  double* y = out.data();
+  if (na == 2) {
+    first_order_recursion(den[1], y, n);
+    return;
+  }
+  const double* a = den.data();
+  for (Eigen::Index t = 1; t < n; ++t) {
+    double acc = y[t];
+    for (Eigen::Index k = 1; k < na && k <= t; ++k) acc -= a[k] * y[t - k];
     y[t] = acc;
   }
 }

@@ -11,5 +11,8 @@ from . import identify
 from .svm import OneClassSVM, cross_validate_outlier_fraction, resample
 from .simulate import simulate
 from . import scenarios
-from .detect import DetectionResult, Detector, DetectorConfig, detect  # noqa: E402
-from .stream import StreamingDetector  # noqa: E402
+from .compare import compare
+from .diagnose import diagnose
+from .update import update
+from .detect import DetectionResult, Detector, DetectorConfig, detect
+from .stream import StreamingDetector

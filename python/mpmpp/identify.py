@@ -15,7 +15,8 @@ from . import _core
 
 IntOrList = Union[int, Sequence[int]]
 
-__all__ = ["arx", "oe", "arx_oe", "arx_oe_windows", "channels", "fir_length_to_one_percent"]
+__all__ = ["arx", "oe", "arx_oe", "arx_oe_windows", "arx_oe_model", "channel_inputs", "channels",
+           "fir_length_to_one_percent"]
 
 fir_length_to_one_percent = _core.fir_length_to_one_percent
 
@@ -121,3 +122,61 @@ def arx_oe_windows(y, u, window: int, step: int, na: int, nb: IntOrList, delays:
                      defaults["oe_nf"], defaults["fir_length"], defaults["detrend"],
                      defaults["delta"], defaults["max_iterations"], defaults["max_pole_radius"])
     return est.estimate_windows(y, u, int(window), int(step))
+
+
+def channel_inputs(model, output: str) -> list[str]:
+    """The inputs that have a channel to ``output`` in ``model``, in the model's order:
+    the column order of every estimate ``arx_oe_model`` returns for that output."""
+    if output not in model.outputs:
+        raise ValueError(f"output {output!r} is not in the model (outputs: {list(model.outputs)})")
+    return [name for name in model.inputs if model.process(output, name) is not None]
+
+
+def arx_oe_model(model, data, output: str, *, na: int = 9, nb: IntOrList | None = None,
+                 structure: str = "nominal", fir_length: IntOrList | None = None,
+                 window: int | None = None, step: int | None = None, detrend: str = "mean",
+                 delta: float = 1e-4):
+    """ARX-OE of one output of a model + data pair (MISO over the inputs the model
+    connects to it, delays from the nominal channels).
+
+    model: a ``Model`` or a model file path; data: a DataFrame (``load_data``,
+    ``simulate``) or a data file path. structure: 'nominal' (each G_j with the nominal
+    channel's numerator/denominator orders: the paper's correctly parameterised case),
+    'foptd' or 'fir' (fir_length taps). nb: ARX numerator coefficients per input
+    (default na + 1, the paper's equal orders). fir_length: impulse-response length per
+    channel (default: until the nominal response falls below 1% of its peak).
+    Without ``window`` one estimate from the whole record (an ``ArxOeResult``); with
+    ``window`` and ``step`` (samples) a list of ``WindowEstimate``.
+    """
+    from .io import load_data, load_model
+
+    if not hasattr(model, "process"):
+        model = load_model(model)
+    if not hasattr(data, "columns"):
+        data = load_data(data, model)
+    inputs = channel_inputs(model, output)
+    if not inputs:
+        raise ValueError(f"output {output!r} has no process channel in the model")
+    for name in inputs + [output]:
+        if name not in data.columns:
+            raise ValueError(f"data has no column {name!r}")
+    nominal = [model.process(output, name) for name in inputs]
+    delays = [g.delay for g in nominal]
+    lengths = ([fir_length_to_one_percent(g) for g in nominal] if fir_length is None
+               else _per_input(fir_length, len(inputs), "fir_length"))
+    if structure == "nominal":
+        structure, oe_nb, oe_nf = "oe", [len(g.num) for g in nominal], [len(g.den) - 1 for g in nominal]
+    elif structure == "fir":  # taps from the delay on, covering the impulse-response length
+        oe_nb, oe_nf = [max(1, L - d) for L, d in zip(lengths, delays)], 0
+    else:
+        oe_nb, oe_nf = 1, 1
+    y = data[output].to_numpy(dtype=float)
+    u = data[inputs].to_numpy(dtype=float)
+    options = dict(structure=structure, oe_nb=oe_nb, oe_nf=oe_nf, fir_length=lengths,
+                   detrend=detrend, delta=delta)
+    nb = na + 1 if nb is None else nb
+    if window is None:
+        return arx_oe(y, u, na, nb, delays, **options)
+    if step is None:
+        raise ValueError("step is required with window")
+    return arx_oe_windows(y, u, window, step, na, nb, delays, **options)

@@ -22,7 +22,7 @@ TOP_KEYS = MODEL_KEYS | {"truth", "controller", "duration_s", "seed", "events", 
 TRUTH_KEYS = {"process", "noise", "sigma", "extra", "actuators"}
 EXTRA_KEYS = {"operating_point", "sigma", "noise", "affects"}
 ACTUATOR_KEYS = {"deadband", "backlash", "min", "max"}
-CONTROLLER_KEYS = {"prediction_horizon", "control_horizon", "cv", "mv"}
+CONTROLLER_KEYS = {"prediction_horizon", "control_horizon", "cv", "mv", "disturbance"}
 CV_KEYS = {"target", "target_weight", "minmax_weight", "min", "max", "max_move", "scale"}
 MV_KEYS = {"target", "target_weight", "move_weight", "deviation_weight", "minmax_weight",
            "min", "max", "max_move", "soft_min", "soft_max", "scale"}
@@ -88,54 +88,27 @@ def _limit(value, where: str, default: float) -> float:
 
 
 def parse_transfer_function(value, where: str, sample_time_s: float) -> _core.TransferFunction:
-    """A channel in the model file's discrete or first-order-plus-dead-time form."""
-    spec = _obj(value, where)
-    if "num" in spec or "den" in spec:
-        _obj(spec, where, {"num", "den", "delay"}, {"num", "den"})
-        coeffs = {}
-        for key in ("num", "den"):
-            c = spec[key]
-            if not isinstance(c, list) or not c:
-                _fail(f"{where}.{key}", "must be a non-empty list of numbers")
-            coeffs[key] = [_num(x, f"{where}.{key}[{k}]") for k, x in enumerate(c)]
-        delay = _int(spec.get("delay", 0), f"{where}.delay")
-        if coeffs["den"][0] == 0:
-            _fail(f"{where}.den[0]", "must be non-zero")
-        return _core.TransferFunction(coeffs["num"], coeffs["den"], delay)
-    _obj(spec, where, {"gain", "time_constant_s", "dead_time_s"}, {"gain", "time_constant_s"})
-    return _core.TransferFunction.from_foptd(
-        _num(spec["gain"], f"{where}.gain"),
-        _num(spec["time_constant_s"], f"{where}.time_constant_s", minimum=0),
-        _num(spec.get("dead_time_s", 0.0), f"{where}.dead_time_s", minimum=0),
-        sample_time_s)
+    """A channel in the model file's discrete or first-order-plus-dead-time form, read by the
+    model-file reader itself (so both accept exactly the same channels)."""
+    doc = {"sample_time_s": sample_time_s, "inputs": ["u"], "outputs": ["y"], "process": {"y": {"u": value}}}
+    try:
+        return _core.Model.from_json(json.dumps(doc), "").process("y", "u")
+    except ValueError as exc:
+        detail = str(exc).split("process.y.u", 1)[-1].lstrip(".: ")
+        raise ValueError(f"{where}: {detail}") from None
 
 
-def tf_to_json(g: _core.TransferFunction) -> dict:
-    return {"num": [float(x) for x in g.num], "den": [float(x) for x in g.den], "delay": int(g.delay)}
-
-
-def _names(value, where: str) -> list[str]:
-    if not isinstance(value, list) or not value or not all(isinstance(x, str) and x for x in value):
-        _fail(where, "must be a non-empty list of names")
-    if len(set(value)) != len(value):
-        _fail(where, "has a repeated name")
-    return list(value)
-
-
-def _matrix(value, where: str, outputs, inputs, ts, what="input"):
-    """{output: {input: tf}} -> [output][input] list with None for absent channels."""
-    rows = [[None] * len(inputs) for _ in outputs]
-    for out, chans in _obj(value, where, set(outputs)).items():
-        for inp, tf in _obj(chans, f"{where}.{out}", set(inputs)).items():
-            rows[outputs.index(out)][inputs.index(inp)] = parse_transfer_function(tf, f"{where}.{out}.{inp}", ts)
-    return rows
-
-
-def _noise(value, where, outputs, ts):
-    models = [_core.TransferFunction() for _ in outputs]
-    for out, tf in _obj(value, where, set(outputs)).items():
-        models[outputs.index(out)] = parse_transfer_function(tf, f"{where}.{out}", ts)
-    return models
+def _model(spec: dict, where: str, process, noise) -> _core.Model:
+    """A Model through the model-file reader; `where` prefixes its error paths."""
+    doc = {k: spec[k] for k in ("name", "sample_time_s", "inputs", "outputs") if k in spec}
+    doc["process"] = process
+    if noise is not None:
+        doc["noise"] = noise
+    try:
+        return _core.Model.from_json(json.dumps(doc), "")
+    except ValueError as exc:
+        detail = str(exc).lstrip(": ")
+        raise ValueError(f"{where}{detail}") from None
 
 
 def _name(value, where, names, kind):
@@ -149,14 +122,8 @@ class Scenario:
     """A validated scenario; ``spec`` is the JSON document it came from."""
 
     spec: dict
-    name: str
-    sample_time_s: float
-    inputs: list[str]
-    outputs: list[str]
-    model_process: list
-    model_noise: list
-    truth_process: list
-    truth_noise: list
+    model: Any          # the nominal Model (what the MPC uses)
+    truth: Any          # the true plant at the start, as a Model (process and noise)
     sigma: list[float]
     extra_names: list[str]
     extra: list
@@ -167,13 +134,29 @@ class Scenario:
     seed: int
     events: list = field(default_factory=list)
 
+    @property
+    def name(self) -> str:
+        return self.model.name
+
+    @property
+    def sample_time_s(self) -> float:
+        return self.model.sample_time_s
+
+    @property
+    def inputs(self) -> list[str]:
+        return list(self.model.inputs)
+
+    @property
+    def outputs(self) -> list[str]:
+        return list(self.model.outputs)
+
     def to_config(self, seed: int | None = None, record_qps: bool = False) -> _core.ClosedLoopConfig:
         cfg = _core.ClosedLoopConfig()
-        cfg.set_model(self.model_process, self.model_noise, self.inputs, self.outputs, self.sample_time_s)
+        cfg.model = self.model
         cfg.tuning = self.tuning
         plant = _core.Plant()
-        plant.process = self.truth_process
-        plant.noise = self.truth_noise
+        plant.process = [[self.truth.process(o, i) for i in self.inputs] for o in self.outputs]
+        plant.noise = [self.truth.noise(o) for o in self.outputs]
         plant.sigma = np.asarray(self.sigma, float)
         plant.extra = self.extra
         plant.extra_process = self.extra_process
@@ -209,6 +192,10 @@ def _tuning(spec, outputs, inputs) -> Any:
     t.control_horizon = _int(c["control_horizon"], "controller.control_horizon", 1)
     if t.control_horizon > t.prediction_horizon:
         _fail("controller.control_horizon", "must be <= prediction_horizon")
+    disturbance = c.get("disturbance", "bias")
+    if disturbance not in ("bias", "noise_model"):
+        _fail("controller.disturbance", f"must be 'bias' or 'noise_model', got {disturbance!r}")
+    t.disturbance = getattr(_core.DisturbanceModel, disturbance)
     cvs = _obj(c["cv"], "controller.cv", set(outputs), set(outputs))
     mvs = _obj(c["mv"], "controller.mv", set(inputs), set(inputs))
     cv = {k: [] for k in ("target", "target_weight", "minmax_weight", "min", "max", "max_move")}
@@ -292,7 +279,7 @@ def _events(items, sc: Scenario) -> list:
             _fail(f"{w}.time_s", "is after the end of the simulation")
         parsed.append((sample, k, w, kind, ev))
     parsed.sort(key=lambda p: (p[0], p[1]))
-    truth = [row[:] for row in sc.truth_process]
+    truth = [[sc.truth.process(o, i) for i in ins] for o in outs]
     out = []
     for sample, _, w, kind, ev in parsed:
         e = _core.Event()
@@ -347,19 +334,11 @@ def parse_scenario(spec: dict) -> Scenario:
     """Validate a scenario document (see docs/scenario.md)."""
     _obj(spec, "", TOP_KEYS, {"sample_time_s", "inputs", "outputs", "process", "truth", "controller",
                               "duration_s"})
-    ts = _num(spec["sample_time_s"], "sample_time_s", positive=True)
-    inputs = _names(spec["inputs"], "inputs")
-    outputs = _names(spec["outputs"], "outputs")
-    clash = set(inputs) & set(outputs)
-    if clash:
-        _fail("outputs", f"{sorted(clash)[0]!r} is also an input")
-    model_process = _matrix(spec["process"], "process", outputs, inputs, ts)
-    model_noise = _noise(spec.get("noise", {}), "noise", outputs, ts)
+    model = _model(spec, "", spec["process"], spec.get("noise"))
+    ts, inputs, outputs = model.sample_time_s, list(model.inputs), list(model.outputs)
     truth = _obj(spec["truth"], "truth", TRUTH_KEYS, {"sigma"})
-    truth_process = (_matrix(truth["process"], "truth.process", outputs, inputs, ts)
-                     if "process" in truth else [row[:] for row in model_process])
-    truth_noise = (_noise(truth["noise"], "truth.noise", outputs, ts) if "noise" in truth
-                   else list(model_noise))
+    truth_model = _model(spec, "truth.", truth.get("process", spec["process"]),
+                         truth.get("noise", spec.get("noise")))
     sig = _obj(truth["sigma"], "truth.sigma", set(outputs), set(outputs))
     sigma = [_num(sig[o], f"truth.sigma.{o}", minimum=0) for o in outputs]
     extra_names, extra, extra_process = [], [], []
@@ -392,9 +371,7 @@ def parse_scenario(spec: dict) -> Scenario:
     num_samples = int(math.floor(duration / ts + 1e-9))
     if num_samples < 1:
         _fail("duration_s", "is shorter than one sample")
-    sc = Scenario(spec=spec, name=str(spec.get("name", "scenario")), sample_time_s=ts, inputs=inputs,
-                  outputs=outputs, model_process=model_process, model_noise=model_noise,
-                  truth_process=truth_process, truth_noise=truth_noise, sigma=sigma,
+    sc = Scenario(spec=spec, model=model, truth=truth_model, sigma=sigma,
                   extra_names=extra_names, extra=extra, extra_process=extra_process,
                   actuators=actuators, tuning=tuning, num_samples=num_samples,
                   seed=_int(spec.get("seed", 0), "seed"))

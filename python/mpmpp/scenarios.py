@@ -12,7 +12,10 @@ HOUR = 3600.0
 
 
 def _tf(num, den, delay=0):
-    return {"num": list(num), "den": list(den), "delay": delay}
+    spec = {"num": list(num), "den": list(den)}
+    if delay:
+        spec["delay"] = delay
+    return spec
 
 
 _SISO = {

@@ -31,7 +31,11 @@ def simulate(scenario: Scenario | dict | str | Path, seed: int | None = None) ->
     ``<output>_sp`` (CV target in force) and one column per extra measured variable.
     ``seed`` overrides the scenario's seed; the same seed gives the same data."""
     sc = as_scenario(scenario)
-    res = _core.simulate_closed_loop(sc.to_config(seed))
+    return frame(sc, _core.simulate_closed_loop(sc.to_config(seed)))
+
+
+def frame(sc: Scenario, res) -> pd.DataFrame:
+    """A SimulationResult as the data table (see simulate)."""
     n = sc.num_samples
     cols = {"time": np.arange(n) * sc.sample_time_s}
     for j, name in enumerate(sc.inputs):

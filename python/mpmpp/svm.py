@@ -99,8 +99,6 @@ class OneClassSVM(OutlierMixin, BaseEstimator):
     mean_, scale_ (standardisation, None when off).
     """
 
-    _parameter_constraints: dict = {}
-
     def __init__(self, nu=0.5, kernel_scale=1.0, outlier_fraction=0.0, tol=1e-3, cache_mb=200.0,
                  shrinking=True, max_iter=-1, standardize=False, n_threads=1):
         self.nu = nu

@@ -19,7 +19,9 @@ void note_allocation() {
 }  // namespace
 
 #if defined(__SANITIZE_ADDRESS__)
-#include <sanitizer/allocator_interface.h>
+// Declared here (public sanitizer ABI) since GCC does not always ship the header.
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, size_t),
+                                                         void (*free_hook)(const volatile void*));
 namespace {
 void asan_malloc_hook(const volatile void*, size_t) { note_allocation(); }
 void asan_free_hook(const volatile void*) {}

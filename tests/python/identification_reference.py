@@ -103,6 +103,32 @@ def prony(g, nb, nf):
     return np.r_[b, f]
 
 
+POLE_GRID = (-0.5, 0.0, 0.5, 0.8, 0.9, 0.95, 0.98)
+
+
+def pole_grid(theta, y, u, chans, skip):
+    """For each first-order-denominator channel (others held): the pole among Prony's and
+    POLE_GRID whose least-squares b gives the lowest cost."""
+    theta = theta.copy()
+    k = 0
+    for j, (nb, nf, d) in enumerate(chans):
+        if nf == 1:
+            others = theta.copy()
+            others[k:k + nb] = 0.0
+            r = (y - simulate(others, u, chans))[skip:]
+            best = np.inf
+            for pole in (-theta[k + nb],) + POLE_GRID:
+                w = ss.lfilter(np.r_[np.zeros(d), 1.0], [1.0, -pole], u[:, j])
+                W = np.column_stack([np.r_[np.zeros(i), w[:len(w) - i]] for i in range(nb)])[skip:]
+                b = np.linalg.lstsq(W, r, rcond=None)[0]
+                cost = np.sum((r - W @ b) ** 2)
+                if cost < best:
+                    best = cost
+                    theta[k:k + nb], theta[k + nb] = b, -pole
+        k += nb + nf
+    return theta
+
+
 def arx_oe(y, u, na, nb, delays, chans, fir_length, detrend="constant", start_length=30):
     """The whole per-window pipeline; returns (theta_oe, a, gains, firs)."""
     y = ss.detrend(y, type=detrend)
@@ -117,7 +143,7 @@ def arx_oe(y, u, na, nb, delays, chans, fir_length, detrend="constant", start_le
         g = ss.lfilter(theta_arx[k:k + nb[j]], a, impulse)
         k += nb[j]
         theta0.append(prony(g, cnb, cnf))
-    theta = oe(yf, uf, chans, np.concatenate(theta0), skip=na)
+    theta = oe(yf, uf, chans, pole_grid(np.concatenate(theta0), yf, uf, chans, na), skip=na)
     gains, firs, k = [], [], 0
     for (cnb, cnf, d), L in zip(chans, fir_length):
         b, f = theta[k:k + cnb], np.r_[1.0, theta[k + cnb:k + cnb + cnf]]

@@ -51,8 +51,12 @@ class NumpyMpc:
     term normalised by the MV range (mv_max - mv_min, 1 if unbounded), as mpc.hpp documents."""
 
     def __init__(self, process, hp, hc, cv_target, mv_target, cv_weight, mv_target_weight, move_weight,
-                 deviation_weight, mv_min, mv_max, max_move, u0):
+                 deviation_weight, mv_min, mv_max, max_move, u0, noise=None):
+        """noise: None for the bias (DMC) disturbance, else [(num, den)] per output for the
+        noise-model (C/Delta) disturbance."""
         self.ny, self.nu = len(process), len(process[0])
+        self.noise = noise
+        self.v_hist = [[] for _ in process]
         ny, nu = self.ny, self.nu
         self.hp, self.hc = hp, hc
         self.cv_target = np.asarray(cv_target, float)
@@ -98,11 +102,26 @@ class NumpyMpc:
             self.dist[i] = y[i] - ym
             fi = np.full(hp, self.dist[i])
             d = self.start[i]
+            if self.noise:
+                fi += self.forecast_increments(i, d + hp - 1)[d - 1:]
             for j, ch in enumerate(self.channels[i]):
                 if ch:
                     fi += ch.run_held(x[j], d + hp - 1)[d - 1:]
             f[i * hp:(i + 1) * hp] = fi
+        self.f = f
         return f
+
+    def forecast_increments(self, i, steps, impulse_terms=400):
+        """sum_{s<=k} Delta vhat(t+s|t), k = 1..steps, with Delta v = H e: innovations by
+        filtering the whole history with 1/H, forecasts by H's truncated impulse response."""
+        self.v_hist[i].append(self.dist[i])
+        v = np.asarray(self.v_hist[i])
+        w = np.diff(v, prepend=v[0])  # Delta v(0) = 0
+        num, den = self.noise[i]
+        e = lfilter(den, num, w)[::-1]  # e(t), e(t-1), ...
+        h = lfilter(num, den, np.r_[1.0, np.zeros(impulse_terms - 1)])
+        ahead = [np.dot(h[k:k + len(e)], e[: impulse_terms - k]) for k in range(1, steps + 1)]
+        return np.cumsum(ahead)
 
     def qp(self, y):
         """The QP of this sample in quadprog's terms (minimise 1/2 z'Pz + q'z, C'z >= b)."""

@@ -54,6 +54,8 @@ CASES = [
     ("foptd negative time constant",
      changed(lambda m: m["process"]["y"].update(u={"gain": 1.0, "time_constant_s": -3.0, "dead_time_s": 0.0})),
      None, "process.y.u: time_constant_s must be >= 0"),
+    ("line break in a name", changed(lambda m: m["process"].update({"y\nz": {}})), None,
+     'process.y?z: unknown output "y?z"'),
     ("duplicate JSON key", '{"name": "a", "name": "b"}', None, "name: duplicate key"),
     ("model not JSON", "time,u,y\n0,1,2\n", None, "not valid JSON"),
     ("model empty", "", None, "file is empty"),

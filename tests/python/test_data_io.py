@@ -104,3 +104,15 @@ def test_save_data_rejects_bad_frames(tmp_path):
     with pytest.raises(ValueError, match="numeric"):
         mpmpp.save_data(tmp_path / "d.csv", pd.DataFrame({"time": [0.0], "u": ["a"]}))
     assert not (tmp_path / "d.csv").exists()
+
+
+@settings(max_examples=200, deadline=None)
+@given(text=st.text(alphabet=st.sampled_from(list('time,uy0123456789.-+e"NaZT:\r\n ')), max_size=80))
+def test_arbitrary_csv_text_gives_a_one_line_error_or_a_table(text):
+    try:
+        table = mpmpp._core.parse_csv(text, "d.csv")
+    except ValueError as exc:
+        assert str(exc).startswith("d.csv: ") and "\n" not in str(exc)
+    else:
+        assert table.values.shape == (table.num_samples, len(table.columns))
+        assert np.all(np.diff(table.time_s) > 0)

@@ -194,3 +194,29 @@ def test_bad_arguments_are_value_errors():
         identify.oe(y, u, 2, "bj")
     with pytest.raises(ValueError, match="detrend"):
         identify.arx_oe(y, u, 4, 4, 2, detrend="quadratic")
+
+
+def test_arx_oe_model_uses_the_models_channels_and_delays():
+    # Paper MIMO scenario, output 2 (press_moisture <- stock_flow, steam_4): the model +
+    # data entry point must give exactly the array call with the nominal delays/orders.
+    import mpmpp
+    spec = mpmpp.scenarios.paper_mimo()
+    spec["events"] = []
+    spec["duration_s"] = 2000 * spec["sample_time_s"]
+    data = mpmpp.simulate(spec, seed=1)
+    model = mpmpp.Model.from_json(__import__("json").dumps(
+        {k: spec[k] for k in ("name", "sample_time_s", "inputs", "outputs", "process", "noise")}))
+    assert identify.channel_inputs(model, "press_moisture") == ["stock_flow", "steam_4"]
+    r = identify.arx_oe_model(model, data, "press_moisture", na=18, nb=10)
+    direct = identify.arx_oe(data["press_moisture"], data[["stock_flow", "steam_4"]], 18, 10,
+                             [19, 23], structure="oe", oe_nb=[1, 1], oe_nf=[1, 1],
+                             fir_length=[len(c.fir) for c in r.channels])
+    np.testing.assert_array_equal(r.oe.theta, direct.oe.theta)
+    lengths = [identify.fir_length_to_one_percent(model.process("press_moisture", i))
+               for i in ("stock_flow", "steam_4")]
+    assert [len(c.fir) for c in r.channels] == lengths
+    windows = identify.arx_oe_model(model, data, "press_moisture", na=18, nb=10,
+                                    window=1000, step=500)
+    assert [w.start for w in windows] == [0, 500, 1000] and all(w.ok for w in windows)
+    with pytest.raises(ValueError, match="not in the model"):
+        identify.arx_oe_model(model, data, "caliper")

@@ -4,6 +4,7 @@ import os
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 from scipy import signal
 
 import mpmpp
@@ -99,6 +100,7 @@ def test_model_built_from_python():
     again = mpmpp.Model(m.name, m.sample_time_s, m.inputs, m.outputs, m.process_dict(), m.noise_dict())
     assert again == m
     assert mpmpp.Model.from_json(m.to_json()) == m
+    assert m != "not a model"
 
 
 @pytest.mark.parametrize("kwargs, message", [
@@ -124,3 +126,16 @@ def test_save_into_missing_directory_names_the_file(tmp_path):
     target = tmp_path / "nope" / "m.json"
     with pytest.raises(ValueError, match=f"^{target}: cannot write: "):
         mpmpp.save_model(m, target)
+
+
+GOOD_TEXT = (CASES / "P2" / "model.json").read_text() if (CASES / "P2").is_dir() else "{}"
+
+
+@settings(max_examples=200, deadline=None)
+@given(cut=st.integers(0, len(GOOD_TEXT)), insert=st.text(max_size=8))
+def test_mangled_model_text_gives_a_one_line_error_or_a_model(cut, insert):
+    text = GOOD_TEXT[:cut] + insert + GOOD_TEXT[cut + len(insert):]
+    try:
+        mpmpp.Model.from_json(text, "m.json")
+    except ValueError as exc:
+        assert str(exc).startswith("m.json: ") and "\n" not in str(exc)

@@ -17,8 +17,14 @@ PROCESS = [
 U0 = np.array([10.0, 20.0])
 
 
-def core_process():
-    return [[TF(*g) if g else None for g in row] for row in PROCESS]
+NOISE = [([1.0, -0.3], [1.0, 0.6]), ([1.0, 0.2], [1.0, -0.5, 0.06])]
+
+
+def core_model(process=None):
+    channels = {f"y{i + 1}": {f"u{j + 1}": TF(*g) for j, g in enumerate(row) if g}
+                for i, row in enumerate(PROCESS)}
+    noise = {f"y{i + 1}": TF(*h) for i, h in enumerate(NOISE)}
+    return _core.Model("test", 1.0, ["u1", "u2"], ["y1", "y2"], channels if process is None else process, noise)
 
 
 def tuning(hp=8, hc=3, mv_min=(-INF, -INF), mv_max=(INF, INF), max_move=(INF, INF), **extra):
@@ -37,18 +43,20 @@ def tuning(hp=8, hc=3, mv_min=(-INF, -INF), mv_max=(INF, INF), max_move=(INF, IN
 
 
 def reference(t):
+    noise = NOISE if t.disturbance == _core.DisturbanceModel.noise_model else None
     return NumpyMpc(PROCESS, t.prediction_horizon, t.control_horizon, t.cv_target, t.mv_target,
                     t.cv_target_weight, t.mv_target_weight, t.move_weight, t.deviation_weight,
-                    t.mv_min, t.mv_max, t.mv_max_move, U0)
+                    t.mv_min, t.mv_max, t.mv_max_move, U0, noise)
 
 
 def measurements(n, scale, seed):
     return np.array([1.0, -2.0]) + scale * np.random.default_rng(seed).standard_normal((n, 2))
 
 
-def test_unconstrained_steps_equal_numpy_formulation():
-    t = tuning()
-    mpc, ref = _core.Mpc(core_process(), t, U0), reference(t)
+@pytest.mark.parametrize("disturbance", ["bias", "noise_model"])
+def test_unconstrained_steps_equal_numpy_formulation(disturbance):
+    t = tuning(disturbance=getattr(_core.DisturbanceModel, disturbance))
+    mpc, ref = _core.Mpc(core_model(), t, U0), reference(t)
     assert np.allclose(mpc.dynamic_matrix, ref.theta, atol=1e-14)
     assert np.allclose(mpc.P, ref.P, rtol=1e-12, atol=1e-14)
     assert list(mpc.prediction_start) == [3, 5]  # G12: delay 2 + a leading zero; G22: 5
@@ -56,12 +64,13 @@ def test_unconstrained_steps_equal_numpy_formulation():
         u = mpc.step(y)
         u_ref = ref.step(y, constrained=False)
         assert np.allclose(mpc.disturbance_estimate, ref.dist, atol=1e-10)
+        assert np.allclose(mpc.free_response, ref.f, atol=1e-9)
         assert np.allclose(u, u_ref, rtol=0, atol=1e-8), (u, u_ref)
 
 
 def test_constrained_steps_equal_quadprog():
     t = tuning(mv_min=(9.6, 19.5), mv_max=(10.4, 20.3), max_move=(0.05, 0.08))
-    mpc, ref = _core.Mpc(core_process(), t, U0), reference(t)
+    mpc, ref = _core.Mpc(core_model(), t, U0), reference(t)
     active = 0
     for y in measurements(150, 2.0, seed=2):
         u_prev = mpc.u.copy()
@@ -90,7 +99,7 @@ def test_soft_limits_qp_equals_quadprog_and_means_what_it_says():
                cv_min=[0.5, -INF], cv_max=[1.5, -1.0], cv_max_move=[0.02, INF],
                mv_soft_min=[9.8, -INF], mv_soft_max=[10.2, INF], cv_minmax_weight=[5.0, 1.0],
                mv_minmax_weight=[2.0, 1.0])
-    mpc = _core.Mpc(core_process(), t, U0)
+    mpc = _core.Mpc(core_model(), t, U0)
     nz = mpc.num_variables
     assert nz == 2 * 3 + 4  # du over Hc plus slacks: MV1 soft, CV1 and CV2 limits, CV1 movement
     theta = mpc.dynamic_matrix
@@ -114,7 +123,7 @@ def test_delay_beyond_horizon_is_measured_from_smallest_delay():
     import mpmpp.scenarios as scen
     from mpmpp.scenario import parse_scenario
     sc = parse_scenario(scen.paper_mimo())
-    mpc = _core.Mpc(sc.model_process, sc.tuning, sc.tuning.mv_target)
+    mpc = _core.Mpc(sc.model, sc.tuning, sc.tuning.mv_target)
     assert list(mpc.prediction_start) == [15, 19, 7]
     theta, hp, hc = mpc.dynamic_matrix, 20, 2
     steam4 = theta[hp:2 * hp, 1::3]  # press_moisture rows, steam_4 columns: G22 (delay 23) is seen
@@ -132,16 +141,15 @@ def test_bad_tuning_is_a_value_error_naming_the_field(field, value, message):
     t = tuning()
     setattr(t, field, value)
     with pytest.raises(ValueError, match=message.replace("[", r"\[").replace("]", r"\]")):
-        _core.Mpc(core_process(), t, U0)
+        _core.Mpc(core_model(), t, U0)
 
 
 def test_model_channel_must_be_strictly_proper():
-    process = core_process()
-    process[1][1] = TF([0.4], [1.0, -0.5], 0)
+    model = core_model({"y1": {"u1": TF([0.5], [1, -0.8], 3)}, "y2": {"u2": TF([0.4], [1.0, -0.5], 0)}})
     with pytest.raises(ValueError, match="strictly proper"):
-        _core.Mpc(process, tuning(), U0)
+        _core.Mpc(model, tuning(), U0)
 
 
 def test_initial_input_outside_bounds_is_rejected():
     with pytest.raises(ValueError, match="outside"):
-        _core.Mpc(core_process(), tuning(mv_min=(11, 0), mv_max=(12, 30)), U0)
+        _core.Mpc(core_model(), tuning(mv_min=(11, 0), mv_max=(12, 30)), U0)

@@ -234,3 +234,23 @@ def test_mpc_like_closed_loop_sequences(n_mv, n_moves):
     binding = np.mean([np.any(mpmpp.solve_qp(**qp).y != 0.0) for qp in qps])
     assert 0.2 < binding < 0.9, binding  # constraints bind in part of the run, not all of it
     assert check_qps(qps) == 400
+
+
+def test_highly_degenerate_vertices_do_not_cycle():
+    """Many rows (copies, scaled copies, sums of bound rows) all tight at the same vertex: the
+    dependent ones must be recognised and the solve end well inside the iteration cap."""
+    rng = np.random.default_rng(5)
+    for trial in range(60):
+        n = int(rng.integers(2, 9))
+        vertex = rng.standard_normal(n)
+        E = np.eye(n)
+        rows = [E, E, 3.0 * E, np.ones((1, n)), E[:1] + E[-1:], rng.standard_normal((n, n))]
+        A = np.vstack(rows)
+        c = A @ vertex
+        l = c - rng.choice([0.0, 1.0], size=len(c))  # most rows tight from below or above
+        u = np.where(l == c, c + rng.choice([0.0, 1.0], size=len(c)), c)
+        M = rng.standard_normal((n, n))
+        qp = dict(P=M @ M.T + 0.1 * np.eye(n), q=10.0 * rng.standard_normal(n), A=A, l=l, u=u)
+        result = mpmpp.solve_qp(**qp, max_iterations=50 * n)
+        assert result.status != "max_iterations", trial
+        check_against_reference(qp, result, label=f"degenerate {trial}")

@@ -28,7 +28,7 @@ struct ArxOptions {
   // plain least squares (the paper asks for a "small" delta; asymptotically it does not
   // matter). 0 disables the rule.
   double delta = 1e-4;
-  // lambda_min <= rank_tolerance * lambda_max of the scaled R: exactly collinear
+  // lambda_min <= rank_tolerance * trace of the scaled R (trace >= lambda_max): collinear
   // regressors, a NumericalError (the window is not informative), never a ridge guess.
   double rank_tolerance = 1e-10;
 };
@@ -73,7 +73,10 @@ class ArxEstimator {
   std::vector<detail::LaggedColumn> columns_;
   detail::NormalEquationsSolver solver_;
   Eigen::MatrixXd G_;
-  Eigen::VectorXd h_, residual_;
+  Eigen::VectorXd h_;
+  // ArxOeEstimator checks the raw window once and turns the per-call check off.
+  bool check_signals_ = true;
+  friend class ArxOeEstimator;
 };
 
 ArxResult arx(const Eigen::Ref<const Eigen::VectorXd>& y,

@@ -10,8 +10,12 @@
 // (Table 4: Hp = 20 with a 23-sample delay on G22, d_2 = 19).
 //   yhat_i(t+d_i+k) = f_i(k) + sum_j sum_m S_ij(d_i+k-m) du_j(t+m)
 // with S_ij the model step response and f_i the free response: the nominal model run
-// forward with u held at u(t-1), plus the output-disturbance estimate
-// y_i(t) - ymodel_i(t) held constant over the horizon (offset-free, as in DMC).
+// forward with u held at u(t-1), plus the forecast of the output disturbance
+// v_i = y_i - ymodel_i. Two disturbance models, both offset-free:
+//  - Bias (DMC): v_i(t) held constant over the horizon;
+//  - NoiseModel (GPC's C/Delta): v_i = H_i / (1 - q^-1) e_i with H_i the model's noise model,
+//    so Delta v_i is forecast by H_i's own predictor from the innovations e = H_i^-1 Delta v:
+//    vhat(t+k) = v(t) + sum_{s=1..k} Delta vhat(t+s). With H_i = 1 it is the bias model.
 //
 // Cost (condensed in du and slacks s; P and A fixed, only q, l, u change per sample):
 //   sum_i cv_target_weight_i   sum_k (yhat_i(k) - cv_target_i)^2
@@ -44,6 +48,8 @@ namespace detail {
 class IncrementalFilter;
 }
 
+enum class DisturbanceModel { Bias, NoiseModel };
+
 // Every vector is per CV (size = outputs) or per MV (size = inputs); an empty vector takes
 // the default given. Infinite limits mean "none".
 struct MpcTuning {
@@ -62,6 +68,7 @@ struct MpcTuning {
   Eigen::VectorXd cv_min, cv_max;     // soft, default -inf/+inf
   Eigen::VectorXd cv_max_move;        // soft, default +inf
   Eigen::VectorXd mv_soft_min, mv_soft_max;  // soft, default -inf/+inf
+  DisturbanceModel disturbance = DisturbanceModel::Bias;
 };
 
 class Mpc {

@@ -14,7 +14,8 @@
 //   d yhat/d b_jk = q^-k [q^-d_j / F_j] u_j,   d yhat/d f_jk = -q^-k [1 / F_j] yhat_j,
 // every F_j kept stable by reflecting roots outside the circle (radius capped at
 // max_pole_radius). Start: a Prony/Kalman fit to an impulse response (the caller's, e.g.
-// B_j/A of the ARX step, or a joint FIR least-squares fit on the data).
+// B_j/A of the ARX step, or a joint FIR least-squares fit on the data); for first-order
+// denominators the best of that pole and a small pole grid (b_j by least squares).
 #include <Eigen/Dense>
 #include <vector>
 
@@ -34,7 +35,7 @@ struct OeOptions {
   int max_iterations = 200;
   // Converged when an accepted step has |dtheta|_inf <= step_tolerance (|theta|_inf + step_tolerance)
   // or every gradient component's cosine |J_k' eps| / (|J_k| |eps|) <= gradient_tolerance.
-  double step_tolerance = 1e-11;
+  double step_tolerance = 1e-8;
   double gradient_tolerance = 1e-12;
   double max_pole_radius = 0.9999;
   // FIR length per channel for the start when no impulse response is given; 0 = automatic
@@ -81,12 +82,13 @@ class OutputErrorEstimator {
                  Eigen::Index N, OeResult& out);
   void prony_start(std::size_t j, const Eigen::Ref<const Eigen::VectorXd>& g,
                    Eigen::VectorXd& b, Eigen::VectorXd& f) const;
+  void pole_grid_start(std::size_t j, const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
+                       Eigen::Index skip, Eigen::Index N, OeResult& out);
   void stabilise(Eigen::VectorXd& f) const;
-  // yhat_j for the current polynomials, e = y - sum_j yhat_j; returns sum(e^2)/2 over rows.
+  // w_j, yhat_j for the given polynomials, e = y - sum_j yhat_j; returns sum(e^2)/2 over rows.
   double simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y, Eigen::Index skip,
                   Eigen::Index N, const OeResult& par);
-  void jacobian_columns(const Eigen::Ref<const Eigen::MatrixXd>& u, Eigen::Index N,
-                        const OeResult& par);
+  void jacobian_columns(Eigen::Index N, const OeResult& par);
   void unpack(const Eigen::VectorXd& theta, OeResult& par) const;
   void pack(const OeResult& par, Eigen::VectorXd& theta) const;
   void throw_if_not_informative(const detail::NormalEquationsSolver::Outcome& o,
@@ -96,14 +98,18 @@ class OutputErrorEstimator {
   OeOptions options_;
   Eigen::Index p_ = 0, pad_ = 0;
   int nonlinear_channels_ = 0;
-  std::vector<detail::LaggedColumn> columns_;
+  std::vector<detail::LaggedColumn> columns_, grid_columns_;
+  Eigen::Vector2d f1_;
   detail::NormalEquationsSolver solver_;
   Eigen::MatrixXd G_, A_;
-  Eigen::VectorXd h_, delta_, theta_, candidate_theta_, error_, impulse_, unit_;
+  Eigen::VectorXd h_, delta_, theta_, candidate_theta_, error_, residual_, unit_;
   // Per channel, zero-padded (pad_ leading zeros) so lagged columns may reach t < 0.
   std::vector<Eigen::VectorXd> yhat_, w_, v_;
   OeResult candidate_;
   Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  // ArxOeEstimator checks the raw window once and turns the per-call check off.
+  bool check_signals_ = true;
+  friend class ArxOeEstimator;
 };
 
 OeResult oe(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,

@@ -12,7 +12,7 @@ enum class QpStatus {
   Solved,
   PrimalInfeasible,
   NonConvex,       // P not positive definite (after any documented regularisation)
-  MaxIterations,   // best iterate returned
+  MaxIterations,   // best iterate returned: the last one, since the dual objective only grows
 };
 
 const char* to_string(QpStatus s);
@@ -39,7 +39,8 @@ struct QpResult {
   double objective = 0.0;
 };
 
-// Algorithm: the dual active-set method of Goldfarb & Idnani (1983), see cpp/src/qp.cpp.
+// Algorithm: the dual active-set method of Goldfarb & Idnani (1983), see cpp/src/qp.cpp and
+// docs/qp.md. A warm solve (same P, A) does not allocate.
 // P must be positive definite (status NonConvex otherwise; no regularisation is attempted).
 // Inputs are checked: wrong sizes, NaN, or l_i > u_i throw InputError.
 //

@@ -22,17 +22,12 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
                              Eigen::Index t0, Eigen::Index n, Eigen::MatrixXd& G,
                              Eigen::VectorXd& h);
 
-// residual = target[t0 .. t0 + n) - Phi theta.
-void lagged_residual(const std::vector<LaggedColumn>& columns, const double* target,
-                     Eigen::Index t0, Eigen::Index n, const Eigen::VectorXd& theta,
-                     Eigen::VectorXd& residual);
-
 // Solves the normal equations R theta = f with R = G / n, f = h / n, in the
 // regressor-scaled coordinates Rs = S R S, S = diag(R)^-1/2 (unit-free: y and every u_j
 // may have any engineering unit). Section 3.1 regularisation rule applied to Rs:
 //   use Rs + delta/2 I when ||Rs^-1||_2 = 1/lambda_min(Rs) >= 2/delta, else Rs;
-// delta = 0 disables it. One symmetric eigendecomposition gives the solution, the rule's
-// test, the rank check and the sandwich covariance R_reg^-1 R R_reg^-1 / n.
+// delta = 0 disables it. The rule is decided without an eigendecomposition:
+// lambda_min(Rs) > delta/2 exactly when Rs - delta/2 I has a Cholesky factor.
 class NormalEquationsSolver {
  public:
   enum class Status { Ok, ZeroColumn, Singular };
@@ -40,20 +35,24 @@ class NormalEquationsSolver {
     Status status = Status::Ok;
     Eigen::Index zero_column = -1;  // the first identically-zero regressor (ZeroColumn)
     bool regularised = false;
-    double min_scaled_eigenvalue = 0.0;
   };
 
-  // rank_tolerance: lambda_min(Rs) <= rank_tolerance * lambda_max(Rs) means exactly
-  // collinear regressors (the data do not identify the model): Status::Singular.
+  // rank_tolerance: lambda_min(Rs) <= rank_tolerance * trace(Rs) (trace(Rs) = p bounds
+  // lambda_max from above) means exactly collinear regressors, i.e. the data do not
+  // identify the model: Status::Singular.
   Outcome solve(const Eigen::MatrixXd& G, const Eigen::VectorXd& h, double delta,
                 double rank_tolerance, Eigen::VectorXd& theta);
-  // Unscaled (sum-form) covariance factor C with cov(theta) = sigma^2 C after solve().
+  // Unscaled (sum-form) covariance factor C with cov(theta) = sigma^2 C after solve():
+  // S (Rs + cI)^-1 Rs (Rs + cI)^-1 S, the sandwich form that reduces to G^-1 when c = 0.
   void covariance_factor(Eigen::MatrixXd& C) const;
 
  private:
-  Eigen::VectorXd scale_, work_;
-  Eigen::MatrixXd scaled_;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig_;
+  // True when Rs - shift I is positive definite (leaves its factor in llt_).
+  bool positive_definite_above(double shift);
+
+  Eigen::VectorXd scale_;
+  Eigen::MatrixXd scaled_, shifted_;
+  Eigen::LLT<Eigen::MatrixXd> llt_;
   double shift_ = 0.0;
 };
 

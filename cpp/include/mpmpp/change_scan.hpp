@@ -1,0 +1,63 @@
+#pragma once
+// Change-point scans behind `diagnose`: where in time does a candidate effect start, and
+// where do the residual statistics change. Both are exact two-segment least-squares fits
+// evaluated for every onset with running sums (O(N) per candidate instead of O(N^2)).
+#include <Eigen/Dense>
+
+namespace mpmpp {
+
+// A candidate effect replaces one channel's contribution from the onset on. With r the
+// whitened one-step error of the nominal model, r_without the same error with the channel's
+// nominal contribution added back (r_without = r for a channel the model lacks) and psi the
+// whitened response of the candidate channel shape, the fit after onset k is
+//   r_without(t) = theta psi(t) + w(t),  t >= k,   (nominal model before k)
+// with w white of unit variance (the caller whitens all three with the same filter and scale).
+// The statistic is the drop of the residual sum of squares against the nominal model,
+//   sum_{t>=k} (r^2 - r_without^2) + (sum_{t>=k} r_without psi)^2 / sum_{t>=k} psi^2,
+// the likelihood-ratio statistic of the candidate for a fixed onset.
+struct OnsetFit {
+  Eigen::Index onset = 0;   // first sample of the changed segment
+  double statistic = 0.0;   // drop of the residual sum of squares at that onset
+  double theta = 0.0;       // least-squares channel scale after the onset
+  double theta_se = 0.0;    // its standard error (unit noise variance)
+};
+
+// Best onset among k = 0 and k = min_segment, min_segment + step, ..., N - min_segment.
+// Samples where weight == 0 are left out (gaps, filter transients, held-out blocks).
+OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                    const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+                    Eigen::Index min_segment, Eigen::Index step);
+
+// The same fit at a given onset (no scan).
+OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                      const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+                      Eigen::Index onset);
+
+// Least-squares AR(order) fit e(t) + a1 e(t-1) + ... + an e(t-n) = w(t) on rows
+// [begin, end) (lags may reach before begin). Returns the monic polynomial [1, a1, ..., an].
+Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,
+                       Eigen::Index end);
+
+// Two-segment AR split of e: for each candidate onset k (step apart, both segments at least
+// min_segment long) the Gaussian log-likelihood gain
+//   n log s2(all) - k log s2(before) - (n - k) log s2(after)
+// of separate AR(order) models (innovation variance and coefficients) before and after k.
+struct ArSplit {
+  Eigen::Index onset = 0;
+  double statistic = 0.0;          // the log-likelihood gain (0 when no split is possible)
+  double variance_before = 0.0;    // AR innovation variances of the two segments
+  double variance_after = 0.0;
+  double variance_all = 0.0;
+};
+ArSplit split_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index min_segment,
+                 Eigen::Index step);
+
+// Actuator with backlash (play) of total width `width`: the output follows the input only
+// once the input has moved more than width/2 past it, as a valve with a loose linkage does.
+Eigen::VectorXd backlash(const Eigen::Ref<const Eigen::VectorXd>& u, double width);
+
+// Actuator with stick-slip (a deadband on the move): the position stays put until the
+// command differs from it by more than `band`, then jumps to the command.
+Eigen::VectorXd stick_slip(const Eigen::Ref<const Eigen::VectorXd>& u, double band);
+
+}  // namespace mpmpp

@@ -1,0 +1,16 @@
+"""Reading the model + data pair every analysis command takes (through the foundation's IO)."""
+from __future__ import annotations
+
+
+def load_pair(model_path: str, data_path: str):
+    import mpmpp
+
+    model = mpmpp.load_model(model_path)
+    return model, mpmpp.load_data(data_path, model)
+
+
+def add_pair_arguments(parser) -> None:
+    parser.add_argument("model", metavar="MODEL", help="nominal model file (JSON, FORMATS.md)")
+    parser.add_argument("data", metavar="DATA", help="operating data (CSV, FORMATS.md)")
+    parser.add_argument("--out", metavar="DIR", help="write PNG figures and tables here")
+    parser.add_argument("--json", action="store_true", help="print one JSON document on stdout")

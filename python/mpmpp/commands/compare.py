@@ -1,0 +1,33 @@
+"""``mpmpp compare MODEL DATA``: fit per output, residual tests, where the model fails."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ._pair import add_pair_arguments, load_pair
+
+
+def add_arguments(parser) -> None:
+    add_pair_arguments(parser)
+    parser.add_argument("--horizon", type=int, default=10, metavar="K",
+                        help="prediction horizon k in samples for the k-step fit (default 10)")
+    parser.add_argument("--max-lag", type=int, default=25, help="correlation lags -M..M (default 25)")
+    parser.add_argument("--window", type=float, default=3600.0, metavar="SECONDS",
+                        help="moving-window length for the fit over time (default 3600)")
+
+
+def run(args) -> int:
+    from ..compare import compare
+
+    model, data = load_pair(args.model, args.data)
+    result = compare(model, data, horizon=args.horizon, max_lag=args.max_lag, window_s=args.window)
+    if args.out:
+        paths = result.plot(args.out)
+        (Path(args.out) / "compare.json").write_text(json.dumps(result.to_dict(), indent=1))
+    if args.json:
+        print(json.dumps(result.to_dict()))
+    else:
+        print(result.summary())
+        if args.out:
+            print(f"  figures: {', '.join(str(p) for p in paths)}")
+    return 0

@@ -1,0 +1,97 @@
+"""Turn a model + operating-data pair into the deviation signals the numerics work on.
+
+The data are absolute engineering units (FORMATS.md), the model's transfer functions act on
+deviations from an operating point. We take the operating point as the sample mean of each
+column over a reference span (the whole record unless the caller gives one) and subtract it.
+Rows with a missing value split the record into NaN-free segments; every filter restarts at the
+start of a segment (no interpolation), and segments shorter than ``min_segment`` are skipped and
+reported.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class Signals:
+    """Deviation signals of one model/data pair (all arrays are N long, row t = data row t)."""
+
+    time_s: np.ndarray
+    inputs: list[str]
+    outputs: list[str]
+    extras: list[str]                 # candidate columns: neither model input/output nor a setpoint
+    u: np.ndarray                     # N x nu input deviations
+    y: np.ndarray                     # N x ny output deviations
+    z: np.ndarray                     # N x nz extra-column deviations
+    operating_point: dict[str, float]
+    segments: list[tuple[int, int]]   # NaN-free [start, stop) row ranges used
+    skipped_rows: int = 0
+    sample_time_s: float = 1.0
+    rows: list = field(default_factory=list)    # model rows: list per output of [TF or None]
+    noise: list = field(default_factory=list)   # noise model per output
+
+    def seconds_to_index(self, seconds: float) -> int:
+        return int(np.searchsorted(self.time_s, seconds, side="left"))
+
+
+def model_rows(model) -> tuple[list, list]:
+    """Per output, the list of its channels (TransferFunction or None) and its noise model."""
+    rows = [[model.process(o, i) for i in model.inputs] for o in model.outputs]
+    noise = [model.noise(o) for o in model.outputs]
+    return rows, noise
+
+
+def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
+    """Deviation signals of ``data`` (DataFrame with ``time`` in seconds) for ``model``.
+
+    ``reference`` is a boolean row mask for the operating-point means (default: all rows).
+    """
+    inputs, outputs = list(model.inputs), list(model.outputs)
+    for col in ["time", *inputs, *outputs]:
+        if col not in data.columns:
+            raise ValueError(f"data: missing column '{col}' required by the model")
+    setpoints = {f"{o}_sp" for o in outputs}
+    extras = [c for c in data.columns if c not in {"time", *inputs, *outputs} and c not in setpoints]
+    time_s = data["time"].to_numpy(dtype=float)
+    raw_u = data[inputs].to_numpy(dtype=float)
+    raw_y = data[outputs].to_numpy(dtype=float)
+    raw_z = data[extras].to_numpy(dtype=float) if extras else np.zeros((len(data), 0))
+    ref = np.ones(len(data), bool) if reference is None else np.asarray(reference, bool)
+    both = np.column_stack([raw_u, raw_y, raw_z])
+    means = np.nanmean(both[ref], axis=0) if ref.any() else np.nanmean(both, axis=0)
+    dev = both - means
+    nu, ny = len(inputs), len(outputs)
+    # Extra columns with NaNs do not cut the model signals; they are handled where used.
+    valid = np.all(np.isfinite(dev[:, : nu + ny]), axis=1)
+    segments, skipped = _segments(valid, min_segment)
+    rows, noise = model_rows(model)
+    return Signals(
+        time_s=time_s, inputs=inputs, outputs=outputs, extras=extras,
+        u=dev[:, :nu], y=dev[:, nu:nu + ny], z=dev[:, nu + ny:],
+        operating_point=dict(zip([*inputs, *outputs, *extras], map(float, means))),
+        segments=segments, skipped_rows=skipped, sample_time_s=float(model.sample_time_s),
+        rows=rows, noise=noise,
+    )
+
+
+def _segments(valid: np.ndarray, min_segment: int) -> tuple[list[tuple[int, int]], int]:
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], valid.astype(np.int8), [0]])))
+    runs = [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]
+    kept = [r for r in runs if r[1] - r[0] >= min_segment]
+    if not kept:
+        raise ValueError(f"data: no stretch of at least {min_segment} rows without missing values")
+    return kept, int(len(valid) - sum(b - a for a, b in kept))
+
+
+def per_segment(signals: Signals, fn, *arrays) -> np.ndarray:
+    """Apply ``fn(*segment_arrays)`` on each NaN-free segment; NaN outside the segments."""
+    n = len(signals.time_s)
+    out = None
+    for a, b in signals.segments:
+        res = np.asarray(fn(*(x[a:b] for x in arrays)))
+        if out is None:
+            out = np.full((n,) + res.shape[1:], np.nan)
+        out[a:b] = res
+    return out

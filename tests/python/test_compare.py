@@ -1,0 +1,130 @@
+"""compare: k-step prediction and residual tests against plain NumPy/SciPy references."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.signal import lfilter
+
+import mpmpp
+from mpmpp import _core
+from mpmpp.compare import compare
+
+from case_files import _Model, load_case
+
+G_NUM, G_DEN, G_DELAY = [0.1], [1.0, -0.9], 4
+H_NUM, H_DEN = [1.0, -0.3], [1.0, 0.5]
+
+
+def _tf(num, den, delay=0):
+    return mpmpp.TransferFunction(num, den, delay)
+
+
+def _siso(n, seed, extra_gain=0.0, noise_scale_after=None):
+    """Open-loop data y = G u + H e (+ an extra column w through 0.05/(1-0.8q^-1) q^-3)."""
+    rng = np.random.default_rng(seed)
+    u = np.repeat(rng.standard_normal(n // 10 + 1), 10)[:n]
+    w = np.repeat(rng.standard_normal(n // 20 + 1), 20)[:n]
+    e = 0.05 * rng.standard_normal(n)
+    if noise_scale_after is not None:
+        e[n // 2:] *= noise_scale_after
+    y = lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, u) + lfilter(H_NUM, H_DEN, e)
+    y += extra_gain * lfilter([0, 0, 0, 0.05], [1.0, -0.8], w)
+    data = pd.DataFrame({"time": 5.0 * np.arange(n), "u": u + 100.0, "y": y + 50.0, "w": w})
+    model = _Model({"name": "t", "sample_time_s": 5.0, "inputs": ["u"], "outputs": ["y"],
+                    "process": {"y": {"u": {"num": G_NUM, "den": G_DEN, "delay": G_DELAY}}},
+                    "noise": {"y": {"num": H_NUM, "den": H_DEN}}})
+    return model, data, e
+
+
+def _numpy_k_step_error(v, k):
+    """Reference: innovations e = H^-1 v, then the k-step error sum_{i<k} h_i e(t-i)."""
+    e = lfilter(H_DEN, H_NUM, v)
+    h = lfilter(H_NUM, H_DEN, np.r_[1.0, np.zeros(k - 1)])
+    return lfilter(h, [1.0], e)
+
+
+@pytest.mark.parametrize("k", [1, 2, 7])
+def test_k_step_prediction_matches_numpy_reference(k):
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal((600, 1))
+    y = rng.standard_normal(600)
+    g, h = _tf(G_NUM, G_DEN, G_DELAY), _tf(H_NUM, H_DEN)
+    v = y - lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, u[:, 0])
+    yhat = _core.predict_output([g], h, y, u, k)
+    np.testing.assert_allclose(y - yhat, _numpy_k_step_error(v, k), atol=1e-12)
+
+
+def test_k_step_error_variance_is_the_analytic_one_for_the_true_model():
+    model, data, e = _siso(40000, seed=2)
+    u = data[["u"]].to_numpy() - 100.0
+    y = data["y"].to_numpy() - 50.0
+    h = lfilter(H_NUM, H_DEN, np.r_[1.0, np.zeros(5)])
+    for k in (1, 3, 6):
+        err = y - _core.predict_output([model.process("y", "u")], model.noise("y"), y, u, k)
+        expected = 0.05**2 * np.sum(h[:k] ** 2)
+        assert abs(np.var(err[100:]) / expected - 1.0) < 0.05
+
+
+def test_cross_correlation_matches_numpy():
+    rng = np.random.default_rng(3)
+    x, y = rng.standard_normal(300), rng.standard_normal(300)
+    r = _core.cross_correlation(x, y, 5)
+    xc, yc = x - x.mean(), y - y.mean()
+    full = np.correlate(xc, yc, mode="full") / np.sqrt(xc @ xc * (yc @ yc))  # index N-1 is lag 0
+    np.testing.assert_allclose(r, full[299 - 5:299 + 6], atol=1e-12)
+
+
+def test_true_model_passes_and_fit_matches_definition():
+    model, data, _ = _siso(8000, seed=4)
+    res = compare(model, data, horizon=5)
+    oc = res.outputs[0]
+    y = data["y"].to_numpy() - data["y"].mean()
+    assert oc.fit_simulation == pytest.approx(
+        100 * (1 - np.linalg.norm(y - oc.simulated) / np.linalg.norm(y - y.mean())), rel=1e-9)
+    att = {a.column: a for a in oc.attribution}
+    assert not att["u"].significant and not att["w"].significant
+    assert len(oc.whiteness.positive_lag_violations) <= 2   # 25 lags at 99 %: ~0.25 expected
+    assert not oc.failing
+    json.dumps(res.to_dict())
+
+
+def test_unmodeled_column_and_noise_change_are_located():
+    model, data, _ = _siso(8000, seed=5, extra_gain=1.0)
+    oc = compare(model, data).outputs[0]
+    att = {a.column: a for a in oc.attribution}
+    assert att["w"].significant and not att["u"].significant
+    w = next(c for c in oc.cross if c.column == "w")
+    assert 4 in w.positive_lag_violations  # delay 3 + one sample of the numerator lag
+
+    model, data, _ = _siso(8000, seed=6, noise_scale_after=2.0)
+    oc = compare(model, data, window_s=1800).outputs[0]
+    assert oc.failing and abs(oc.failing[0].start_s - 5.0 * 4000) <= 1800
+
+
+def test_missing_values_split_segments_not_interpolated():
+    model, data, _ = _siso(3000, seed=7)
+    data.loc[1500:1504, "y"] = np.nan
+    res = compare(model, data)
+    assert res.skipped_rows == 5
+    assert np.isnan(res.outputs[0].residual[1500:1505]).all()
+    assert np.isfinite(res.outputs[0].residual[1505:]).all()
+
+
+def test_bad_arguments_name_the_field():
+    model, data, _ = _siso(1000, seed=8)
+    with pytest.raises(ValueError, match="horizon"):
+        compare(model, data, horizon=0)
+    with pytest.raises(ValueError, match="'y'"):
+        compare(model, data.drop(columns=["y"]))
+
+
+def test_p3_noise_change_is_where_it_fails(tmp_path):
+    model, data, answer = load_case("P3")
+    res = compare(model, data)
+    by = {oc.output: oc for oc in res.outputs}
+    onset = answer["findings"][0]["onset_s"]
+    assert by["moisture"].failing and abs(by["moisture"].failing[0].start_s - onset) <= 3600
+    assert not by["basis_weight"].failing
+    paths = res.plot(tmp_path)
+    assert len(paths) == 6 and all(p.stat().st_size > 1000 for p in paths)

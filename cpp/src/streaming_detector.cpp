@@ -1,6 +1,8 @@
 #include "mpmpp/streaming_detector.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <nlohmann/json.hpp>
 
@@ -22,9 +24,15 @@ std::uint64_t fnv1a(const std::string& text) {
   return h;
 }
 
+// The shortest fixed form that reads back exactly ("120 s", "105.000001 s"); %.17g else.
 std::string seconds(double t) {
-  json j = t;  // shortest round-trip form: the message shows the exact time
-  return j.dump() + " s";
+  char buf[64];
+  for (int decimals = 0; decimals <= 9 && std::abs(t) < 1e15; ++decimals) {
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, t);
+    if (std::strtod(buf, nullptr) == t) return std::string(buf) + " s";
+  }
+  std::snprintf(buf, sizeof buf, "%.17g", t);
+  return std::string(buf) + " s";
 }
 
 }  // namespace

@@ -19,7 +19,7 @@ DIGEST = textwrap.dedent("""
     import copy, hashlib, numpy as np, mpmpp
     from mpmpp import identify, scenarios
     h = hashlib.sha256()
-    spec = copy.deepcopy(scenarios.paper_siso()); spec["duration_s"] = 2 * 3600.0
+    spec = copy.deepcopy(scenarios.paper_siso()); spec["duration_s"] = 2 * 3600.0; spec["events"] = []
     df = mpmpp.simulate(spec, seed=11)
     h.update(np.ascontiguousarray(df.to_numpy()).tobytes())
     rng = np.random.default_rng(3)
@@ -63,7 +63,7 @@ def test_svm_fit_twice_and_kernel_threads():
 def test_simulate_same_seed_same_data_other_seed_differs():
     import copy
     spec = copy.deepcopy(scenarios.paper_siso())
-    spec["duration_s"] = 3600.0
+    spec["duration_s"], spec["events"] = 3600.0, []
     a, b, c = mpmpp.simulate(spec, seed=4), mpmpp.simulate(spec, seed=4), mpmpp.simulate(spec, seed=5)
     assert np.array_equal(a.to_numpy(), b.to_numpy())
     assert not np.array_equal(a["dry_weight"].to_numpy(), c["dry_weight"].to_numpy())

@@ -44,7 +44,7 @@ def test_badly_scaled_arx_matches_numpy_lstsq():
     y, u = siso_data(800, 3)
     r = identify.arx(y, u * 1e8, 1, 2, 2, delta=0.0)
     N = len(y)
-    phi = np.column_stack([-y[1:N - 2], 1e8 * u[1:N - 2], 1e8 * u[0:N - 3]])
+    phi = np.column_stack([-y[2:N - 1], 1e8 * u[1:N - 2], 1e8 * u[0:N - 3]])
     theta, *_ = np.linalg.lstsq(phi, y[3:], rcond=None)
     np.testing.assert_allclose(r.theta, theta, rtol=1e-6)
 

@@ -5,12 +5,14 @@
 #include <string>
 
 #include "mpmpp/error.hpp"
+#include "order_limits.hpp"
 
 namespace mpmpp {
 
 namespace {
 void require_informative_signal(const Eigen::Ref<const Eigen::VectorXd>& x,
                                 const std::string& name) {
+  if (x.size() == 0) throw NumericalError("window not informative: " + name + " has no samples");
   // The sum is finite iff every sample is (short of overflow): one vectorised pass.
   if (!std::isfinite(x.sum()))
     if (const auto k = (!x.array().isFinite()).count(); k > 0)
@@ -33,6 +35,7 @@ ArxEstimator::ArxEstimator(ArxOrders orders, ArxOptions options)
     : orders_(std::move(orders)), options_(options) {
   const std::size_t m = orders_.nb.size();
   if (orders_.na < 0) throw InputError("na must be >= 0, got " + std::to_string(orders_.na));
+  if (orders_.na > detail::kMaxLag) throw InputError("na must be <= 1000000, got " + std::to_string(orders_.na));
   if (m == 0) throw InputError("nb must name at least one input");
   if (orders_.delays.size() != m)
     throw InputError("delays must have one entry per input (" + std::to_string(m) + "), got " +
@@ -45,10 +48,15 @@ ArxEstimator::ArxEstimator(ArxOrders orders, ArxOptions options)
     if (orders_.nb[j] < 1)
       throw InputError("nb[" + std::to_string(j) + "] must be >= 1, got " +
                        std::to_string(orders_.nb[j]));
+    if (orders_.nb[j] > detail::kMaxLag)
+      throw InputError("nb[" + std::to_string(j) + "] must be <= 1000000, got " + std::to_string(orders_.nb[j]));
+    if (orders_.delays[j] > detail::kMaxLag)
+      throw InputError("delays[" + std::to_string(j) + "] must be <= 1000000, got " +
+                       std::to_string(orders_.delays[j]));
     if (orders_.delays[j] < 0)
       throw InputError("delays[" + std::to_string(j) + "] must be >= 0, got " +
                        std::to_string(orders_.delays[j]));
-    t0_ = std::max<Eigen::Index>(t0_, orders_.delays[j] + orders_.nb[j] - 1);
+    t0_ = std::max<Eigen::Index>(t0_, Eigen::Index{orders_.delays[j]} + orders_.nb[j] - 1);
     p_ += orders_.nb[j];
   }
   columns_.resize(static_cast<std::size_t>(p_));

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "mpmpp/error.hpp"
+#include "order_limits.hpp"
 
 namespace mpmpp {
 
@@ -50,8 +51,9 @@ ArxOeEstimator::ArxOeEstimator(ArxOeConfig config)
   if (config_.fir_length.size() != m)
     throw InputError("fir_length must have one entry per input (" + std::to_string(m) + ")");
   for (std::size_t j = 0; j < m; ++j)
-    if (config_.fir_length[j] < 1)
-      throw InputError("fir_length[" + std::to_string(j) + "] must be >= 1");
+    if (config_.fir_length[j] < 1 || config_.fir_length[j] > detail::kMaxLag)
+      throw InputError("fir_length[" + std::to_string(j) + "] must be in [1, 1000000], got " +
+                       std::to_string(config_.fir_length[j]));
   start_impulse_.resize(m);
   arx_.check_signals_ = false;  // estimate() checks the raw window and the detrended one
   oe_.check_signals_ = false;   // A(q)-filtering a non-constant signal keeps it non-constant

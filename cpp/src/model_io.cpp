@@ -158,6 +158,11 @@ double largest_magnitude(const Eigen::VectorXcd& roots) {
 // monic (H(inf) = 1, so e is the one-step prediction error), stable, and inversely
 // stable (the predictor filters y through H^-1).
 void check_noise(const TransferFunction& h, const std::string& path) {
+  // Its roots are computed below (an eigenvalue problem cubic in the order): a hostile
+  // 10^4-coefficient polynomial must not stall loading for minutes.
+  constexpr Eigen::Index kMaxNoiseCoefficients = 200;
+  if (h.num().size() > kMaxNoiseCoefficients || h.den().size() > kMaxNoiseCoefficients)
+    fail(path, "at most 200 coefficients in num and in den");
   if (h.delay() != 0) fail(path, "delay must be 0 (the noise model is monic)");
   if (std::abs(h.num()[0] - 1.0) > 1e-12)
     fail(path, "must be monic (num[0] == den[0]), got num[0]/den[0] = " + format_number(h.num()[0]));
@@ -302,7 +307,7 @@ Model parse_model(const std::string& json_text, const std::string& source) {
     json root;
     try {
       root = json::parse(json_text, DuplicateKeyCheck());
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {  // parse_error, or out_of_range 406 for 1e400
       // what() is "[json.exception.parse_error.101] parse error at line 1, column 1: ...".
       std::string what = e.what();
       const auto start = what.find("] ");

@@ -94,6 +94,11 @@ Mpc::Mpc(const Model& model, MpcTuning tuning, const Eigen::Ref<const Eigen::Vec
   if (tuning.prediction_horizon < 1) throw InputError("controller prediction_horizon must be >= 1");
   if (tuning.control_horizon < 1 || tuning.control_horizon > tuning.prediction_horizon)
     throw InputError("controller control_horizon must be in [1, prediction_horizon]");
+  // The condensed QP is dense ((ny Hp) x (nu Hc) dynamic matrix, (nu Hc)^2 Hessian): bounds
+  // far beyond MD practice (paper: Hp 40, Hc 4) so a hostile horizon cannot ask for gigabytes.
+  if (tuning.prediction_horizon > 10000) throw InputError("controller prediction_horizon must be <= 10000");
+  if (static_cast<long long>(tuning.control_horizon) * s.nu > 2000)
+    throw InputError("controller control_horizon x inputs must be <= 2000 (the QP is dense)");
   if (u_initial.size() != s.nu || !u_initial.allFinite())
     throw InputError("initial inputs must be " + std::to_string(s.nu) + " finite values");
   const int ny = s.ny, nu = s.nu;

@@ -8,6 +8,7 @@
 #include "mpmpp/arx.hpp"
 #include "mpmpp/error.hpp"
 #include "mpmpp/transfer_function.hpp"
+#include "order_limits.hpp"
 
 namespace mpmpp {
 
@@ -20,13 +21,20 @@ OutputErrorEstimator::OutputErrorEstimator(std::vector<OeChannel> channels, OeOp
     if (c.nb < 1) throw InputError(at + ".nb must be >= 1, got " + std::to_string(c.nb));
     if (c.nf < 0) throw InputError(at + ".nf must be >= 0, got " + std::to_string(c.nf));
     if (c.delay < 0) throw InputError(at + ".delay must be >= 0, got " + std::to_string(c.delay));
-    p_ += c.nb + c.nf;
+    const auto at_most_max_lag = [&](const char* name, int value) {
+      if (value > detail::kMaxLag) throw InputError(at + name + " must be <= 1000000, got " + std::to_string(value));
+    };
+    at_most_max_lag(".nb", c.nb);
+    at_most_max_lag(".nf", c.nf);
+    at_most_max_lag(".delay", c.delay);
+    p_ += Eigen::Index{c.nb} + c.nf;
     if (c.nf > 0) ++nonlinear_channels_;
   }
   if (options_.max_iterations < 1) throw InputError("max_iterations must be >= 1");
   if (!(options_.max_pole_radius > 0.0 && options_.max_pole_radius < 1.0))
     throw InputError("max_pole_radius must be in (0, 1)");
-  if (options_.init_fir_length < 0) throw InputError("init_fir_length must be >= 0");
+  if (options_.init_fir_length < 0 || options_.init_fir_length > detail::kMaxLag)
+    throw InputError("init_fir_length must be in [0, 1000000]");
   const std::size_t m = channels_.size();
   yhat_.resize(m);
   w_.resize(m);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "mpmpp/error.hpp"
+#include "order_limits.hpp"
 
 namespace mpmpp {
 
@@ -73,6 +74,7 @@ TransferFunction::TransferFunction(Eigen::VectorXd num, Eigen::VectorXd den, int
   if (!den_.allFinite()) throw InputError("den has a non-finite coefficient");
   if (den_[0] == 0.0) throw InputError("den[0] must be non-zero");
   if (delay_ < 0) throw InputError("delay must be >= 0, got " + std::to_string(delay_));
+  if (delay_ > detail::kMaxLag) throw InputError("delay must be <= 1000000 samples, got " + std::to_string(delay_));
   num_ /= den_[0];
   den_ /= den_[0];
 }
@@ -192,7 +194,9 @@ bool TransferFunction::is_minimum_phase() const { return all_inside_unit_circle(
 bool TransferFunction::is_zero() const { return (num_.array() == 0.0).all(); }
 
 TransferFunction TransferFunction::series(const TransferFunction& o) const {
-  return TransferFunction(poly_multiply(num_, o.num_), poly_multiply(den_, o.den_), delay_ + o.delay_);
+  const long long delay = static_cast<long long>(delay_) + o.delay_;  // <= 2 kMaxLag: no overflow
+  if (delay > detail::kMaxLag) throw InputError("series delay must be <= 1000000 samples, got " + std::to_string(delay));
+  return TransferFunction(poly_multiply(num_, o.num_), poly_multiply(den_, o.den_), static_cast<int>(delay));
 }
 
 TransferFunction TransferFunction::parallel(const TransferFunction& o) const {

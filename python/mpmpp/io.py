@@ -7,7 +7,9 @@ the field, column or row at fault.
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import tempfile
 from typing import TYPE_CHECKING, Optional, Union
 
 import numpy as np
@@ -20,7 +22,7 @@ if TYPE_CHECKING:
 
 PathLike = Union[str, "os.PathLike[str]"]
 
-__all__ = ["Model", "load_model", "save_model", "load_data", "save_data"]
+__all__ = ["Model", "load_model", "save_model", "load_data", "save_data", "atomic_output"]
 
 
 def load_model(path: PathLike) -> Model:
@@ -75,3 +77,23 @@ def save_data(path: PathLike, df: pd.DataFrame) -> None:
     except ValueError as exc:
         raise ValueError(f"{os.fspath(path)}: {exc}") from None
     _core.write_csv(table, os.fspath(path))
+
+
+@contextlib.contextmanager
+def atomic_output(path: PathLike, mode: str = "w"):
+    """An open temporary file beside ``path`` that replaces ``path`` (fsync, then rename) only
+    when the block succeeds: an interrupted or failed write leaves the previous file intact.
+    For files written in Python; the engine's save_model/save_data do the same in C++."""
+    path = os.fspath(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.tmp.", dir=os.path.dirname(path) or ".")
+    try:
+        with os.fdopen(fd, mode) as f:
+            yield f
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, os.stat(path).st_mode & 0o7777 if os.path.exists(path) else 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise

@@ -18,6 +18,7 @@ import numpy as np
 from . import _core
 
 MODEL_KEYS = {"name", "sample_time_s", "inputs", "outputs", "process", "noise"}
+MAX_SAMPLES = 100_000_000  # ~16 years at 5 s
 TOP_KEYS = MODEL_KEYS | {"truth", "controller", "duration_s", "seed", "events", "notes"}
 TRUTH_KEYS = {"process", "noise", "sigma", "extra", "actuators"}
 EXTRA_KEYS = {"operating_point", "sigma", "noise", "affects"}
@@ -79,6 +80,8 @@ def _int(value, where: str, minimum: int = 0) -> int:
         _fail(where, "must be an integer")
     if int(value) < minimum:
         _fail(where, f"must be >= {minimum}")
+    if int(value) >= 2**63:  # seeds are uint64, sample counts int: no silent wrap-around
+        _fail(where, "must be < 2^63")
     return int(value)
 
 
@@ -371,6 +374,9 @@ def parse_scenario(spec: dict) -> Scenario:
     num_samples = int(math.floor(duration / ts + 1e-9))
     if num_samples < 1:
         _fail("duration_s", "is shorter than one sample")
+    # The engine counts samples in a C int and keeps every signal in memory.
+    if num_samples > MAX_SAMPLES:
+        _fail("duration_s", f"gives {num_samples} samples, more than {MAX_SAMPLES}")
     sc = Scenario(spec=spec, model=model, truth=truth_model, sigma=sigma,
                   extra_names=extra_names, extra=extra, extra_process=extra_process,
                   actuators=actuators, tuning=tuning, num_samples=num_samples,

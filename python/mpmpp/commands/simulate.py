@@ -23,7 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..io import save_data
+    from ..io import atomic_output, save_data
     from ..plots import plot_simulation
     from ..scenario import load_scenario, parse_scenario
     from ..simulate import frame
@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         sc = load_scenario(args.scenario)
     if args.write_scenario:
-        with open(args.write_scenario, "w") as f:
+        with atomic_output(args.write_scenario) as f:
             json.dump(sc.spec, f, indent=2)
     res = _core.simulate_closed_loop(sc.to_config(args.seed, record_qps=bool(args.record_qps)))
     df = frame(sc, res)
@@ -51,7 +51,11 @@ def run(args: argparse.Namespace) -> int:
         written += [str(p) for p in plot_simulation(df, sc.inputs, sc.outputs, args.plot,
                                                     df.attrs["event_times_s"], sc.name)]
     if args.record_qps:
-        np.savez_compressed(args.record_qps, P=res.qp_P, A=res.qp_A, q=res.qp_q, l=res.qp_l, u=res.qp_u)
+        # Through a file object numpy adds no ".npz"; add it as numpy would for a path.
+        if not args.record_qps.endswith(".npz"):
+            args.record_qps += ".npz"
+        with atomic_output(args.record_qps, "wb") as f:
+            np.savez_compressed(f, P=res.qp_P, A=res.qp_A, q=res.qp_q, l=res.qp_l, u=res.qp_u)
         written.append(args.record_qps)
     summary = {"scenario": sc.name, "samples": sc.num_samples, "sample_time_s": sc.sample_time_s,
                "seed": sc.seed if args.seed is None else args.seed, "events": len(sc.events),

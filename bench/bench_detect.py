@@ -59,7 +59,7 @@ def main():
     for name, target in (("siso", 1.0), ("mimo", 3.0)):
         scenario = load_scenario(f"paper-{name}")
         model = nominal_model(scenario)
-        config = make_config(f"paper_{name}")
+        config = make_config(name)  # the recommended preset, as the demo uses
         sim, det, peer = [], [], []
         for seed in range(args.seeds):
             t0 = time.process_time()

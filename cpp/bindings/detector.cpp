@@ -58,6 +58,8 @@ void bind_detector(py::module_& m) {
       .def_readwrite("arx_regularisation", &DetectorConfig::arx_regularisation)
       .def_static("paper_siso", &DetectorConfig::paper_siso)
       .def_static("paper_mimo", &DetectorConfig::paper_mimo)
+      .def_static("siso", &DetectorConfig::siso)
+      .def_static("mimo", &DetectorConfig::mimo)
       .def_static("preset", &DetectorConfig::preset, py::arg("name"))
       .def_static("from_json", &DetectorConfig::from_json, py::arg("text"))
       .def("to_json", &DetectorConfig::to_json)

@@ -30,19 +30,20 @@ ConfigLike = Union[None, str, dict, "os.PathLike[str]", DetectorConfig]
 
 
 def make_config(config: ConfigLike = None, model=None) -> DetectorConfig:
-    """A DetectorConfig from: None (the paper preset for the model's size: ``paper_siso``
-    for one output, ``paper_mimo`` otherwise), a preset name, a dict or a JSON file path
+    """A DetectorConfig from: None (the recommended preset for the model's size: ``siso``
+    for one output, ``mimo`` otherwise), a preset name (``siso``, ``mimo``, or the paper's
+    Tables 1/3 verbatim: ``paper_siso``, ``paper_mimo``), a dict or a JSON file path
     (``{"preset": ..., field: value, ...}``; unknown keys are an error), or a DetectorConfig."""
     if isinstance(config, DetectorConfig):
         config.validate()
         return config
     if config is None:
         n_outputs = len(model.outputs) if model is not None else 1
-        return DetectorConfig.paper_siso() if n_outputs == 1 else DetectorConfig.paper_mimo()
+        return DetectorConfig.siso() if n_outputs == 1 else DetectorConfig.mimo()
     if isinstance(config, dict):
         return DetectorConfig.from_json(json.dumps(config))
     text = os.fspath(config)
-    if text in ("paper_siso", "paper_mimo"):
+    if text in ("siso", "mimo", "paper_siso", "paper_mimo"):
         return DetectorConfig.preset(text)
     try:
         with open(text, encoding="utf-8") as f:

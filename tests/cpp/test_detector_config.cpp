@@ -19,6 +19,28 @@ TEST(DetectorConfig, PaperPresetsGiveTableValues) {
   EXPECT_EQ(mimo.arx_order_a, 18);
   EXPECT_EQ(mimo.arx_order_b, 10);
   EXPECT_DOUBLE_EQ(mimo.train_duration_s, 14400.0);
+  EXPECT_DOUBLE_EQ(siso.alpha, 1.5);  // Tables 1 and 3 verbatim
+  EXPECT_DOUBLE_EQ(mimo.alpha, 1.5);
+}
+
+TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
+  auto rec_siso = DetectorConfig::preset("siso");
+  auto rec_mimo = DetectorConfig::preset("mimo");
+  auto pap_siso = DetectorConfig::paper_siso();
+  auto pap_mimo = DetectorConfig::paper_mimo();
+  pap_siso.alpha = rec_siso.alpha;
+  pap_siso.train_duration_s = rec_siso.train_duration_s;
+  pap_mimo.alpha = rec_mimo.alpha;
+  pap_mimo.train_duration_s = rec_mimo.train_duration_s;
+  pap_mimo.oe_structure = rec_mimo.oe_structure;
+  EXPECT_EQ(rec_siso.to_json(), pap_siso.to_json());
+  EXPECT_EQ(rec_mimo.to_json(), pap_mimo.to_json());
+  EXPECT_GT(rec_siso.alpha, 1.5);
+  EXPECT_DOUBLE_EQ(rec_siso.train_duration_s, 6 * 3600.0);  // before the paper's noise change at 7 h
+  EXPECT_GT(rec_mimo.alpha, 1.5);
+  EXPECT_DOUBLE_EQ(rec_mimo.train_duration_s, 8 * 3600.0);
+  EXPECT_EQ(rec_mimo.oe_structure, mpmpp::OeStructure::Fir);  // before the paper's noise change at 9.58 h
+  EXPECT_THROW(DetectorConfig::preset("sisoo"), mpmpp::InputError);
 }
 
 TEST(DetectorConfig, JsonRoundTripAndPresetOverrides) {

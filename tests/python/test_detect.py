@@ -47,6 +47,10 @@ def test_config_presets_and_errors(tmp_path):
     siso, mimo = make_config("paper_siso"), make_config("paper_mimo")
     assert (siso.arx_order_a, mimo.arx_order_a, mimo.arx_order_b) == (9, 18, 10)
     assert siso.window_samples(5.0) == 1440 and siso.inspection_windows() == 24
+    assert (siso.alpha, mimo.alpha) == (1.5, 1.5)  # Tables 1 and 3 verbatim
+    rec_siso, rec_mimo = make_config("siso"), make_config("mimo")
+    assert rec_siso.arx_order_a == 9 and rec_mimo.arx_order_a == 18
+    assert make_config(None).to_json() == rec_siso.to_json()  # the recommended preset is the default
     p = tmp_path / "cfg.json"
     p.write_text(json.dumps({"preset": "paper_mimo", "alpha": 3.0}))
     assert make_config(str(p)).alpha == 3.0
@@ -68,10 +72,14 @@ def siso_data(seed, hours=7.0, gain_change_h=None):
     return nominal_model(scen), mpmpp.simulate(scen, seed=seed)
 
 
+# The fixture's config (the earlier default): 3 h of training, alpha 8.
+TRAINED_CONFIG = {"preset": "paper_siso", "alpha": 8.0}
+
+
 @pytest.fixture(scope="module")
 def trained():
     model, data = siso_data(3, hours=7.5, gain_change_h=4.0)
-    result, detector = detect(model, data, 3 * 3600, "paper_siso", return_detector=True)
+    result, detector = detect(model, data, 3 * 3600, TRAINED_CONFIG, return_detector=True)
     return model, data, result, detector
 
 
@@ -173,9 +181,11 @@ def test_cli_detect_json(trained, tmp_path):
     import contextlib
     import io
 
+    (tmp_path / "cfg.json").write_text(json.dumps(TRAINED_CONFIG))
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
         code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "10800",
+                     "--config", str(tmp_path / "cfg.json"),
                      "--json", "--save-detector", str(tmp_path / "det.json")])
     assert code == 0
     d = json.loads(buf.getvalue())

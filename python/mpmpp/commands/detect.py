@@ -13,7 +13,7 @@ def add_arguments(parser) -> None:
                              "by then train the detector (the data must be free of mismatch there)")
     parser.add_argument("--config", metavar="FILE",
                         help="detector config JSON ({\"preset\": \"paper_siso\", \"alpha\": 2, ...}); "
-                             "default: the paper preset for the model's size")
+                             "or a preset name (siso, mimo, paper_siso, paper_mimo); default: the recommended preset (siso or mimo) for the model's size")
     parser.add_argument("--out", metavar="DIR", help="write scores/indicator plots (PNG) and detect.json there")
     parser.add_argument("--json", action="store_true", help="print one JSON document (FORMATS.md detect --json)")
     parser.add_argument("--save-detector", metavar="FILE",

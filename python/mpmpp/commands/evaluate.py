@@ -8,7 +8,7 @@ import json
 def add_arguments(parser) -> None:
     parser.add_argument("scenario", help="paper-siso | paper-mimo | a scenario JSON file")
     parser.add_argument("--seeds", type=int, default=20, metavar="N", help="runs with seeds 0..N-1 (default 20)")
-    parser.add_argument("--config", metavar="FILE", help="detector config JSON (default: the paper preset)")
+    parser.add_argument("--config", metavar="FILE", help="detector config JSON or preset name (siso, mimo, paper_siso, paper_mimo; default: the recommended preset for the model size)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="Dask scheduler address (tcp://host:8786); default: local processes")
     parser.add_argument("--workers", type=int, metavar="K", help="local processes (default: all cores)")

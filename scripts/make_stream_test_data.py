@@ -43,12 +43,13 @@ def write_dataset(out_dir: str) -> tuple[str, str]:
 
 
 def batch_detect(model_path: str, data_path: str, out_dir: str) -> dict:
-    """`mpmpp detect MODEL DATA --train-end 10800 --json --save-detector detector.json`."""
+    """`mpmpp detect MODEL DATA --train-end 10800 --config paper_siso --json --save-detector detector.json`
+    (the paper's Table 1 verbatim, so the data does not change when the default preset is retuned)."""
     from mpmpp import cli
 
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        code = cli.main(["detect", model_path, data_path, "--train-end", str(TRAIN_END_S), "--json",
+        code = cli.main(["detect", model_path, data_path, "--train-end", str(TRAIN_END_S), "--config", "paper_siso", "--json",
                          "--save-detector", os.path.join(out_dir, "detector.json")])
     if code != 0:
         raise SystemExit(f"mpmpp detect failed ({code})")

@@ -11,6 +11,7 @@ import pytest
 import mpmpp
 from mpmpp import _core
 from mpmpp.detect import Detector, detect, make_config
+from child_process import child_env
 
 TF = mpmpp.TransferFunction
 
@@ -135,7 +136,7 @@ def test_save_load_new_process_identical_scores(trained, tmp_path):
         f"r = d.monitor(mpmpp.load_data({str(csv)!r}, d.model))\n"
         "print(json.dumps({'scores': r.scores.tolist(), 'alarms': r.to_dict()['alarms']}))\n")
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True,
-                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+                         env=child_env())
     got = json.loads(out.stdout)
     np.testing.assert_array_equal(np.array(got["scores"]), result.scores)  # bit-identical
     assert got["alarms"] == result.to_dict()["alarms"]

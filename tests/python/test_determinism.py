@@ -11,8 +11,8 @@ import numpy as np
 
 import mpmpp
 from mpmpp import _core, identify, scenarios
+from child_process import child_env
 
-ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 
 # Prints one digest of everything random or iterative, computed in a fresh process.
 DIGEST = textwrap.dedent("""
@@ -35,8 +35,7 @@ DIGEST = textwrap.dedent("""
 
 
 def digest_in_child(threads):
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH", "")]),
-               OMP_NUM_THREADS=str(threads), OPENBLAS_NUM_THREADS=str(threads), MKL_NUM_THREADS=str(threads))
+    env = child_env(OMP_NUM_THREADS=str(threads), OPENBLAS_NUM_THREADS=str(threads), MKL_NUM_THREADS=str(threads))
     out = subprocess.run([sys.executable, "-c", DIGEST], capture_output=True, text=True, env=env, timeout=600)
     assert out.returncode == 0, out.stderr[-2000:]
     return out.stdout.strip()

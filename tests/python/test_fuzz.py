@@ -5,13 +5,13 @@ MPMPP_FUZZ_EXAMPLES sets the examples per property (CI default 40)."""
 import os
 import subprocess
 import sys
+from child_process import child_env
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def test_fuzz_properties_in_child_process():
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        [os.path.join(HERE, "..", "..", "python"), HERE, os.environ.get("PYTHONPATH", "")]))
+    env = child_env(HERE)
     examples = int(os.environ.get("MPMPP_FUZZ_EXAMPLES", "40"))
     proc = subprocess.run(
         [sys.executable, "-X", "faulthandler", "-m", "pytest", "-q", "-p", "no:cacheprovider",

@@ -17,6 +17,7 @@ import sys
 import textwrap
 
 import pytest
+from child_process import child_env
 
 # Names every row may use (built once in the child).
 PRELUDE = textwrap.dedent("""
@@ -192,8 +193,7 @@ CHILD = f"ROW_SECONDS = {ROW_SECONDS}\n" + PRELUDE + textwrap.dedent("""
 
 @pytest.fixture(scope="module")
 def outcomes(tmp_path_factory):
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        [os.path.join(os.path.dirname(__file__), "..", "..", "python"), os.environ.get("PYTHONPATH", "")]))
+    env = child_env()
     workdir = str(tmp_path_factory.mktemp("hostile"))
     todo = [list(row) for row in HOSTILE]
     results = {}

@@ -19,8 +19,8 @@ import pandas as pd
 import pytest
 
 import mpmpp
+from child_process import child_env
 
-ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 AWKWARD = [1 / 3, -2 / 7, 1e-300, 5e-324, 1.7976931348623157e308, 0.1 + 0.2, -0.0]
 
 
@@ -125,7 +125,7 @@ def test_kill_during_write_keeps_a_complete_file(tmp_path, kind):
         versions = [big_frame(1.0), big_frame(2.0)]
         mpmpp.save_data(path, versions[0])
         load = mpmpp.load_data
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([os.path.join(ROOT, "python"), os.environ.get("PYTHONPATH", "")]))
+    env = child_env()
     killed_mid_write = 0
     for _ in range(2):
         child = subprocess.Popen([sys.executable, "-c", WRITER, kind, str(path), os.path.dirname(__file__)],

@@ -52,7 +52,9 @@ class NormalEquationsSolver {
 
   Eigen::VectorXd scale_;
   Eigen::MatrixXd scaled_, shifted_;
-  Eigen::LLT<Eigen::MatrixXd> llt_;
+  // Factored once on an empty matrix so that copying a solver that has not solved yet
+  // copies a defined state (a default LLT leaves its info flag uninitialised: UBSan).
+  Eigen::LLT<Eigen::MatrixXd> llt_{Eigen::MatrixXd(0, 0)};
   double shift_ = 0.0;
 };
 

@@ -19,6 +19,7 @@ where it ran.
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import sys
 import time
@@ -125,6 +126,16 @@ def _progress(done: int, total: int, started: float) -> None:
           end="" if done < total else "\n", file=sys.stderr, flush=True)
 
 
+def _gather(completed, total: int, started: float, progress: bool) -> list:
+    """Results of finished futures (local or Dask), in completion order, with a progress bar."""
+    runs = []
+    for future in completed:
+        runs.append(future.result())
+        if progress:
+            _progress(len(runs), total, started)
+    return runs
+
+
 def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: bool = True) -> dict:
     """Runs every seed (a count N means seeds 0..N-1) and summarises (see ``summarise``).
 
@@ -138,15 +149,13 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
     config_json = cfg.to_json()
     payload = scenario  # a plain dict: travels to any worker
     started = time.perf_counter()
-    runs = []
     if scheduler is None:
         n = workers or os.cpu_count() or 1
-        with ProcessPoolExecutor(max_workers=n) as pool:
+        # forkserver, not fork: the parent may hold threads (BLAS, a Dask client, the test
+        # runner), and a forked child inheriting a held lock deadlocks.
+        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("forkserver")) as pool:
             futures = [pool.submit(run_seed, payload, s, config_json) for s in seeds]
-            for f in as_completed(futures):
-                runs.append(f.result())
-                if progress:
-                    _progress(len(runs), len(seeds), started)
+            runs = _gather(as_completed(futures), len(seeds), started, progress)
         where = f"{n} local processes"
     else:
         from dask.distributed import Client, as_completed as dask_completed
@@ -154,10 +163,7 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
         client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
         try:
             futures = client.map(run_seed, [payload] * len(seeds), seeds, [config_json] * len(seeds), pure=False)
-            for f in dask_completed(futures):
-                runs.append(f.result())
-                if progress:
-                    _progress(len(runs), len(seeds), started)
+            runs = _gather(dask_completed(futures), len(seeds), started, progress)
             where = f"Dask cluster {client.scheduler.address}"
         finally:
             if client is not scheduler:

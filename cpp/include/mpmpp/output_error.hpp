@@ -106,7 +106,8 @@ class OutputErrorEstimator {
   // Per channel, zero-padded (pad_ leading zeros) so lagged columns may reach t < 0.
   std::vector<Eigen::VectorXd> yhat_, w_, v_;
   OeResult candidate_;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  // Factored on an empty matrix so copies of an unfitted estimator are defined (UBSan).
+  Eigen::LDLT<Eigen::MatrixXd> ldlt_{Eigen::MatrixXd(0, 0)};
   // ArxOeEstimator checks the raw window once and turns the per-call check off.
   bool check_signals_ = true;
   friend class ArxOeEstimator;

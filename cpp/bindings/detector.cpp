@@ -55,6 +55,9 @@ void bind_detector(py::module_& m) {
       .def_property(
           "oe_structure", [](const DetectorConfig& c) { return std::string(to_string(c.oe_structure)); },
           [](DetectorConfig& c, const std::string& s) { c.oe_structure = oe_structure_from_string(s); })
+      .def_property(
+          "resampling", [](const DetectorConfig& c) { return std::string(to_string(c.resampling)); },
+          [](DetectorConfig& c, const std::string& s) { c.resampling = resampling_from_string(s); })
       .def_readwrite("arx_regularisation", &DetectorConfig::arx_regularisation)
       .def_static("paper_siso", &DetectorConfig::paper_siso)
       .def_static("paper_mimo", &DetectorConfig::paper_mimo)
@@ -108,6 +111,7 @@ void bind_detector(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("feature_mean", &ChannelScorer::feature_mean)
       .def_readwrite("feature_scale", &ChannelScorer::feature_scale)
+      .def_readwrite("feature_decorrelation", &ChannelScorer::feature_decorrelation)
       .def_readwrite("support_vectors", &ChannelScorer::support_vectors)
       .def_readwrite("dual_coef", &ChannelScorer::dual_coef)
       .def_readwrite("offset", &ChannelScorer::offset)

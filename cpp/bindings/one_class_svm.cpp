@@ -56,8 +56,12 @@ void bind_one_class_svm(py::module_& m) {
       py::arg("features"));
   m.def("draw_gaussian_models", &draw_gaussian_models, py::arg("mean"), py::arg("std"),
         py::arg("n"), py::arg("alpha"), py::arg("seed"), py::call_guard<py::gil_scoped_release>());
+  m.def("coefficient_covariance", &coefficient_covariance, py::arg("features"));
+  m.def("draw_correlated_gaussian_models", &draw_correlated_gaussian_models, py::arg("mean"),
+        py::arg("covariance"), py::arg("n"), py::arg("alpha"), py::arg("seed"),
+        py::call_guard<py::gil_scoped_release>());
   m.def("resample", &resample, py::arg("features"), py::arg("n"), py::arg("alpha") = 1.5,
-        py::arg("seed") = 0, py::call_guard<py::gil_scoped_release>());
+        py::arg("seed") = 0, py::arg("correlated") = false, py::call_guard<py::gil_scoped_release>());
 }
 
 }  // namespace mpmpp::bindings

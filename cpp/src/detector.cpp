@@ -19,6 +19,7 @@ using nlohmann::json;
 
 double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   RowMatrixXd z = ((x - feature_mean).array() / feature_scale.array()).matrix().transpose();
+  if (feature_decorrelation.size() != 0) z = z * feature_decorrelation.transpose();
   const double f = gaussian_kernel_expansion(support_vectors, dual_coef, kernel_scale, z)[0] - offset;
   return f / (nu * n_train);  // eq. 20: h = f / (nu l)
 }
@@ -38,6 +39,11 @@ void ChannelScorer::validate(int feature_length, const std::string& where) const
     fail("feature_mean/feature_scale must have " + std::to_string(feature_length) + " entries");
   if (!feature_mean.allFinite() || !feature_scale.allFinite() || (feature_scale.array() <= 0).any())
     fail("feature_scale must be finite and positive, feature_mean finite");
+  if (feature_decorrelation.size() != 0 &&
+      (feature_decorrelation.rows() != feature_length || feature_decorrelation.cols() != feature_length ||
+       !feature_decorrelation.allFinite()))
+    fail("feature_decorrelation must be empty or a finite " + std::to_string(feature_length) + " x " +
+         std::to_string(feature_length) + " matrix");
   if (support_vectors.rows() < 1 || support_vectors.cols() != feature_length)
     fail("support_vectors must be n_sv x " + std::to_string(feature_length));
   if (dual_coef.size() != support_vectors.rows()) fail("dual_coef must have one entry per support vector");
@@ -131,6 +137,11 @@ Eigen::VectorXd Detector::score_window(WindowFeatures& features, const Eigen::Re
 namespace {
 
 json vector_json(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
+json rows_json(const Eigen::Ref<const Eigen::MatrixXd>& m) {
+  json rows = json::array();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) rows.push_back(vector_json(m.row(r).transpose()));
+  return rows;
+}
 
 // Reads the detector file with every problem named by its JSON path.
 class Reader {
@@ -159,6 +170,18 @@ class Reader {
     for (size_t k = 0; k < j.size(); ++k) v[k] = number(j[k], path + "[" + std::to_string(k) + "]");
     return v;
   }
+  // An array of rows of `cols` numbers each (`rows_required`: at least one row).
+  RowMatrixXd matrix(const json& j, const std::string& path, Eigen::Index cols, bool rows_required) const {
+    if (!j.is_array() || (rows_required && j.empty())) fail(path, "expected a non-empty array of rows");
+    RowMatrixXd m(j.size(), cols);
+    for (size_t r = 0; r < j.size(); ++r) {
+      const std::string pr = path + "[" + std::to_string(r) + "]";
+      Eigen::VectorXd row = vector(j[r], pr);
+      if (row.size() != cols) fail(pr, "expected " + std::to_string(cols) + " numbers");
+      m.row(r) = row.transpose();
+    }
+    return m;
+  }
   const std::string& source() const { return source_; }
 
  private:
@@ -176,9 +199,6 @@ std::string Detector::to_json() const {
   for (size_t k = 0; k < channels_.size(); ++k) {
     const MonitoredChannel& c = channels_[k];
     const ChannelScorer& s = scorers_[k];
-    json sv = json::array();
-    for (Eigen::Index r = 0; r < s.support_vectors.rows(); ++r)
-      sv.push_back(vector_json(s.support_vectors.row(r).transpose()));
     json jc{{"kind", kind_name(c.kind)}, {"output", model_.outputs[c.output]}};
     if (c.kind == MonitoredChannel::Kind::Process) jc["input"] = model_.inputs[c.input];
     jc["training_windows"] = s.training_windows;
@@ -186,9 +206,10 @@ std::string Detector::to_json() const {
     jc["cv_accuracy"] = s.cv_accuracy < 0 ? json(nullptr) : json(s.cv_accuracy);
     jc["feature_mean"] = vector_json(s.feature_mean);
     jc["feature_scale"] = vector_json(s.feature_scale);
+    jc["feature_decorrelation"] = rows_json(s.feature_decorrelation);
     jc["svm"] = json{{"kernel_scale", s.kernel_scale}, {"nu", s.nu},     {"n_train", s.n_train},
                      {"offset", s.offset},             {"dual_coef", vector_json(s.dual_coef)},
-                     {"support_vectors", sv}};
+                     {"support_vectors", rows_json(s.support_vectors)}};
     channels.push_back(std::move(jc));
   }
   // nlohmann writes doubles in their shortest round-trip form: a reload scores identically.
@@ -249,16 +270,11 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
     s.n_train = rd.integer(rd.field(svm, ps, "n_train"), ps + ".n_train");
     s.offset = rd.number(rd.field(svm, ps, "offset"), ps + ".offset");
     s.dual_coef = rd.vector(rd.field(svm, ps, "dual_coef"), ps + ".dual_coef");
-    const json& sv = rd.field(svm, ps, "support_vectors");
-    if (!sv.is_array() || sv.empty()) rd.fail(ps + ".support_vectors", "expected a non-empty array of rows");
     const Eigen::Index m = s.feature_mean.size();
-    s.support_vectors.resize(sv.size(), m);
-    for (size_t r = 0; r < sv.size(); ++r) {
-      const std::string pr = ps + ".support_vectors[" + std::to_string(r) + "]";
-      Eigen::VectorXd row = rd.vector(sv[r], pr);
-      if (row.size() != m) rd.fail(pr, "expected " + std::to_string(m) + " numbers");
-      s.support_vectors.row(r) = row.transpose();
-    }
+    s.support_vectors = rd.matrix(rd.field(svm, ps, "support_vectors"), ps + ".support_vectors", m, true);
+    if (version >= 2)  // version 1 files predate it: identity
+      s.feature_decorrelation =
+          rd.matrix(rd.field(c, p, "feature_decorrelation"), p + ".feature_decorrelation", m, false);
     scorers.push_back(std::move(s));
   }
   try {

@@ -77,9 +77,41 @@ RowMatrixXd draw_gaussian_models(const Eigen::Ref<const Eigen::VectorXd>& mean,
   return draws;
 }
 
+Eigen::MatrixXd coefficient_covariance(const Eigen::Ref<const RowMatrixXd>& features) {
+  const CoefficientStatistics s = coefficient_statistics(features);  // validates the shape
+  const RowMatrixXd centred = features.rowwise() - s.mean.transpose();
+  return centred.transpose() * centred / static_cast<double>(features.rows() - 1);
+}
+
+RowMatrixXd draw_correlated_gaussian_models(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                                            const Eigen::Ref<const Eigen::MatrixXd>& covariance, int n,
+                                            double alpha, std::uint64_t seed) {
+  if (!(alpha >= 0) || !std::isfinite(alpha))
+    throw InputError("alpha: width factor must be a finite number >= 0, got " + std::to_string(alpha));
+  if (covariance.rows() != mean.size() || covariance.cols() != mean.size() || mean.size() < 1)
+    throw InputError("covariance: must be m x m with m = length of mean (>= 1)");
+  if (!covariance.allFinite()) throw InputError("covariance: must be finite");
+  const Eigen::LLT<Eigen::MatrixXd> llt(covariance);
+  // L_ii^2 / S_ii = 1 - R^2 of coefficient i regressed on the earlier ones: below 1e-10 the
+  // covariance is singular up to rounding (e.g. fewer windows than coefficients).
+  const bool singular = llt.info() != Eigen::Success ||
+                        (llt.matrixL().toDenseMatrix().diagonal().array().square() <=
+                         1e-10 * covariance.diagonal().array())
+                            .any();
+  if (singular)
+    throw InputError("covariance: not positive definite (a coefficient that never varies, or "
+                     "fewer training windows than coefficients)");
+  // Standard normals from the same stream and in the same order as the independent draws.
+  const RowMatrixXd v = draw_gaussian_models(Eigen::VectorXd::Zero(mean.size()),
+                                             Eigen::VectorXd::Ones(mean.size()), n, 1.0, seed);
+  return (v * (alpha * llt.matrixL().toDenseMatrix()).transpose()).rowwise() + mean.transpose();
+}
+
 RowMatrixXd resample(const Eigen::Ref<const RowMatrixXd>& features, int n, double alpha,
-                     std::uint64_t seed) {
+                     std::uint64_t seed, bool correlated) {
   const CoefficientStatistics s = coefficient_statistics(features);
+  if (correlated)
+    return draw_correlated_gaussian_models(s.mean, coefficient_covariance(features), n, alpha, seed);
   return draw_gaussian_models(s.mean, s.std, n, alpha, seed);
 }
 

@@ -72,12 +72,27 @@ def _channel_seed(seed: int, channel: int) -> int:
                >> np.uint64(1))
 
 
+def _independent_windows(n_windows: int, config: DetectorConfig) -> int:
+    """Non-overlapping windows spanned by n_windows consecutive moving windows."""
+    return int((config.window_s + (n_windows - 1) * config.step_s) // config.window_s)
+
+
 def train_scorer(estimates: np.ndarray, config: DetectorConfig, seed: int) -> _core.ChannelScorer:
     """The trained SVM of one channel from its training-window estimates (rows)."""
     X = np.asarray(estimates, dtype=float)
     d = X.shape[1]
-    # Sec. 4.2: N synthetic models, coefficient i ~ N(mu_i, (alpha sigma_i)^2).
-    Z = resample(X, int(config.resampled_models), float(config.alpha), seed)
+    correlated = config.resampling == "covariance" and _independent_windows(X.shape[0], config) > d
+    try:
+        # Sec. 4.2: N synthetic models, coefficient i ~ N(mu_i, (alpha sigma_i)^2), or with the
+        # coefficients' covariance (DetectorConfig.resampling).
+        Z = resample(X, int(config.resampled_models), float(config.alpha), seed, correlated=correlated)
+    except ValueError:
+        if not correlated:
+            raise
+        # A singular covariance (a coefficient that never varies, collinear estimates): the
+        # paper's independent draws, as documented for Resampling::Covariance.
+        correlated = False
+        Z = resample(X, int(config.resampled_models), float(config.alpha), seed)
     if config.standardise:
         # FIR coefficients are ~0.01-0.1, so with the paper's c = 1 the raw kernel
         # exp(-||x - y||^2) is ~1 everywhere and the SVM degenerates to a sphere in the
@@ -89,7 +104,16 @@ def train_scorer(estimates: np.ndarray, config: DetectorConfig, seed: int) -> _c
         scale = np.where(scale > 0, scale, 1.0)  # a coefficient that never varies (alpha sigma = 0)
     else:
         mean, scale = np.zeros(d), np.ones(d)
-    Zs = np.ascontiguousarray((Z - mean) / scale)
+    Zs = (Z - mean) / scale
+    decorrelation = np.zeros((0, 0))
+    if correlated and config.standardise:
+        # Whitening: with R the correlation matrix of the resampled models and R = L L',
+        # z = L^-1 (x - mean) / (std sqrt(d)) has covariance I / d, so the kernel with c = 1
+        # measures Mahalanobis distance: a shift along a precise direction (the gain) counts
+        # as much as along a loose one.
+        decorrelation = np.linalg.inv(np.linalg.cholesky(np.corrcoef(Z, rowvar=False)))
+        Zs = Zs @ decorrelation.T
+    Zs = np.ascontiguousarray(Zs)
     cv_accuracy = -1.0
     if config.outlier_fraction >= 0:
         fraction = float(config.outlier_fraction)
@@ -101,7 +125,7 @@ def train_scorer(estimates: np.ndarray, config: DetectorConfig, seed: int) -> _c
     svm = OneClassSVM(nu=float(config.nu), kernel_scale=float(config.kernel_scale),
                       outlier_fraction=fraction).fit(Zs)
     s = _core.ChannelScorer()
-    s.feature_mean, s.feature_scale = mean, scale
+    s.feature_mean, s.feature_scale, s.feature_decorrelation = mean, scale, decorrelation
     s.support_vectors = np.ascontiguousarray(Zs[svm.support_])
     s.dual_coef = np.asarray(svm.dual_coef_[0], dtype=float)
     s.offset = float(svm.offset_)

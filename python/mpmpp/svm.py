@@ -264,13 +264,15 @@ def coefficient_statistics(features):
     return _core.coefficient_statistics(np.ascontiguousarray(features, dtype=np.float64))
 
 
-def resample(features, n, alpha=1.5, seed=0):
+def resample(features, n, alpha=1.5, seed=0, correlated=False):
     """n synthetic FIR models, coefficient i ~ N(mu_i, (alpha sigma_i)^2) independently
     (paper Section 4.2), from the training-window estimates ``features`` (N_k x m, N_k >= 2).
+    ``correlated=True``: rows ~ N(mu, alpha^2 S) with the coefficients' sample covariance S
+    (mpmpp's extension, see resampling.hpp; ValueError when S is not positive definite).
     Deterministic per seed (std::mt19937_64 + Marsaglia's polar method, see resampling.hpp)."""
     if isinstance(n, bool) or not isinstance(n, Integral):
         raise ValueError(f"n: must be an integer, got {n!r}")
     if isinstance(seed, bool) or not isinstance(seed, Integral) or seed < 0:
         raise ValueError(f"seed: must be a non-negative integer, got {seed!r}")
     return _core.resample(np.ascontiguousarray(features, dtype=np.float64), int(n), float(alpha),
-                          int(seed))
+                          int(seed), bool(correlated))

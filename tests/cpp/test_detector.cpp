@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -26,11 +27,15 @@ Model siso_model() {
 }
 
 // A scorer with random support vectors: the file format does not care how it was trained.
-ChannelScorer random_scorer(int d, std::mt19937_64& rng) {
+// decorrelated: with a random lower-triangular feature_decorrelation (Resampling::Covariance).
+ChannelScorer random_scorer(int d, std::mt19937_64& rng, bool decorrelated) {
   std::normal_distribution<double> n(0.0, 1.0);
   ChannelScorer s;
   s.feature_mean = Eigen::VectorXd::NullaryExpr(d, [&] { return 0.01 * n(rng); });
   s.feature_scale = Eigen::VectorXd::NullaryExpr(d, [&] { return 0.001 + std::abs(n(rng)); });
+  if (decorrelated)
+    s.feature_decorrelation =
+        Eigen::MatrixXd::NullaryExpr(d, d, [&] { return n(rng); }).triangularView<Eigen::Lower>();
   s.support_vectors = RowMatrixXd::NullaryExpr(7, d, [&] { return n(rng) / 3.0; });
   s.dual_coef = Eigen::VectorXd::NullaryExpr(7, [&] { return 0.1 + 0.9 * std::abs(std::tanh(n(rng))); });
   s.offset = 0.123456789012345678;
@@ -49,7 +54,7 @@ Detector random_detector() {
   DetectorConfig c = DetectorConfig::paper_siso();
   WindowFeatures f(m, c);
   std::vector<ChannelScorer> scorers;
-  for (size_t k = 0; k < f.channels().size(); ++k) scorers.push_back(random_scorer(f.feature_length(k), rng));
+  for (size_t k = 0; k < f.channels().size(); ++k) scorers.push_back(random_scorer(f.feature_length(k), rng, k == 0));
   return Detector(m, c, 10800.0, scorers);
 }
 
@@ -83,12 +88,29 @@ TEST(Detector, SaveLoadRoundTripIsExact) {
     // eq. 20 written out: h = (sum_i a_i exp(-||sv_i - z||^2 / c) - offset) / (nu l)
     const ChannelScorer& s = d.scorers()[k];
     Eigen::VectorXd z = (X.row(3).transpose() - s.feature_mean).cwiseQuotient(s.feature_scale);
+    if (s.feature_decorrelation.size() != 0) z = s.feature_decorrelation * z;
     double sum = 0;
     for (int i = 0; i < s.support_vectors.rows(); ++i)
       sum += s.dual_coef[i] * std::exp(-(s.support_vectors.row(i).transpose() - z).squaredNorm() / s.kernel_scale);
     EXPECT_NEAR(a[3], (sum - s.offset) / (s.nu * s.n_train), 1e-12);
   }
+  EXPECT_EQ(back.scorers()[0].feature_decorrelation, d.scorers()[0].feature_decorrelation);
   std::remove(path.c_str());
+}
+
+TEST(Detector, VersionOneFilesLoadWithoutDecorrelation) {
+  nlohmann::json doc = nlohmann::json::parse(random_detector().to_json());
+  doc["version"] = 1;  // written before feature_decorrelation existed
+  for (auto& c : doc["channels"]) c.erase("feature_decorrelation");
+  const Detector old = Detector::from_json(doc.dump(), "v1.json");
+  for (const ChannelScorer& s : old.scorers()) EXPECT_EQ(s.feature_decorrelation.size(), 0);
+  doc["version"] = 2;  // the field is required from version 2 on
+  try {
+    Detector::from_json(doc.dump(), "v2.json");
+    FAIL() << "a version 2 file without feature_decorrelation loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing field 'feature_decorrelation'"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Detector, CorruptTruncatedOrNewerFilesAreClearErrors) {
@@ -105,7 +127,7 @@ TEST(Detector, CorruptTruncatedOrNewerFilesAreClearErrors) {
   expect_error(text.substr(0, text.size() / 2), "truncated or corrupt");
   expect_error("", "truncated or corrupt");
   std::string newer = text;
-  newer.replace(newer.find("\"version\": 1"), 12, "\"version\": 7");
+  newer.replace(newer.find("\"version\": 2"), 12, "\"version\": 7");
   expect_error(newer, "version 7");
   std::string foreign = text;
   foreign.replace(foreign.find("mpmpp-detector"), 14, "something-else");

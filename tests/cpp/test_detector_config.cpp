@@ -33,13 +33,16 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
   pap_mimo.alpha = rec_mimo.alpha;
   pap_mimo.train_duration_s = rec_mimo.train_duration_s;
   pap_mimo.oe_structure = rec_mimo.oe_structure;
+  pap_mimo.resampling = rec_mimo.resampling;
   EXPECT_EQ(rec_siso.to_json(), pap_siso.to_json());
   EXPECT_EQ(rec_mimo.to_json(), pap_mimo.to_json());
   EXPECT_GT(rec_siso.alpha, 1.5);
   EXPECT_DOUBLE_EQ(rec_siso.train_duration_s, 6 * 3600.0);  // before the paper's noise change at 7 h
   EXPECT_GT(rec_mimo.alpha, 1.5);
   EXPECT_DOUBLE_EQ(rec_mimo.train_duration_s, 8 * 3600.0);
-  EXPECT_EQ(rec_mimo.oe_structure, mpmpp::OeStructure::Fir);  // before the paper's noise change at 9.58 h
+  EXPECT_EQ(rec_mimo.oe_structure, mpmpp::OeStructure::Fir);
+  EXPECT_EQ(rec_mimo.resampling, mpmpp::Resampling::Covariance);
+  EXPECT_EQ(pap_siso.resampling, mpmpp::Resampling::Independent);  // Sec. 4.2 as printed
   EXPECT_THROW(DetectorConfig::preset("sisoo"), mpmpp::InputError);
 }
 

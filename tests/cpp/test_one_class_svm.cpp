@@ -96,6 +96,23 @@ TEST(OneClassSvm, RejectsBadInput) {
   EXPECT_THROW(mpmpp::fit_one_class_svm(RowMatrixXd(0, 2), o), mpmpp::InputError);
 }
 
+TEST(Resampling, CorrelatedDrawsHaveTheSampleCovariance) {
+  RowMatrixXd windows = random_points(8, 3, 5);
+  windows.col(1) = -windows.col(0) + 0.1 * windows.col(1);  // strongly anti-correlated pair
+  const Eigen::MatrixXd S = mpmpp::coefficient_covariance(windows);
+  const RowMatrixXd centred = windows.rowwise() - windows.colwise().mean();
+  EXPECT_LT((S - centred.transpose() * centred / 7.0).cwiseAbs().maxCoeff(), 1e-14);
+  const RowMatrixXd a = mpmpp::resample(windows, 100000, 2.0, 11, true);
+  EXPECT_EQ((a - mpmpp::resample(windows, 100000, 2.0, 11, true)).cwiseAbs().maxCoeff(), 0.0);
+  const RowMatrixXd ac = a.rowwise() - a.colwise().mean();
+  const Eigen::MatrixXd C = ac.transpose() * ac / 99999.0;
+  const Eigen::VectorXd sd = S.diagonal().cwiseSqrt();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(C(i, j) / (sd[i] * sd[j]), 4.0 * S(i, j) / (sd[i] * sd[j]), 0.05);
+  // Fewer windows than coefficients: a singular covariance is an error, not a silent guess.
+  EXPECT_THROW(mpmpp::resample(windows.topRows(3), 10, 1.5, 0, true), mpmpp::InputError);
+}
+
 TEST(Resampling, DeterministicPerSeedWithTargetMoments) {
   const RowMatrixXd windows = random_points(6, 5, 4);
   const auto s = mpmpp::coefficient_statistics(windows);

@@ -73,6 +73,31 @@ def test_draws_are_exactly_the_documented_stream():
     np.testing.assert_allclose(draws, mu + 1.5 * sd * z, rtol=1e-14, atol=1e-17)
 
 
+def test_correlated_draws_are_mean_plus_cholesky_factor_times_the_same_stream():
+    windows = fir_windows(9, 3, 5)
+    draws = mpmpp.resample(windows, 40, alpha=2.0, seed=99, correlated=True)
+    S = np.cov(windows, rowvar=False)
+    z = polar_normals(99, 40 * 3).reshape(40, 3)  # the same stream as the independent draws
+    np.testing.assert_allclose(draws, windows.mean(0) + 2.0 * z @ np.linalg.cholesky(S).T,
+                               rtol=0, atol=1e-12)
+
+
+def test_correlated_draws_have_the_sample_covariance():
+    windows = fir_windows(7, 3, 6)  # neighbouring FIR coefficients: correlation near 1
+    S = np.cov(windows, rowvar=False)
+    n, alpha = 100_000, 1.5
+    draws = mpmpp.resample(windows, n, alpha=alpha, seed=3, correlated=True)
+    C = np.cov(draws, rowvar=False)
+    sd = np.sqrt(np.diag(S))
+    np.testing.assert_allclose(C / np.outer(sd, sd), alpha ** 2 * S / np.outer(sd, sd), atol=0.03)
+    np.testing.assert_allclose(mpmpp._core.coefficient_covariance(windows), S, rtol=1e-12)
+
+
+def test_correlated_resampling_needs_a_positive_definite_covariance():
+    with pytest.raises(ValueError, match="not positive definite"):
+        mpmpp.resample(fir_windows(3, 5, 7), 10, correlated=True)  # 3 windows, 5 coefficients
+
+
 def test_statistics_match_numpy():
     windows = fir_windows(8, 30, 2)
     mean, std = coefficient_statistics(windows)

@@ -26,10 +26,13 @@
 namespace mpmpp {
 
 // The trained SVM of one channel and the standardisation of its features:
-// z = (x - feature_mean) / feature_scale,  h(x) = (sum_i dual_coef_i k(sv_i, z) - offset) / (nu l)
-// (eq. 20 in the paper's scaling: same sign as scikit-learn's decision_function).
+// z = D ((x - feature_mean) / feature_scale),  h(x) = (sum_i dual_coef_i k(sv_i, z) - offset) / (nu l)
+// (eq. 20 in the paper's scaling: same sign as scikit-learn's decision_function), with
+// D = feature_decorrelation (lower triangular, the inverse Cholesky factor of the resampled
+// coefficients' correlation matrix, Resampling::Covariance) or the identity when it is empty.
 struct ChannelScorer {
   Eigen::VectorXd feature_mean, feature_scale;
+  Eigen::MatrixXd feature_decorrelation;  // empty or m x m
   RowMatrixXd support_vectors;  // in the standardised space
   Eigen::VectorXd dual_coef;    // libsvm scaling, in (0, 1]
   double offset = 0;            // libsvm scaling, after the outlier-fraction shift
@@ -95,7 +98,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 1;
+  static constexpr int kFormatVersion = 2;  // 2 added feature_decorrelation
 
  private:
   Model model_;

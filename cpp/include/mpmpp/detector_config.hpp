@@ -21,6 +21,15 @@ enum class OeStructure {
   Fir,    // fir_length coefficients after the nominal delay (Remark 3: no structure assumed)
 };
 
+// How the training-window estimates are enlarged into the SVM's training set (Sec. 4.2).
+enum class Resampling {
+  Independent,  // the paper: independent Gaussian per coefficient
+  // mpmpp: one Gaussian with the coefficients' sample covariance, on channels whose training
+  // period holds more non-overlapping windows than coefficients (a covariance from fewer is
+  // singular); the others fall back to Independent. See resampling.hpp for why.
+  Covariance,
+};
+
 struct DetectorConfig {
   double window_s = 7200.0;          // W_size: moving-window length
   double step_s = 300.0;             // W_step: moving-window step
@@ -44,6 +53,7 @@ struct DetectorConfig {
   std::uint64_t seed = 0;            // resampling and cross-validation seed
   OeStructure oe_structure = OeStructure::Foptd;
   double arx_regularisation = 1e-4;  // delta of the paper's R_reg rule (Sec. 3.1)
+  Resampling resampling = Resampling::Independent;
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the
   // choices the paper leaves open are documented next to their values in detector_config.cpp.
@@ -73,5 +83,7 @@ struct DetectorConfig {
 
 const char* to_string(OeStructure s);
 OeStructure oe_structure_from_string(const std::string& s);
+const char* to_string(Resampling r);
+Resampling resampling_from_string(const std::string& s);
 
 }  // namespace mpmpp

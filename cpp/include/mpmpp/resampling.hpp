@@ -33,8 +33,23 @@ RowMatrixXd draw_gaussian_models(const Eigen::Ref<const Eigen::VectorXd>& mean,
                                  const Eigen::Ref<const Eigen::VectorXd>& std, int n, double alpha,
                                  std::uint64_t seed);
 
-// coefficient_statistics followed by draw_gaussian_models: the enlarged training set.
+// n x m matrix of correlated draws, row ~ N(mean, alpha^2 covariance): mean + alpha L v with
+// covariance = L L' (Cholesky; InputError when it is not positive definite) and v drawn from the
+// same normal stream as draw_gaussian_models.
+RowMatrixXd draw_correlated_gaussian_models(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                                            const Eigen::Ref<const Eigen::MatrixXd>& covariance, int n,
+                                            double alpha, std::uint64_t seed);
+
+// Sample covariance (divisor N_k - 1) of the rows of `features` (N_k >= 2, finite).
+Eigen::MatrixXd coefficient_covariance(const Eigen::Ref<const RowMatrixXd>& features);
+
+// The enlarged training set. correlated = false: the paper's independent per-coefficient
+// Gaussians (coefficient_statistics + draw_gaussian_models). correlated = true (mpmpp's
+// extension): one multivariate Gaussian with the coefficients' sample covariance. Why: under
+// feedback the inputs are strongly autocorrelated, so neighbouring FIR coefficients of one window
+// are estimated with a strong negative correlation (their sum, the gain, is far more precise than
+// either); independent draws lose that and fill a box in which a doubled gain still fits.
 RowMatrixXd resample(const Eigen::Ref<const RowMatrixXd>& features, int n, double alpha = 1.5,
-                     std::uint64_t seed = 0);
+                     std::uint64_t seed = 0, bool correlated = false);
 
 }  // namespace mpmpp

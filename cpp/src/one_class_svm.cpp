@@ -42,8 +42,11 @@ class PackedPoints {
       : n_(static_cast<int>(X.rows())), m_(static_cast<int>(X.cols())),
         n_pad_((n_ + kPanel - 1) / kPanel * kPanel),
         data_(static_cast<size_t>(n_pad_) * m_, 0.0) {
-    for (int j = 0; j < n_; ++j)
-      for (int k = 0; k < m_; ++k) at(j, k) = X(j, k);
+    for (int j = 0; j < n_; ++j) {
+      const double* row = X.row(j).data();
+      double* dst = data_.data() + offset(j, 0);
+      for (int k = 0; k < m_; ++k) dst[static_cast<size_t>(k) * kPanel] = row[k];
+    }
   }
   int size() const { return n_; }
   int padded_size() const { return n_pad_; }
@@ -175,6 +178,7 @@ void dot_tile(const double* q, int n_q, int m, const double* packed, int panel0,
 // reduction x = n ln2 + r, |r| <= ln2 / 2, and the degree-11 Taylor polynomial of e^r (truncation
 // error below 1e-21). Inlined into each CPU clone.
 typedef long long Vec4i __attribute__((vector_size(32)));
+typedef float Vec4f __attribute__((vector_size(16)));
 
 __attribute__((always_inline)) inline void vexp(Vec4& x) {
   const Vec4 lo = {-708.0, -708.0, -708.0, -708.0}, hi = {709.0, 709.0, 709.0, 709.0};
@@ -217,7 +221,8 @@ void gaussian_column(const double* dots, const double* sq, double sq_i, double g
     MPMPP_LOAD4(q, sq + j);
     Vec4 v = -gamma * ((sq_i + q) - 2 * d);
     vexp(v);
-    for (int t = 0; t < 4; ++t) out[j + t] = static_cast<float>(v[t]);
+    const Vec4f f = __builtin_convertvector(v, Vec4f);  // round to nearest, as static_cast
+    __builtin_memcpy(out + j, &f, sizeof f);
   }
   for (; j < n; ++j)
     out[j] = static_cast<float>(std::exp(-gamma * (sq_i + sq[j] - 2 * dots[j])));
@@ -245,6 +250,121 @@ double gaussian_sum(const double* dots, const double* sq, const double* coef, do
   for (; j < n; ++j)
     sum += coef[j] * std::exp(-gamma * std::max(0.0, x_sq + sq[j] - 2 * dots[j]));
   return sum;
+}
+
+// The two scans of the working-set selection (select_working_set below), 4 lanes at a time and
+// two lane groups (independent dependency chains). Every lane keeps its best value and the last
+// index reaching it; merging the lanes by (best value, then largest index) and finishing the
+// tail in order gives exactly the index the plain sequential scan with ">=" / "<=" picks, and
+// the arithmetic per element is the same (2 q is exact, so a fused 2 - 2 q rounds as the
+// separate operations do). Bound masks come from alpha itself (upper: alpha >= 1, lower:
+// alpha <= 0, the solver's status rule).
+struct LaneBest {
+  Vec4 value;
+  Vec4i index;
+};
+
+// Merge the lanes: the best value (larger when maximise, else smaller), ties to the largest index.
+template <bool maximise>
+int merge_lanes(const LaneBest* groups, int n_groups, double& best) {
+  int idx = -1;
+  for (int g = 0; g < n_groups; ++g)
+    for (int k = 0; k < 4; ++k) {
+      const double v = groups[g].value[k];
+      const int i = static_cast<int>(groups[g].index[k]);
+      if (i != -1 && (idx == -1 || (maximise ? v > best : v < best) || (v == best && i > idx))) {
+        best = v;
+        idx = i;
+      }
+    }
+  return idx;
+}
+
+// i = the last t < n with alpha_t < 1 maximising -G_t; gmax = -G_i (-inf and -1 when none).
+MPMPP_CPU_CLONES
+int max_violating_up(const double* grad, const double* alpha, int n, double& gmax) {
+  const Vec4 one = {1.0, 1.0, 1.0, 1.0};
+  LaneBest lane[2];
+  for (LaneBest& l : lane) {
+    l.value = -one * kInf;
+    l.index = Vec4i{} - 1;
+  }
+  Vec4i idx = {0, 1, 2, 3};
+  int t = 0;
+  for (; t + 8 <= n; t += 8, idx += 8)
+    for (int g = 0; g < 2; ++g) {
+      Vec4 v, a;
+      MPMPP_LOAD4(v, grad + t + 4 * g);
+      MPMPP_LOAD4(a, alpha + t + 4 * g);
+      v = -v;
+      const Vec4i take = (a < one) & (v >= lane[g].value);
+      lane[g].value = take ? v : lane[g].value;
+      lane[g].index = take ? idx + 4 * g : lane[g].index;
+    }
+  gmax = -kInf;
+  int i = merge_lanes<true>(lane, 2, gmax);
+  for (; t < n; ++t)
+    if (alpha[t] < 1.0 && -grad[t] >= gmax) {
+      gmax = -grad[t];
+      i = t;
+    }
+  if (i != -1) gmax = -grad[i];
+  return i;
+}
+
+// j = the last t < n with alpha_t > 0 and G_t > -gmax minimising the second-order objective
+// change -(gmax + G_t)^2 / (Q_ii + Q_tt - 2 Q_it) (Q_tt = 1, q_i = column i; -1 when none);
+// gmax2 = max G_t over alpha_t > 0.
+MPMPP_CPU_CLONES
+int second_order_partner(const double* grad, const double* alpha, const float* q_i, double gmax,
+                         int n, double& gmax2) {
+  const Vec4 zero = {}, one = {1.0, 1.0, 1.0, 1.0}, tau = one * kTau;
+  LaneBest lane[2];
+  Vec4 g_best[2];
+  for (int g = 0; g < 2; ++g) {
+    lane[g].value = one * kInf;
+    lane[g].index = Vec4i{} - 1;
+    g_best[g] = -one * kInf;
+  }
+  Vec4i idx = {0, 1, 2, 3};
+  int t = 0;
+  // Without an i (gmax = -inf) no G_t - G_i is positive and q_i is never read.
+  const int n_vec = q_i != nullptr ? n : 0;
+  for (; t + 8 <= n_vec; t += 8, idx += 8)
+    for (int g = 0; g < 2; ++g) {
+      Vec4 grad_t, a;
+      MPMPP_LOAD4(grad_t, grad + t + 4 * g);
+      MPMPP_LOAD4(a, alpha + t + 4 * g);
+      Vec4f qf;
+      __builtin_memcpy(&qf, q_i + t + 4 * g, sizeof qf);
+      const Vec4i up = a > zero;
+      g_best[g] = (up & (grad_t >= g_best[g])) ? grad_t : g_best[g];
+      const Vec4 grad_diff = gmax + grad_t;
+      const Vec4 quad_coef = 2.0 - 2.0 * __builtin_convertvector(qf, Vec4);
+      const Vec4 obj_diff = -(grad_diff * grad_diff) / (quad_coef > zero ? quad_coef : tau);
+      const Vec4i take = up & (grad_diff > zero) & (obj_diff <= lane[g].value);
+      lane[g].value = take ? obj_diff : lane[g].value;
+      lane[g].index = take ? idx + 4 * g : lane[g].index;
+    }
+  gmax2 = -kInf;
+  for (const Vec4& v : g_best)
+    for (int k = 0; k < 4; ++k) gmax2 = std::max(gmax2, v[k]);
+  double obj_diff_min = kInf;
+  int j = merge_lanes<false>(lane, 2, obj_diff_min);
+  for (; t < n; ++t) {
+    if (!(alpha[t] > 0.0)) continue;
+    const double grad_diff = gmax + grad[t];
+    if (grad[t] >= gmax2) gmax2 = grad[t];
+    if (grad_diff > 0) {
+      const double quad_coef = 2.0 - 2.0 * q_i[t];
+      const double obj_diff = -(grad_diff * grad_diff) / (quad_coef > 0 ? quad_coef : kTau);
+      if (obj_diff <= obj_diff_min) {
+        j = t;
+        obj_diff_min = obj_diff;
+      }
+    }
+  }
+  return j;
 }
 
 // Gaussian kernel matrix Q_ij = exp(-gamma ||x_i - x_j||^2), gamma = 1/c (eq 15), seen through
@@ -282,6 +402,38 @@ class KernelColumns {
     }
     link_last(i);
     return h.data.data();
+  }
+
+  // Length of the cached part of column i (0 when not cached).
+  int cached_length(int i) const { return columns_[i].len; }
+
+  // How many columns of length len still fit in the budget without evicting any.
+  std::int64_t free_columns(int len) const { return budget_ / std::max(len, 1); }
+
+  // Computes and caches the columns of four uncached points over [0, len) in one pass over the
+  // data, the last of them becoming the most recently used. One column alone is bounded by the
+  // memory traffic of reading every point (the dots of one query do one multiply-add per load);
+  // the 4-query tile of dot_tile shares each load between four columns, so the four cost about
+  // as much as one. Values are identical to column()'s (same dot_tile sums, same expression).
+  void compute_four(const int* points, int len) {
+    const int m = x_.features();
+    const int n_panels = (len + kPanel - 1) / kPanel, ld = n_panels * kPanel;
+    queries_.resize(4 * m);
+    four_dots_.resize(static_cast<size_t>(4) * ld);
+    for (int p = 0; p < 4; ++p)
+      for (int k = 0; k < m; ++k) queries_[p * m + k] = x_.at(points[p], k);
+    dot_tile(queries_.data(), 4, m, x_.data(), 0, n_panels, four_dots_.data(), ld);
+    for (int p = 0; p < 4; ++p) {
+      const int i = points[p];
+      Column& h = columns_[i];
+      while (budget_ < len) evict(sentinel().next);
+      h.data.resize(len);
+      budget_ -= len;
+      gaussian_column(four_dots_.data() + static_cast<size_t>(p) * ld, sq_norm_.data(), sq_norm_[i],
+                      gamma_, len, h.data.data());
+      h.len = len;
+      link_last(i);
+    }
   }
 
   // Columns c0 .. c0 + nc - 1 over all l points (before any shrinking), by one matrix product.
@@ -385,6 +537,7 @@ class KernelColumns {
   std::vector<Column> columns_;  // l_ heads plus the LRU list's sentinel at index l_
   std::int64_t budget_;          // floats still available
   Eigen::VectorXd dots_, point_;
+  std::vector<double> queries_, four_dots_;  // compute_four's buffers
 };
 
 // SMO for  min 1/2 alpha' Q alpha  s.t.  0 <= alpha_i <= 1,  sum alpha_i = nu l  (the libsvm
@@ -498,35 +651,40 @@ class SmoSolver {
   // over I_low with G_j > G_i. Returns true when the violation max(-G, I_up) + max(G, I_low)
   // is below tol (or no pair improves), i.e. the KKT conditions hold to tol.
   bool select_working_set(int& out_i, int& out_j) {
-    double gmax = -kInf;
-    int gmax_idx = -1;
-    for (int t = 0; t < active_size_; ++t)
-      if (!is_upper(t) && -grad_[t] >= gmax) {
-        gmax = -grad_[t];
-        gmax_idx = t;
-      }
-    const int i = gmax_idx;
+    double gmax, gmax2;
+    const int i = max_violating_up(grad_.data(), alpha_.data(), active_size_, gmax);
+    if (i != -1 && q_.cached_length(i) == 0) prefetch_with(i);
     const float* q_i = i != -1 ? q_.column(i, active_size_) : nullptr;
-    double gmax2 = -kInf;
-    int gmin_idx = -1;
-    double obj_diff_min = kInf;
-    for (int j = 0; j < active_size_; ++j) {
-      if (is_lower(j)) continue;
-      const double grad_diff = gmax + grad_[j];
-      if (grad_[j] >= gmax2) gmax2 = grad_[j];
-      if (grad_diff > 0) {
-        const double quad_coef = 2.0 - 2.0 * q_i[j];  // Q_ii + Q_jj - 2 Q_ij
-        const double obj_diff = -(grad_diff * grad_diff) / (quad_coef > 0 ? quad_coef : kTau);
-        if (obj_diff <= obj_diff_min) {
-          gmin_idx = j;
-          obj_diff_min = obj_diff;
-        }
-      }
-    }
-    if (gmax + gmax2 < tol_ || gmin_idx == -1) return true;
-    out_i = gmax_idx;
-    out_j = gmin_idx;
+    const int j = second_order_partner(grad_.data(), alpha_.data(), q_i, gmax, active_size_, gmax2);
+    if (gmax + gmax2 < tol_ || j == -1) return true;
+    out_i = i;
+    out_j = j;
     return false;
+  }
+
+  // Column i is about to be computed: compute it together with the columns of the three
+  // uncached points of I_up with the next largest violations -G_t, which are the likeliest next
+  // i's (a point entering the support set usually has no cached column yet), in one pass over
+  // the data (KernelColumns::compute_four). Only when the cache holds them without evicting
+  // anything, so the guess never costs a useful column; it never changes a value either.
+  void prefetch_with(int i) {
+    if (q_.free_columns(active_size_) < 4) return;
+    int top[4] = {i, -1, -1, -1};
+    double value[4] = {kInf, -kInf, -kInf, -kInf};  // -G of top[1..3], descending
+    for (int t = 0; t < active_size_; ++t) {
+      if (!(alpha_[t] < 1.0) || t == i || -grad_[t] <= value[3] || q_.cached_length(t) != 0)
+        continue;
+      int k = 3;
+      for (; k > 1 && -grad_[t] > value[k - 1]; --k) {
+        value[k] = value[k - 1];
+        top[k] = top[k - 1];
+      }
+      value[k] = -grad_[t];
+      top[k] = t;
+    }
+    if (top[3] == -1) return;
+    std::swap(top[0], top[3]);  // i last: the most recently used
+    q_.compute_four(top, active_size_);
   }
 
   // Exact minimisation over (alpha_i, alpha_j) with alpha_i + alpha_j fixed, clipped to the box.
@@ -673,8 +831,27 @@ class SmoSolver {
   bool unshrink_ = false;
 };
 
+// A sum of x * 0 is NaN exactly when some x is NaN or infinite; Eigen's allFinite() is a
+// comparison per element, which shows in the fit time of small problems.
+MPMPP_CPU_CLONES
+bool all_finite(const double* x, Index n_rows, Index n_cols, Index row_stride) {
+  Vec4 acc = {};
+  for (Index r = 0; r < n_rows; ++r, x += row_stride) {
+    Index k = 0;
+    for (; k + 4 <= n_cols; k += 4) {
+      Vec4 v;
+      MPMPP_LOAD4(v, x + k);
+      acc += v * 0.0;
+    }
+    for (; k < n_cols; ++k) acc[0] += x[k] * 0.0;
+  }
+  const double sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+  return sum == sum;
+}
+
 void require_finite(const Eigen::Ref<const RowMatrixXd>& X, const char* name) {
-  if (!X.allFinite()) throw InputError(std::string(name) + ": contains NaN or infinite values");
+  if (!all_finite(X.data(), X.rows(), X.cols(), X.outerStride()))
+    throw InputError(std::string(name) + ": contains NaN or infinite values");
 }
 
 void check_kernel_scale(double c) {

@@ -136,7 +136,10 @@ class OneClassSVM(OutlierMixin, BaseEstimator):
     def fit(self, X, y=None):
         """Train on the rows of X (y is ignored)."""
         self._check_params()
-        X = validate_data(self, X, dtype=np.float64, order="C")
+        # The C++ solver rejects NaN/inf in one cheap pass (ValueError naming X), so scikit-learn's
+        # finiteness scan is skipped, unless the standardisation has to run on X first.
+        X = validate_data(self, X, dtype=np.float64, order="C",
+                          ensure_all_finite=bool(self.standardize))
         if self.standardize:
             self.mean_ = X.mean(axis=0)
             scale = X.std(axis=0)
@@ -174,7 +177,8 @@ class OneClassSVM(OutlierMixin, BaseEstimator):
 
     def _validated(self, X):
         check_is_fitted(self)
-        X = validate_data(self, X, dtype=np.float64, order="C", reset=False)
+        X = validate_data(self, X, dtype=np.float64, order="C", reset=False,
+                          ensure_all_finite=self.mean_ is not None)  # else checked in C++
         return self._transform(X)
 
     def score_samples(self, X):

@@ -295,7 +295,9 @@ struct QpSolver::Impl {
     int first = 0, last = n;
     while (first < last && x[first] == 0.0) ++first;
     while (last > first && x[last - 1] == 0.0) --last;
-    if (last > first)
+    if (last > first && m <= detail::kLazyProductMaxSize)  // gemv set-up costs more than this
+      Ax.noalias() = A.middleCols(first, last - first).lazyProduct(x.segment(first, last - first));
+    else if (last > first)
       Ax.noalias() = A.middleCols(first, last - first) * x.segment(first, last - first);
     else
       Ax.setZero();

@@ -18,6 +18,7 @@
 
 #include <cmath>
 #include <limits>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,16 +66,21 @@ struct QpSolver::Impl {
   int m;
   QpSettings settings;
   Eigen::MatrixXd P;
+  Eigen::MatrixXd A;   // column-major: A x is a sum of column axpys over the rows (m >> n in MPC)
   Eigen::MatrixXd At;  // A' so that each constraint normal a_i is a contiguous column
   Eigen::VectorXd row_inv_norm;
   Eigen::MatrixXd L_inv_transpose;
   bool positive_definite = false;
   detail::ActiveSetFactorization factorization;
 
-  // The data of the current solve, copied in (O(n + m), no allocation), and its bound
-  // classification (|bound| >= settings.infinite_bound is infinite).
-  Eigen::VectorXd q, l, u;
-  Eigen::Array<bool, Eigen::Dynamic, 1> is_equality, previous_is_equality;
+  // The data of the current solve: views of the caller's vectors, valid during solve() only
+  // (rebound by load(), no copy), and its bound classification (|bound| >=
+  // settings.infinite_bound is infinite).
+  using ConstMap = Eigen::Map<const Eigen::VectorXd>;
+  ConstMap q{nullptr, 0}, l{nullptr, 0}, u{nullptr, 0};
+  Eigen::Array<bool, Eigen::Dynamic, 1> is_equality;
+  int num_equalities = 0;
+  bool equalities_changed = true;  // is_equality differs from the previous solve's
   bool warm = false;
   // A row i is violated when A_i x < lower_trigger_i or A_i x > upper_trigger_i: its bound
   // moved by the feasibility tolerance, or +-inf while the row is active, an equality or absent.
@@ -88,7 +94,7 @@ struct QpSolver::Impl {
   Eigen::VectorXd mult;
 
   // Workspace, sized once.
-  Eigen::VectorXd x, Ax, violation, d, z, r, w, Jq;
+  Eigen::VectorXd x, Ax, d, z, r, w, Jq, x_steps;
   double x_P_x = 0.0;
   QpResult result;
 
@@ -98,26 +104,23 @@ struct QpSolver::Impl {
         m(static_cast<int>(A_.rows())),
         settings(s),
         P(P_),
+        A(A_),
         At(A_.transpose()),
         row_inv_norm(m),
         L_inv_transpose(n, n),
         factorization(n),
-        q(n),
-        l(m),
-        u(m),
-        is_equality(m),
-        previous_is_equality(m),
+        is_equality(Eigen::Array<bool, Eigen::Dynamic, 1>::Zero(m)),
         lower_trigger(m),
         upper_trigger(m),
         mult(Eigen::VectorXd::Zero(n)),
         x(n),
         Ax(m),
-        violation(m),
         d(n),
         z(n),
         r(n),
         w(n),
-        Jq(n) {
+        Jq(n),
+        x_steps(n) {
     active.reserve(n);
     redundant_equalities.reserve(m);
     result.x = Eigen::VectorXd::Zero(n);
@@ -153,21 +156,37 @@ struct QpSolver::Impl {
     if (u_in.size() != m)
       throw InputError("u has " + std::to_string(u_in.size()) + " entries, expected " + std::to_string(m));
     check_finite(q_in, "q");
-    q = q_in;
+    // Placement new is how an Eigen::Map is pointed at other data.
+    new (&q) ConstMap(q_in.data(), n);
+    new (&l) ConstMap(l_in.data(), m);
+    new (&u) ConstMap(u_in.data(), m);
     const double inf = settings.infinite_bound;
-    // One pass: copy, classify, set the violation thresholds (as arm() does) and note any bad
-    // entry; which one and why is worked out only on failure.
-    bool bad = false;
-    for (int i = 0; i < m; ++i) {
-      const double li = l_in[i];
-      const double ui = u_in[i];
-      l[i] = li;
-      u[i] = ui;
-      bad |= !(li <= ui) || li >= inf || ui <= -inf;  // also catches NaN
-      is_equality[i] = li == ui;
-      arm(i);
+    const double tol = settings.feasibility_tol;
+    // Vectorised passes for what every row needs; which entry is bad and why is worked out only
+    // on failure. min(u - l) is NaN when an entry is NaN, < 0 when l_i > u_i, and 0 exactly when
+    // some row is an equality (usually none in MPC: the per-row comparison is then skipped).
+    const auto L = l.array();
+    const auto U = u.array();
+    const double min_gap = m > 0 ? (U - L).minCoeff<Eigen::PropagateNaN>() : kInfinity;
+    if (!(min_gap >= 0.0) || (m > 0 && (L.maxCoeff() >= inf || U.minCoeff() <= -inf))) reject_bounds();
+    // As arm() does, except for finite bounds beyond infinite_bound (rare): their thresholds
+    // stay finite here and are disarmed by most_violated() if such a row is ever picked.
+    lower_trigger.array() = L - tol * (1.0 + L.abs());
+    upper_trigger.array() = U + tol * (1.0 + U.abs());
+    int equalities = 0;
+    bool changed = false;
+    if (min_gap == 0.0 || num_equalities > 0) {
+      for (int i = 0; i < m; ++i) {
+        const bool equality = l[i] == u[i];
+        changed |= equality != is_equality[i];
+        is_equality[i] = equality;
+        if (equality) disarm(i);
+        equalities += equality;
+      }
     }
-    if (bad) reject_bounds();
+    changed |= equalities != num_equalities;
+    num_equalities = equalities;
+    equalities_changed = changed;
   }
 
   [[noreturn]] void reject_bounds() const {
@@ -265,18 +284,37 @@ struct QpSolver::Impl {
     x_P_x = w.squaredNorm();  // x = J w and J'PJ = I
   }
 
-  // Most violated constraint (violation scaled by the row norm), or -1 when all hold.
-  int most_violated(int& sigma) {
+  // Most violated constraint (violation scaled by the row norm), or -1 when all hold; the
+  // largest scaled violation (<= 0 when all hold) goes to `max_violation`.
+  int most_violated(int& sigma, double& max_violation) {
+    max_violation = -kInfinity;
     if (m == 0) return -1;
-    if (n <= detail::kLazyProductMaxSize)
-      Ax.noalias() = At.transpose().lazyProduct(x);
+    // Column-major A: Eigen's gemv runs over the m rows (m >> n in MPC), a few columns at a
+    // time. Leading and trailing zeros of x are skipped: MPC puts the slacks last, and they
+    // are exactly 0 unless a soft limit binds.
+    int first = 0, last = n;
+    while (first < last && x[first] == 0.0) ++first;
+    while (last > first && x[last - 1] == 0.0) --last;
+    if (last > first && m <= detail::kLazyProductMaxSize)  // gemv set-up costs more than this
+      Ax.noalias() = A.middleCols(first, last - first).lazyProduct(x.segment(first, last - first));
+    else if (last > first)
+      Ax.noalias() = A.middleCols(first, last - first) * x.segment(first, last - first);
     else
-      Ax.noalias() = At.transpose() * x;
-    violation = (lower_trigger - Ax).cwiseMax(Ax - upper_trigger).cwiseProduct(row_inv_norm);
-    Eigen::Index p;
-    if (!(violation.maxCoeff(&p) > 0.0)) return -1;
-    sigma = lower_trigger[p] - Ax[p] > 0.0 ? +1 : -1;
-    return static_cast<int>(p);
+      Ax.setZero();
+    const auto violation = (lower_trigger - Ax).cwiseMax(Ax - upper_trigger).cwiseProduct(row_inv_norm);
+    for (;;) {
+      max_violation = violation.maxCoeff();  // one vectorised pass; the index only when needed
+      if (!(max_violation > 0.0)) return -1;
+      int p = 0;
+      while (violation.coeff(p) != max_violation) ++p;
+      sigma = lower_trigger[p] - Ax[p] > 0.0 ? +1 : -1;
+      if (sigma > 0 ? has_lower(p) : has_upper(p)) return p;
+      // A finite bound beyond infinite_bound (load() left it armed): it is no constraint.
+      if (sigma > 0)
+        lower_trigger[p] = -kInfinity;
+      else
+        upper_trigger[p] = kInfinity;
+    }
   }
 
   bool redundant_equalities_hold() const {
@@ -331,12 +369,11 @@ struct QpSolver::Impl {
     }
 
     int iterations = 0;
-    if (warm && (is_equality == previous_is_equality).all()) {
+    if (warm && !equalities_changed) {
       warm_start();
     } else {
       cold_start();
     }
-    previous_is_equality = is_equality;  // same size: no allocation
     warm = true;
     restore_dual_feasibility(iterations);
     if (!redundant_equalities_hold()) return finish(QpStatus::PrimalInfeasible, iterations);
@@ -344,12 +381,19 @@ struct QpSolver::Impl {
     bool refined = true;  // x, mult were just computed in closed form
     for (;;) {
       int sigma = 0;
-      const int p = most_violated(sigma);
+      double max_violation;
+      const int p = most_violated(sigma, max_violation);
       if (p < 0) {
         if (refined) return finish(QpStatus::Solved, iterations, /*exact=*/true);
         // The steps accumulate rounding; recompute x on the final active set and re-check.
+        x_steps = x;
+        const int before = iterations;
         restore_dual_feasibility(iterations);
         refined = true;
+        // No drop and x moved by dx: no scaled violation (Lipschitz 1 in |dx|_2) can have
+        // crossed zero unless max_violation + |dx|_2 > 0, so the scan just done still holds.
+        if (iterations == before && max_violation + (x - x_steps).norm() <= 0.0)
+          return finish(QpStatus::Solved, iterations, /*exact=*/true);
         continue;
       }
       refined = false;

@@ -14,7 +14,7 @@ namespace mpmpp::detail {
 
 // Eigen's blocked matrix-vector kernels cost more to set up than the whole product for the
 // small matrices of MPC problems; up to this size the coefficient-wise (lazy) product is used.
-constexpr int kLazyProductMaxSize = 8;
+constexpr int kLazyProductMaxSize = 12;
 
 class ActiveSetFactorization {
  public:

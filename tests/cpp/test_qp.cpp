@@ -145,6 +145,23 @@ TEST(QpSolver, BoundsAt1e20AreInfinite) {
   EXPECT_EQ(r.y[0], 0.0);
 }
 
+TEST(QpSolver, BoundsBeyond1e20StayInfiniteWhenTheSolutionCrossesThem) {
+  // The unconstrained minimiser lies beyond the "infinite" finite bounds: no row may bind,
+  // warm-started or cold, and the next solve (bounds finite again) must still see the row.
+  const MatrixXd P = MatrixXd::Identity(1, 1), A = MatrixXd::Identity(1, 1);
+  mpmpp::QpSolver solver(P, A);
+  for (double target : {5e20, -5e20}) {
+    const auto& r = solver.solve(vec({-target}), vec({-1e20}), vec({1e20}));
+    ASSERT_EQ(r.status, QpStatus::Solved);
+    EXPECT_DOUBLE_EQ(r.x[0], target);
+    EXPECT_EQ(r.y[0], 0.0);
+  }
+  const auto& r = solver.solve(vec({-5e20}), vec({-1}), vec({1}));
+  ASSERT_EQ(r.status, QpStatus::Solved);
+  EXPECT_DOUBLE_EQ(r.x[0], 1.0);
+  EXPECT_DOUBLE_EQ(r.y[0], 5e20 - 1.0);
+}
+
 TEST(QpSolver, NonConvexAndIterationCap) {
   const MatrixXd A = MatrixXd::Identity(2, 2);
   const VectorXd one = VectorXd::Ones(2);

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -30,6 +31,16 @@ std::string temp_path(const std::string& name) { return std::string(::testing::T
 
 // Exact equality, NaN equal to NaN (skipped windows).
 bool same(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
+
+// Scores written by the (Release) Python build: bit-identical in an optimised build; a Debug
+// or sanitizer build may round a kernel sum differently in the last bit, so there 1e-13.
+bool same_as_release_file(double a, double b) {
+#ifdef NDEBUG
+  return same(a, b);
+#else
+  return same(a, b) || std::abs(a - b) <= 1e-13 * std::max(1.0, std::abs(b));
+#endif
+}
 
 // Every window of a table of samples pushed one by one.
 std::vector<StreamWindow> stream_all(StreamingDetector& s, const Eigen::VectorXd& t, const Eigen::MatrixXd& u,
@@ -148,7 +159,7 @@ TEST(StreamingDetector, PythonTrainedDetectorMatchesBatchScoresAndAlarms) {
     EXPECT_EQ(w.start_s, num(cells[1]));
     EXPECT_EQ(w.end_s, num(cells[2]));
     for (int k = 0; k < nc; ++k) {
-      EXPECT_TRUE(same(w.scores[k], num(cells[3 + k]))) << "window " << row << " channel " << k << ": "
+      EXPECT_TRUE(same_as_release_file(w.scores[k], num(cells[3 + k]))) << "window " << row << " channel " << k << ": "
                                                          << w.scores[k] << " vs " << cells[3 + k];
       EXPECT_EQ(w.indicator[k], num(cells[3 + nc + k])) << "window " << row << " channel " << k;
     }
@@ -376,7 +387,9 @@ TEST(StreamingDetector, MemoryStaysFlatOverSevenDays) {
   }
   // Keeping even one byte per sample would add 5 x 17280 B = 84 KB; one double, 675 KB.
   EXPECT_LE(heap[1], heap[0] + 4096) << "heap in use after day 2 and day 7 (bytes)";
+#ifndef __SANITIZE_ADDRESS__  // AddressSanitizer's quarantine keeps freed blocks resident
   EXPECT_LE(rss[1], rss[0] + 256) << "resident memory after day 2 and day 7 (KB)";
+#endif
   EXPECT_EQ(s.samples(), 7 * per_day);
   EXPECT_EQ(windows, static_cast<int>((7 * per_day - 120) / 60 + 1));
   EXPECT_LT(s.checkpoint_json().size(), 64u * 1024u);  // the whole state: one window of samples

@@ -142,13 +142,18 @@ void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
   // The identification's hot path (thousands of windows, several filters per
   // Gauss-Newton iteration): the numerator as shifted vector updates (vectorised), then
   // 1/den as an in-place recursion (c[t] is read before y[t] is written).
-  out.setZero();
-  for (Eigen::Index k = 0; k < num.size(); ++k) {
+  // The first term is assigned, not added to zeros: one pass fewer, same values.
+  const Eigen::Index d = std::min<Eigen::Index>(delay, n);
+  out.head(d).setZero();
+  if (num.size() == 0) out.tail(n - d).setZero();
+  else out.tail(n - d) = num[0] * x.head(n - d);
+  for (Eigen::Index k = 1; k < num.size(); ++k) {
     const Eigen::Index shift = delay + k;
     if (shift >= n) break;
     out.tail(n - shift) += num[k] * x.head(n - shift);
   }
   const Eigen::Index na = den.size();
+  if (na == 1) return;  // FIR: no recursion
   double* y = out.data();
   if (na == 2) {
     first_order_recursion(den[1], y, n);

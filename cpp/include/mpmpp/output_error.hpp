@@ -13,9 +13,11 @@
 // Levenberg-Marquardt with the analytic sensitivities
 //   d yhat/d b_jk = q^-k [q^-d_j / F_j] u_j,   d yhat/d f_jk = -q^-k [1 / F_j] yhat_j,
 // every F_j kept stable by reflecting roots outside the circle (radius capped at
-// max_pole_radius). Start: a Prony/Kalman fit to an impulse response (the caller's, e.g.
-// B_j/A of the ARX step, or a joint FIR least-squares fit on the data); for first-order
-// denominators the best of that pole and a small pole grid (b_j by least squares).
+// max_pole_radius); the damped matrix is Newton's Hessian (second-order sensitivities
+// q^-(k+i) q^-d_j/F_j^2 u_j, q^-(i+l) yhat_j/F_j^2) where positive definite, else J'J.
+// Start: a Prony/Kalman fit to an impulse response (the caller's, e.g. B_j/A of the ARX
+// step, or a joint FIR least-squares fit on the data); for first-order denominators the
+// best of that pole and a small pole grid (b_j by least squares).
 #include <Eigen/Dense>
 #include <vector>
 
@@ -89,6 +91,9 @@ class OutputErrorEstimator {
   double simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y, Eigen::Index skip,
                   Eigen::Index N, const OeResult& par);
   void jacobian_columns(Eigen::Index N, const OeResult& par);
+  // H_ = G_ (J'J at the parameters jacobian_columns() last saw) minus the second-order
+  // term, from the s_j and v_j jacobian_columns() left.
+  void newton_hessian(Eigen::Index skip, Eigen::Index N, const OeResult& par);
   void unpack(const Eigen::VectorXd& theta, OeResult& par) const;
   void pack(const OeResult& par, Eigen::VectorXd& theta) const;
   void throw_if_not_informative(const detail::NormalEquationsSolver::Outcome& o,
@@ -101,10 +106,10 @@ class OutputErrorEstimator {
   std::vector<detail::LaggedColumn> columns_, grid_columns_;
   Eigen::Vector2d f1_;
   detail::NormalEquationsSolver solver_;
-  Eigen::MatrixXd G_, A_;
+  Eigen::MatrixXd G_, H_, A_;
   Eigen::VectorXd h_, delta_, theta_, candidate_theta_, error_, residual_, unit_;
   // Per channel, zero-padded (pad_ leading zeros) so lagged columns may reach t < 0.
-  std::vector<Eigen::VectorXd> yhat_, w_, v_;
+  std::vector<Eigen::VectorXd> yhat_, w_, v_, s_, r_;
   OeResult candidate_;
   // Factored on an empty matrix so copies of an unfitted estimator are defined (UBSan).
   Eigen::LDLT<Eigen::MatrixXd> ldlt_{Eigen::MatrixXd(0, 0)};

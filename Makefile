@@ -25,8 +25,9 @@ install: venv
 	$(PY) -m pip install -q --no-build-isolation ".[test]"
 
 # The C++ build also puts _core next to python/mpmpp, and pytest imports that build
-# (PYTHONPATH=python): in this session, a full pytest run against the installed wheel
-# showed flaky child-process tests and a hang in evaluate (under investigation).
+# (PYTHONPATH=python); MPMPP_BUILD_DIR lets the streaming test run the stream_csv example.
+# (A full pytest run against the installed wheel showed flaky child-process tests in session 1;
+# not reinvestigated, see the issue notes.)
 test-cpp: install
 	cmake -S . -B $(BUILD) -DMPMPP_BUILD_TESTS=ON -DMPMPP_BUILD_PYTHON=ON -DMPMPP_INPLACE=ON \
 	      -DPython_EXECUTABLE=$(abspath $(PY)) -DCMAKE_BUILD_TYPE=Release
@@ -35,7 +36,7 @@ test-cpp: install
 
 # pytest exits 5 when it collects no test; that is not a failure of the suite.
 test-python: test-cpp
-	PYTHONPATH=python $(PY) -m pytest -q tests/python || [ $$? -eq 5 ]
+	PYTHONPATH=python MPMPP_BUILD_DIR=$(abspath $(BUILD)) $(PY) -m pytest -q tests/python || [ $$? -eq 5 ]
 
 test: test-cpp test-python
 

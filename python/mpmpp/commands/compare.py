@@ -1,10 +1,7 @@
 """``mpmpp compare MODEL DATA``: fit per output, residual tests, where the model fails."""
 from __future__ import annotations
 
-import json
-from pathlib import Path
-
-from ._pair import add_pair_arguments, load_pair
+from ._pair import add_pair_arguments, load_pair, report
 
 
 def add_arguments(parser) -> None:
@@ -21,13 +18,4 @@ def run(args) -> int:
 
     model, data = load_pair(args.model, args.data)
     result = compare(model, data, horizon=args.horizon, max_lag=args.max_lag, window_s=args.window)
-    if args.out:
-        paths = result.plot(args.out)
-        (Path(args.out) / "compare.json").write_text(json.dumps(result.to_dict(), indent=1))
-    if args.json:
-        print(json.dumps(result.to_dict()))
-    else:
-        print(result.summary())
-        if args.out:
-            print(f"  figures: {', '.join(str(p) for p in paths)}")
-    return 0
+    return report(result, args, "compare")

@@ -43,6 +43,7 @@ void bind_detector(py::module_& m) {
       .def_readwrite("inspection_s", &DetectorConfig::inspection_s)
       .def_readwrite("threshold", &DetectorConfig::threshold)
       .def_readwrite("alpha", &DetectorConfig::alpha)
+      .def_readwrite("noise_alpha", &DetectorConfig::noise_alpha)
       .def_readwrite("nu", &DetectorConfig::nu)
       .def_readwrite("kernel_scale", &DetectorConfig::kernel_scale)
       .def_readwrite("outlier_fraction", &DetectorConfig::outlier_fraction)
@@ -89,7 +90,9 @@ void bind_detector(py::module_& m) {
   py::class_<WindowFeatures::Series>(m, "WindowSeries", "ARX-OE features of every moving window of a series")
       .def_property_readonly("windows", [](const WindowFeatures::Series& s) { return windows_list(s.windows); })
       .def_readonly("features", &WindowFeatures::Series::features,
-                    "per channel: windows x feature length (NaN rows for skipped windows)");
+                    "per channel: windows x feature length (NaN rows for skipped windows)")
+      .def_readonly("covariances", &WindowFeatures::Series::covariances,
+                    "resampling 'estimator' only: per channel, windows x d^2 feature covariances (row-major)");
 
   py::class_<WindowFeatures>(m, "WindowFeatures", "Per-window ARX-OE features per monitored channel")
       .def(py::init<const Model&, const DetectorConfig&>(), py::arg("model"), py::arg("config"))
@@ -112,6 +115,7 @@ void bind_detector(py::module_& m) {
       .def_readwrite("feature_mean", &ChannelScorer::feature_mean)
       .def_readwrite("feature_scale", &ChannelScorer::feature_scale)
       .def_readwrite("feature_decorrelation", &ChannelScorer::feature_decorrelation)
+      .def_readwrite("reference_covariance", &ChannelScorer::reference_covariance)
       .def_readwrite("support_vectors", &ChannelScorer::support_vectors)
       .def_readwrite("dual_coef", &ChannelScorer::dual_coef)
       .def_readwrite("offset", &ChannelScorer::offset)
@@ -121,7 +125,7 @@ void bind_detector(py::module_& m) {
       .def_readwrite("training_windows", &ChannelScorer::training_windows)
       .def_readwrite("outlier_fraction", &ChannelScorer::outlier_fraction)
       .def_readwrite("cv_accuracy", &ChannelScorer::cv_accuracy)
-      .def("score_rows", &ChannelScorer::score_rows, py::arg("X"));
+      .def("score_rows", &ChannelScorer::score_rows, py::arg("X"), py::arg("covariances") = Eigen::MatrixXd());
 
   py::class_<DetectionResult>(m, "DetectionResult")
       .def_property_readonly("windows", [](const DetectionResult& r) { return windows_list(r.windows); })

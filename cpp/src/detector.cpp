@@ -17,19 +17,66 @@ using nlohmann::json;
 
 // ---------------------------------------------------------------------------- ChannelScorer
 
+namespace {
+
+// Symmetric square root of a symmetric positive definite matrix, or of its inverse; false
+// when it is not positive definite.
+bool symmetric_root(const Eigen::MatrixXd& m, bool inverse, Eigen::MatrixXd& root) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m);
+  if (eig.info() != Eigen::Success || !(eig.eigenvalues().minCoeff() > 0)) return false;
+  Eigen::VectorXd r = eig.eigenvalues().cwiseSqrt();
+  if (inverse) r = r.cwiseInverse();
+  root = eig.eigenvectors() * r.asDiagonal() * eig.eigenvectors().transpose();
+  return true;
+}
+
+}  // namespace
+
 double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  RowMatrixXd z = ((x - feature_mean).array() / feature_scale.array()).matrix().transpose();
+  if (reference_covariance.size() != 0)
+    throw InputError("detector: this channel scores a window together with its covariance (resampling 'estimator')");
+  return score(x, Eigen::MatrixXd());
+}
+
+double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
+                            const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const {
+  Eigen::VectorXd deviation = x - feature_mean;
+  if (reference_covariance.size() != 0) {
+    if (window_covariance.rows() != x.size() || window_covariance.cols() != x.size())
+      throw InputError("detector: the window covariance must be " + std::to_string(x.size()) + " x " +
+                       std::to_string(x.size()));
+    Eigen::MatrixXd reference_root, window_inverse_root;
+    if (!symmetric_root(reference_covariance, false, reference_root) ||
+        !symmetric_root(window_covariance, true, window_inverse_root))
+      return std::numeric_limits<double>::quiet_NaN();
+    deviation = reference_root * (window_inverse_root * deviation);
+  }
+  RowMatrixXd z = (deviation.array() / feature_scale.array()).matrix().transpose();
   if (feature_decorrelation.size() != 0) z = z * feature_decorrelation.transpose();
   const double f = gaussian_kernel_expansion(support_vectors, dual_coef, kernel_scale, z)[0] - offset;
   return f / (nu * n_train);  // eq. 20: h = f / (nu l)
 }
 
-Eigen::VectorXd ChannelScorer::score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+Eigen::VectorXd ChannelScorer::score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                          const Eigen::Ref<const Eigen::MatrixXd>& covariances) const {
+  const Eigen::Index d = X.cols();
+  const bool with_covariance = reference_covariance.size() != 0;
+  if (with_covariance && (covariances.rows() != X.rows() || covariances.cols() != d * d))
+    throw InputError("detector: window covariances must be " + std::to_string(X.rows()) + " x " +
+                     std::to_string(d * d) + " (one row-major d x d matrix per window)");
   // Row by row through score(): a blocked kernel product would sum in a different order than
   // the one-window (streaming) path, and batch and streaming scores must be bit-identical.
   Eigen::VectorXd h = Eigen::VectorXd::Constant(X.rows(), std::numeric_limits<double>::quiet_NaN());
-  for (Eigen::Index r = 0; r < X.rows(); ++r)
-    if (X.row(r).allFinite()) h[r] = score(X.row(r).transpose());
+  for (Eigen::Index r = 0; r < X.rows(); ++r) {
+    if (!X.row(r).allFinite()) continue;
+    if (!with_covariance) {
+      h[r] = score(X.row(r).transpose(), Eigen::MatrixXd());
+      continue;
+    }
+    if (!covariances.row(r).allFinite()) continue;
+    const Eigen::MatrixXd c = Eigen::Map<const RowMatrixXd>(covariances.row(r).eval().data(), d, d);
+    h[r] = score(X.row(r).transpose(), c);
+  }
   return h;
 }
 
@@ -43,6 +90,11 @@ void ChannelScorer::validate(int feature_length, const std::string& where) const
       (feature_decorrelation.rows() != feature_length || feature_decorrelation.cols() != feature_length ||
        !feature_decorrelation.allFinite()))
     fail("feature_decorrelation must be empty or a finite " + std::to_string(feature_length) + " x " +
+         std::to_string(feature_length) + " matrix");
+  if (reference_covariance.size() != 0 &&
+      (reference_covariance.rows() != feature_length || reference_covariance.cols() != feature_length ||
+       !reference_covariance.allFinite() || !reference_covariance.isApprox(reference_covariance.transpose())))
+    fail("reference_covariance must be empty or a finite symmetric " + std::to_string(feature_length) + " x " +
          std::to_string(feature_length) + " matrix");
   if (support_vectors.rows() < 1 || support_vectors.cols() != feature_length)
     fail("support_vectors must be n_sv x " + std::to_string(feature_length));
@@ -107,7 +159,12 @@ DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
       throw InputError("detector: features of channel " + std::to_string(k) + " have " +
                        std::to_string(series.features[k].rows()) + " rows, expected " +
                        std::to_string(n_windows));
-    r.scores.col(k) = scorers_[k].score_rows(series.features[k]);
+    const bool with_covariance = scorers_[k].reference_covariance.size() != 0;
+    if (with_covariance && series.covariances.size() != static_cast<size_t>(n_channels))
+      throw InputError("detector: channel " + channel_label(model_, channels_[k]) +
+                       " needs the window covariances (resampling 'estimator')");
+    r.scores.col(k) = with_covariance ? scorers_[k].score_rows(series.features[k], series.covariances[k])
+                                      : scorers_[k].score_rows(series.features[k]);
     MismatchIndicator indicator(config_.inspection_windows(), config_.alarm_count());
     for (int w = 0; w < n_windows; ++w) {
       if (r.training[w]) r.scores(w, k) = 0.0;  // as in the paper: 0 while the SVM is trained
@@ -125,10 +182,12 @@ Eigen::VectorXd Detector::score_window(WindowFeatures& features, const Eigen::Re
                                        const Eigen::Ref<const Eigen::MatrixXd>& y,
                                        std::string* skip_reason) const {
   std::vector<Eigen::VectorXd> f;
+  std::vector<Eigen::MatrixXd> c;
   Eigen::VectorXd h = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(channels_.size()),
                                                 std::numeric_limits<double>::quiet_NaN());
-  if (!features.extract(u, y, f, skip_reason)) return h;
-  for (size_t k = 0; k < channels_.size(); ++k) h[k] = scorers_[k].score(f[k]);
+  if (!features.extract(u, y, f, skip_reason, &c)) return h;
+  for (size_t k = 0; k < channels_.size(); ++k)
+    h[k] = scorers_[k].reference_covariance.size() != 0 ? scorers_[k].score(f[k], c[k]) : scorers_[k].score(f[k]);
   return h;
 }
 
@@ -207,6 +266,7 @@ std::string Detector::to_json() const {
     jc["feature_mean"] = vector_json(s.feature_mean);
     jc["feature_scale"] = vector_json(s.feature_scale);
     jc["feature_decorrelation"] = rows_json(s.feature_decorrelation);
+    jc["reference_covariance"] = rows_json(s.reference_covariance);
     jc["svm"] = json{{"kernel_scale", s.kernel_scale}, {"nu", s.nu},     {"n_train", s.n_train},
                      {"offset", s.offset},             {"dual_coef", vector_json(s.dual_coef)},
                      {"support_vectors", rows_json(s.support_vectors)}};
@@ -275,6 +335,9 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
     if (version >= 2)  // version 1 files predate it: identity
       s.feature_decorrelation =
           rd.matrix(rd.field(c, p, "feature_decorrelation"), p + ".feature_decorrelation", m, false);
+    if (version >= 3)  // earlier files predate it: no window-covariance mapping
+      s.reference_covariance =
+          rd.matrix(rd.field(c, p, "reference_covariance"), p + ".reference_covariance", m, false);
     scorers.push_back(std::move(s));
   }
   try {

@@ -46,7 +46,8 @@ ArxOeConfig output_problem_config(const Model& model, const DetectorConfig& conf
 WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& config)
     : sample_time_s_(nominal.sample_time_s),
       num_inputs_(nominal.num_inputs()),
-      num_outputs_(nominal.num_outputs()) {
+      num_outputs_(nominal.num_outputs()),
+      with_covariances_(config.resampling == Resampling::Estimator) {
   config.validate();
   window_ = config.window_samples(nominal.sample_time_s);
   step_ = config.step_samples(nominal.sample_time_s);
@@ -81,7 +82,8 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
 
 bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                              const Eigen::Ref<const Eigen::MatrixXd>& y,
-                             std::vector<Eigen::VectorXd>& features, std::string* skip_reason) {
+                             std::vector<Eigen::VectorXd>& features, std::string* skip_reason,
+                             std::vector<Eigen::MatrixXd>* covariances) {
   if (u.rows() != window_ || y.rows() != window_ || u.cols() != num_inputs_ || y.cols() != num_outputs_)
     throw InputError("detector: a window must be " + std::to_string(window_) + " samples of " +
                      std::to_string(num_inputs_) + " inputs and " + std::to_string(num_outputs_) +
@@ -93,6 +95,8 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
     return false;
   }
   features.resize(channels_.size());
+  const bool want_covariances = with_covariances_ && covariances != nullptr;
+  if (want_covariances) covariances->assign(channels_.size(), Eigen::MatrixXd());
   for (auto& p : problems_) {
     const int i = channels_[p.noise_channel].output;
     for (size_t e = 0; e < p.inputs.size(); ++e) p.u.col(e) = u.col(p.inputs[e]);
@@ -102,9 +106,16 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
       if (skip_reason) *skip_reason = err.what();
       return false;
     }
+    Eigen::Index offset = 0;  // channel e's block of the OE parameter vector (FIR structure)
     for (size_t e = 0; e < p.inputs.size(); ++e) {
       const Eigen::VectorXd& g = result_.channels[e].fir;
       features[p.channels[e]] = g.tail(g.size() - p.skip[e]);
+      const Eigen::Index d = features[p.channels[e]].size();
+      if (want_covariances) {  // symmetrised bit for bit: batch (row-major copy) and streaming agree
+        const auto block = result_.oe.covariance.block(offset, offset, d, d);
+        (*covariances)[p.channels[e]] = 0.5 * (block + block.transpose());
+      }
+      offset += d;
     }
     features[p.noise_channel] = result_.noise;
   }
@@ -122,21 +133,31 @@ WindowFeatures::Series WindowFeatures::extract_series(const Eigen::Ref<const Eig
   Series s;
   const int count = n >= window_ ? static_cast<int>((n - window_) / step_) + 1 : 0;
   s.windows.resize(count);
-  for (size_t k = 0; k < channels_.size(); ++k)
+  for (size_t k = 0; k < channels_.size(); ++k) {
     s.features.emplace_back(count, feature_length_[k]);
+    if (with_covariances_) {
+      const bool process = channels_[k].kind == MonitoredChannel::Kind::Process;
+      s.covariances.emplace_back(count, process ? feature_length_[k] * feature_length_[k] : 0);
+    }
+  }
   std::vector<Eigen::VectorXd> f;
+  std::vector<Eigen::MatrixXd> c;
   for (int w = 0; w < count; ++w) {
     FeatureWindow& win = s.windows[w];
     win.first = w * step_;
     win.start_s = time_s[win.first];
     win.end_s = time_s[win.first + window_ - 1] + sample_time_s_;
     win.skipped = !extract(u.middleRows(win.first, window_), y.middleRows(win.first, window_), f,
-                           &win.skip_reason);
+                           &win.skip_reason, &c);
     for (size_t k = 0; k < channels_.size(); ++k) {
-      if (win.skipped)
+      if (win.skipped) {
         s.features[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());
-      else
-        s.features[k].row(w) = f[k].transpose();
+        if (with_covariances_) s.covariances[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());
+        continue;
+      }
+      s.features[k].row(w) = f[k].transpose();
+      if (with_covariances_ && c[k].size() != 0)  // symmetric: row- and column-major agree
+        s.covariances[k].row(w) = Eigen::Map<const Eigen::RowVectorXd>(c[k].data(), c[k].size());
     }
   }
   return s;

@@ -77,22 +77,44 @@ def _independent_windows(n_windows: int, config: DetectorConfig) -> int:
     return int((config.window_s + (n_windows - 1) * config.step_s) // config.window_s)
 
 
-def train_scorer(estimates: np.ndarray, config: DetectorConfig, seed: int) -> _core.ChannelScorer:
-    """The trained SVM of one channel from its training-window estimates (rows)."""
-    X = np.asarray(estimates, dtype=float)
-    d = X.shape[1]
-    correlated = config.resampling == "covariance" and _independent_windows(X.shape[0], config) > d
+def _draw_models(X: np.ndarray, config: DetectorConfig, seed: int, reference_covariance, noise: bool):
+    """Sec. 4.2's synthetic models for one channel, and whether they are correlated."""
+    n = int(config.resampled_models)
+    alpha = float(config.noise_alpha if noise and config.noise_alpha > 0 else config.alpha)
+    if reference_covariance is not None:
+        # Resampling 'estimator': N(mu, alpha^2 (S + C_ref)). C_ref, the mean OE covariance of the
+        # training windows, is computed from every sample, so it is sound even when the training
+        # period spans only a few independent windows; S, the sample covariance of the window
+        # estimates, widens the cloud where the real spread exceeds it (100 seeds of the paper
+        # MIMO example: G32's coefficient differences vary ~2x more than C_ref says, its gain as
+        # C_ref says). The sum is never narrower than either estimate.
+        spread = reference_covariance + np.cov(X, rowvar=False).reshape(X.shape[1], X.shape[1])
+        return _core.draw_correlated_gaussian_models(X.mean(axis=0), spread, n, alpha, int(seed)), True
+    correlated = config.resampling == "covariance" and _independent_windows(X.shape[0], config) > X.shape[1]
     try:
-        # Sec. 4.2: N synthetic models, coefficient i ~ N(mu_i, (alpha sigma_i)^2), or with the
+        # N synthetic models, coefficient i ~ N(mu_i, (alpha sigma_i)^2), or with the
         # coefficients' covariance (DetectorConfig.resampling).
-        Z = resample(X, int(config.resampled_models), float(config.alpha), seed, correlated=correlated)
+        return resample(X, n, alpha, seed, correlated=correlated), correlated
     except ValueError:
         if not correlated:
             raise
         # A singular covariance (a coefficient that never varies, collinear estimates): the
         # paper's independent draws, as documented for Resampling::Covariance.
-        correlated = False
-        Z = resample(X, int(config.resampled_models), float(config.alpha), seed)
+        return resample(X, n, alpha, seed), False
+
+
+def train_scorer(estimates: np.ndarray, config: DetectorConfig, seed: int,
+                 covariances: Optional[np.ndarray] = None, noise: bool = False) -> _core.ChannelScorer:
+    """The trained SVM of one channel from its training-window estimates (rows) and, with
+    resampling 'estimator' on a process channel, their OE covariances (rows of d^2).
+    noise: a noise-model channel (widened by config.noise_alpha when set)."""
+    X = np.asarray(estimates, dtype=float)
+    d = X.shape[1]
+    reference = None
+    if config.resampling == "estimator" and covariances is not None and np.size(covariances):
+        reference = np.asarray(covariances, dtype=float).mean(axis=0).reshape(d, d)
+        reference = 0.5 * (reference + reference.T)
+    Z, correlated = _draw_models(X, config, seed, reference, noise)
     if config.standardise:
         # FIR coefficients are ~0.01-0.1, so with the paper's c = 1 the raw kernel
         # exp(-||x - y||^2) is ~1 everywhere and the SVM degenerates to a sphere in the
@@ -126,6 +148,8 @@ def train_scorer(estimates: np.ndarray, config: DetectorConfig, seed: int) -> _c
                       outlier_fraction=fraction).fit(Zs)
     s = _core.ChannelScorer()
     s.feature_mean, s.feature_scale, s.feature_decorrelation = mean, scale, decorrelation
+    if reference is not None:
+        s.reference_covariance = reference
     s.support_vectors = np.ascontiguousarray(Zs[svm.support_])
     s.dual_coef = np.asarray(svm.dual_coef_[0], dtype=float)
     s.offset = float(svm.offset_)
@@ -223,7 +247,10 @@ class Detector:
             raise ValueError(f"train_end_s: the training period holds {len(train)} usable windows "
                              f"({n_in} in all, window {config.window_s:g} s, step {config.step_s:g} s); "
                              "need at least 3")
-        scorers = [train_scorer(series.features[k][train], config, _channel_seed(config.seed, k))
+        covariances = series.covariances
+        kinds = [kind for kind, _, _ in _core.WindowFeatures(model, config).channels]
+        scorers = [train_scorer(series.features[k][train], config, _channel_seed(config.seed, k),
+                                covariances[k][train] if covariances else None, noise=kinds[k] == "noise")
                    for k in range(len(series.features))]
         return _core.Detector(model, config, float(train_end_s), scorers)
 

@@ -102,6 +102,7 @@ TEST(Detector, VersionOneFilesLoadWithoutDecorrelation) {
   nlohmann::json doc = nlohmann::json::parse(random_detector().to_json());
   doc["version"] = 1;  // written before feature_decorrelation existed
   for (auto& c : doc["channels"]) c.erase("feature_decorrelation");
+  for (auto& c : doc["channels"]) c.erase("reference_covariance");  // version 3
   const Detector old = Detector::from_json(doc.dump(), "v1.json");
   for (const ChannelScorer& s : old.scorers()) EXPECT_EQ(s.feature_decorrelation.size(), 0);
   doc["version"] = 2;  // the field is required from version 2 on
@@ -111,6 +112,58 @@ TEST(Detector, VersionOneFilesLoadWithoutDecorrelation) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("missing field 'feature_decorrelation'"), std::string::npos) << e.what();
   }
+}
+
+TEST(Detector, VersionTwoFilesLoadWithoutReferenceCovariance) {
+  nlohmann::json doc = nlohmann::json::parse(random_detector().to_json());
+  doc["version"] = 2;
+  for (auto& c : doc["channels"]) c.erase("reference_covariance");
+  for (const ChannelScorer& s : Detector::from_json(doc.dump(), "v2.json").scorers())
+    EXPECT_EQ(s.reference_covariance.size(), 0);
+}
+
+// Resampling::Estimator: the window's deviation is carried into the training precision,
+// x <- mean + C_ref^1/2 C^-1/2 (x - mean). Analytic cases: C = C_ref is the identity map,
+// C = C_ref / 4 doubles the deviation; and the file keeps C_ref exactly.
+TEST(Detector, ReferenceCovarianceMapsTheDeviationAndRoundTrips) {
+  std::mt19937_64 rng(5);
+  ChannelScorer plain = random_scorer(3, rng, true);
+  ChannelScorer mapped = plain;
+  Eigen::MatrixXd L(3, 3);
+  L << 2e-3, 0, 0, -1e-3, 1e-3, 0, 5e-4, 2e-4, 3e-3;
+  mapped.reference_covariance = L * L.transpose();
+  std::normal_distribution<double> n(0.0, 0.01);
+  for (int r = 0; r < 10; ++r) {
+    const Eigen::VectorXd x = plain.feature_mean + Eigen::VectorXd::NullaryExpr(3, [&] { return n(rng); });
+    EXPECT_NEAR(mapped.score(x, mapped.reference_covariance), plain.score(x), 1e-12);
+    const Eigen::MatrixXd quarter = mapped.reference_covariance / 4.0;
+    EXPECT_NEAR(mapped.score(x, quarter), plain.score(plain.feature_mean + 2.0 * (x - plain.feature_mean)), 1e-12);
+  }
+  EXPECT_THROW(mapped.score(plain.feature_mean), InputError);  // the window covariance is required
+  EXPECT_THROW(mapped.score(plain.feature_mean, Eigen::MatrixXd::Identity(2, 2)), InputError);
+  EXPECT_TRUE(std::isnan(mapped.score(plain.feature_mean, -Eigen::MatrixXd::Identity(3, 3))));
+
+  Model m = siso_model();
+  DetectorConfig c = DetectorConfig::mimo();  // FIR OE: the estimator's covariance is the features'
+  c.resampling = Resampling::Estimator;
+  WindowFeatures f(m, c);
+  std::vector<ChannelScorer> scorers;
+  for (size_t k = 0; k < f.channels().size(); ++k) {
+    scorers.push_back(random_scorer(f.feature_length(static_cast<int>(k)), rng, true));
+    if (f.channels()[k].kind == MonitoredChannel::Kind::Process) {
+      const int d = f.feature_length(static_cast<int>(k));
+      const Eigen::MatrixXd a = Eigen::MatrixXd::NullaryExpr(d, d, [&] { return n(rng); });
+      scorers.back().reference_covariance = a * a.transpose() + 1e-4 * Eigen::MatrixXd::Identity(d, d);
+    }
+  }
+  const Detector d(m, c, 7200.0, scorers);
+  const Detector back = Detector::from_json(d.to_json(), "estimator.json");
+  EXPECT_EQ(back.to_json(), d.to_json());
+  EXPECT_EQ(back.scorers()[0].reference_covariance, d.scorers()[0].reference_covariance);
+  EXPECT_EQ(back.config().resampling, Resampling::Estimator);
+  ChannelScorer asymmetric = scorers[0];
+  asymmetric.reference_covariance(0, 1) += 1.0;
+  EXPECT_THROW(asymmetric.validate(f.feature_length(0), "channel"), InputError);
 }
 
 TEST(Detector, CorruptTruncatedOrNewerFilesAreClearErrors) {
@@ -127,7 +180,7 @@ TEST(Detector, CorruptTruncatedOrNewerFilesAreClearErrors) {
   expect_error(text.substr(0, text.size() / 2), "truncated or corrupt");
   expect_error("", "truncated or corrupt");
   std::string newer = text;
-  newer.replace(newer.find("\"version\": 2"), 12, "\"version\": 7");
+  newer.replace(newer.find("\"version\": 3"), 12, "\"version\": 7");
   expect_error(newer, "version 7");
   std::string foreign = text;
   foreign.replace(foreign.find("mpmpp-detector"), 14, "something-else");

@@ -11,7 +11,7 @@
 //   * monitor: every window of a series -> scores (0 inside the training period, as in the
 //     paper's Figs 4, 7, 8; NaN for skipped windows), the indicator of eq. 23 and the
 //     alarms per channel (mismatch_indicator.hpp) with their start times;
-//   * save / load: a versioned JSON file ("format": "mpmpp-detector", "version": 1),
+//   * save / load: a versioned JSON file ("format": "mpmpp-detector", "version": 3),
 //     written atomically; a missing, truncated, corrupt or newer file is a clear InputError.
 // The streaming front end of issue 9 is WindowFeatures + ChannelScorer + MismatchIndicator.
 #include <Eigen/Dense>
@@ -44,8 +44,24 @@ struct ChannelScorer {
   double outlier_fraction = 0;
   double cv_accuracy = -1;      // -1: the outlier fraction was fixed, not cross-validated
 
+  // Resampling::Estimator (else empty): C_ref, the mean OE covariance of the training
+  // windows' features (d x d). A monitored window's deviation is first carried into the
+  // training windows' precision, x <- feature_mean + C_ref^1/2 C^-1/2 (x - feature_mean), C the
+  // window's own OE covariance (symmetric square roots). With no change x - mean ~ N(0, C), so
+  // the mapped deviation ~ N(0, C_ref) like the training estimates: a window estimated less
+  // precisely (a noise change that leaves the A-filtered inputs less informative) is not taken
+  // for a process change, and a more precise one shows a real change more clearly.
+  Eigen::MatrixXd reference_covariance;
+
+  // score(x) for channels without reference_covariance (InputError otherwise); score(x, C)
+  // takes the window's covariance (ignored without reference_covariance; NaN when C is not
+  // positive definite: the window carries no usable evidence).
   double score(const Eigen::Ref<const Eigen::VectorXd>& x) const;
-  Eigen::VectorXd score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X) const;  // NaN rows -> NaN
+  double score(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const;
+  // NaN rows -> NaN. covariances: windows x d^2 (row-major rows, WindowFeatures::Series),
+  // required with reference_covariance.
+  Eigen::VectorXd score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                             const Eigen::Ref<const Eigen::MatrixXd>& covariances = Eigen::MatrixXd()) const;
   void validate(int feature_length, const std::string& where) const;  // InputError on bad shapes
 };
 
@@ -98,7 +114,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 2;  // 2 added feature_decorrelation
+  static constexpr int kFormatVersion = 3;  // 2 added feature_decorrelation, 3 reference_covariance
 
  private:
   Model model_;

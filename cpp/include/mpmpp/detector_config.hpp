@@ -28,6 +28,12 @@ enum class Resampling {
   // period holds more non-overlapping windows than coefficients (a covariance from fewer is
   // singular); the others fall back to Independent. See resampling.hpp for why.
   Covariance,
+  // mpmpp: one Gaussian with the sample covariance plus the estimator's own covariance (the
+  // mean OE covariance sigma^2 (J'J)^-1 of the training windows), on process channels; and each
+  // monitored window's deviation is measured in the precision of its own estimate
+  // (ChannelScorer::reference_covariance). Needs OeStructure::Fir (the OE parameters are then
+  // the features). Noise channels keep Independent. See detector.hpp for why.
+  Estimator,
 };
 
 struct DetectorConfig {
@@ -39,6 +45,7 @@ struct DetectorConfig {
   double inspection_s = 7200.0;      // n_T as a duration: windows inspected by the indicator (eq. 23)
   double threshold = 0.95;           // s_T: alarm when the indicator s >= s_T
   double alpha = 1.5;                // widening of each coefficient's std in resampling (Sec. 4.2)
+  double noise_alpha = 0.0;          // the same for the noise-model channels; 0 = alpha
   double nu = 0.5;                   // one-class SVM nu (eqs. 16-19)
   double kernel_scale = 1.0;         // c in k(x, y) = exp(-||x - y||^2 / c) (eq. 15)
   // Fraction of resampled training models allowed to score negative. Negative = choose

@@ -53,13 +53,21 @@ class WindowFeatures {
   // model's order. Fills features[k] for every channel k and returns true, or returns false
   // with the reason when the window holds a NaN or is not informative (NumericalError of
   // ARX-OE); InputError on wrong shapes.
+  // With Resampling::Estimator, `covariances` (when given) receives per channel the OE
+  // covariance sigma^2 (J'J)^-1 of features[k] (process channels; the FIR structure makes the
+  // OE parameters the features themselves) and a 0 x 0 matrix for noise channels.
   bool extract(const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y,
-               std::vector<Eigen::VectorXd>& features, std::string* skip_reason = nullptr);
+               std::vector<Eigen::VectorXd>& features, std::string* skip_reason = nullptr,
+               std::vector<Eigen::MatrixXd>* covariances = nullptr);
+  bool has_covariances() const { return with_covariances_; }
 
   // All windows of a series (windows start at 0, step, 2 step, ... while they fit).
   struct Series {
     std::vector<FeatureWindow> windows;
     std::vector<Eigen::MatrixXd> features;  // per channel: windows x feature_length, NaN rows when skipped
+    // Resampling::Estimator only (else empty): per channel, windows x d^2, each row the
+    // window's feature covariance in row-major order; 0 columns for noise channels.
+    std::vector<Eigen::MatrixXd> covariances;
   };
   Series extract_series(const Eigen::Ref<const Eigen::VectorXd>& time_s,
                         const Eigen::Ref<const Eigen::MatrixXd>& u,
@@ -77,6 +85,7 @@ class WindowFeatures {
   double sample_time_s_;
   int num_inputs_, num_outputs_;
   int window_, step_;
+  bool with_covariances_;
   std::vector<MonitoredChannel> channels_;
   std::vector<int> feature_length_;
   std::vector<OutputProblem> problems_;

@@ -172,7 +172,7 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
     runs.sort(key=lambda r: r["seed"])
     summary = summarise(runs, truth_onsets(scenario), nominal_model(scenario))
     summary.update({"scenario": spec if isinstance(spec, str) else scenario.get("name", "scenario"),
-                    "seeds": len(seeds), "wall_seconds": wall, "where": where,
+                    "seeds": len(seeds), "seed_range": [min(seeds), max(seeds)], "wall_seconds": wall, "where": where,
                     "cpu_seconds": float(sum(r["seconds"]["total"] for r in runs)),
                     "config": json.loads(config_json)})
     return summary
@@ -287,7 +287,8 @@ def _fmt_rate(x):
 
 def format_table(summary: dict) -> str:
     """Markdown table of the summary (also the human output of ``mpmpp evaluate``)."""
-    lines = [f"{summary['scenario']}: {summary['seeds']} seeds, {summary['wall_seconds']:.0f} s wall on "
+    lo, hi = summary.get("seed_range", [0, summary["seeds"] - 1])
+    lines = [f"{summary['scenario']}: {summary['seeds']} seeds ({lo}-{hi}), {summary['wall_seconds']:.0f} s wall on "
              f"{summary['where']} ({summary['cpu_seconds']:.0f} s of runs)", "",
              "| method | channel | alarm | changed at (h) | detected | false alarm | delay median (h) | delay p90 (h) |",
              "| --- | --- | --- | --- | --- | --- | --- | --- |"]

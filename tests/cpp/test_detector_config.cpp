@@ -34,6 +34,8 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
   pap_mimo.train_duration_s = rec_mimo.train_duration_s;
   pap_mimo.oe_structure = rec_mimo.oe_structure;
   pap_mimo.resampling = rec_mimo.resampling;
+  pap_mimo.outlier_fraction = rec_mimo.outlier_fraction;
+  pap_mimo.noise_alpha = rec_mimo.noise_alpha;
   EXPECT_EQ(rec_siso.to_json(), pap_siso.to_json());
   EXPECT_EQ(rec_mimo.to_json(), pap_mimo.to_json());
   EXPECT_GT(rec_siso.alpha, 1.5);
@@ -41,7 +43,10 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
   EXPECT_GT(rec_mimo.alpha, 1.5);
   EXPECT_DOUBLE_EQ(rec_mimo.train_duration_s, 8 * 3600.0);
   EXPECT_EQ(rec_mimo.oe_structure, mpmpp::OeStructure::Fir);
-  EXPECT_EQ(rec_mimo.resampling, mpmpp::Resampling::Covariance);
+  EXPECT_EQ(rec_mimo.resampling, mpmpp::Resampling::Estimator);
+  EXPECT_DOUBLE_EQ(rec_mimo.outlier_fraction, 0.05);  // fixed, not cross-validated
+  EXPECT_DOUBLE_EQ(rec_mimo.noise_alpha, 5.0);
+  EXPECT_DOUBLE_EQ(DetectorConfig::paper_mimo().noise_alpha, 0.0);  // 0: the same alpha
   EXPECT_EQ(pap_siso.resampling, mpmpp::Resampling::Independent);  // Sec. 4.2 as printed
   EXPECT_THROW(DetectorConfig::preset("sisoo"), mpmpp::InputError);
 }

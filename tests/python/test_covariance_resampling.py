@@ -22,6 +22,7 @@ def config(resampling):
     c = mpmpp.DetectorConfig.mimo()  # 2 h windows, 5 min step: 73 windows span 8 h = 4 independent
     c.outlier_fraction = 0.05
     c.resampling = resampling
+    c.alpha = 5.0  # the widening these draws need (docs/detection.md)
     return c
 
 

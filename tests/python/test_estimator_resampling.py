@@ -1,20 +1,21 @@
 """Resampling with the estimator's own covariance (DetectorConfig.resampling = "estimator"):
 the window covariances are the OE step's, the training draws have covariance
-alpha^2 (S + C_ref), each monitored deviation is carried into the training precision
+alpha^2 max(S, C_ref) (direction by direction), each monitored deviation is carried into the training precision
 (x <- mean + C_ref^1/2 C^-1/2 (x - mean), checked against analytic cases), noise channels use
 noise_alpha, and a trained detector scores identically after save/load and in streaming."""
 import copy
 
 import numpy as np
 import pytest
+import scipy.linalg
 
 import mpmpp
 from mpmpp import _core, scenarios
-from mpmpp.detect import Detector, _draw_models, make_config, train_scorer
+from mpmpp.detect import Detector, _directional_max, _draw_models, make_config, train_scorer
 from mpmpp.evaluate import nominal_model
 from mpmpp.identify import arx_oe_model, channel_inputs
 
-ESTIMATOR = {"preset": "mimo", "resampling": "estimator", "alpha": 1.5, "noise_alpha": 5}
+ESTIMATOR = {"preset": "mimo"}  # resampling "estimator", alpha 1.75, noise_alpha 5, outlier fraction 0.05
 
 
 def estimator_config(**changes):
@@ -60,14 +61,26 @@ def test_reference_covariance_is_the_mean_window_covariance(scorer):
     assert s.feature_decorrelation.shape == (2, 2)  # the draws are correlated: whitened
 
 
-def test_draws_have_covariance_alpha_squared_sample_plus_reference():
+def test_draws_have_covariance_alpha_squared_directional_max():
     X, covs, C_ref = windows_and_covariances(seed=4)
+    X[:, 1] += 0.02 * np.random.default_rng(9).standard_normal(len(X))  # one direction looser than C_ref says
+    S = np.cov(X, rowvar=False)
+    # Reference by the generalised eigenproblem S v = l C_ref v (SciPy), V' C_ref V = I:
+    # the spread is V^-T diag(max(l, 1)) V^-1.
+    lam, V = scipy.linalg.eigh(S, C_ref)
+    Vinv = np.linalg.inv(V)
+    expected_spread = Vinv.T @ np.diag(np.maximum(lam, 1.0)) @ Vinv
+    assert lam.min() < 1 < lam.max()  # both branches of the max are exercised
+    spread = _directional_max(C_ref, S)
+    np.testing.assert_allclose(spread, expected_spread, rtol=1e-10)
+    for lower in (C_ref, S):  # at least as wide as either estimate
+        assert np.linalg.eigvalsh(spread - lower).min() > -1e-12 * np.abs(spread).max()
     c = estimator_config(resampled_models=200_000)
     Z, correlated = _draw_models(X, c, 7, C_ref, noise=False)
     assert correlated
-    expected = c.alpha ** 2 * (np.cov(X, rowvar=False) + C_ref)
-    np.testing.assert_allclose(np.cov(Z, rowvar=False), expected, rtol=0.02, atol=2e-7)
-    np.testing.assert_allclose(Z.mean(0), X.mean(0), atol=4 * np.sqrt(np.diag(expected) / 200_000).max())
+    np.testing.assert_allclose(np.cov(Z, rowvar=False), c.alpha ** 2 * expected_spread, rtol=0.02,
+                               atol=0.02 * c.alpha ** 2 * np.abs(expected_spread).max())
+    np.testing.assert_allclose(Z.mean(0), X.mean(0), atol=4 * c.alpha * np.sqrt(np.diag(expected_spread) / 200_000).max())
 
 
 def test_noise_channels_use_noise_alpha_and_independent_draws():
@@ -127,7 +140,7 @@ def test_config_needs_the_fir_structure_and_a_valid_noise_alpha():
         make_config({**ESTIMATOR, "noise_alpha": -1})
     c = make_config(ESTIMATOR)
     back = mpmpp.DetectorConfig.from_json(c.to_json())
-    assert (back.resampling, back.noise_alpha, back.alpha) == ("estimator", 5.0, 1.5)
+    assert (back.resampling, back.noise_alpha, back.alpha, back.outlier_fraction) == ("estimator", 5.0, 1.75, 0.05)
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,9 @@ import json
 
 def add_arguments(parser) -> None:
     parser.add_argument("scenario", help="paper-siso | paper-mimo | a scenario JSON file")
-    parser.add_argument("--seeds", type=int, default=20, metavar="N", help="runs with seeds 0..N-1 (default 20)")
+    parser.add_argument("--seeds", type=int, default=20, metavar="N", help="number of runs (default 20)")
+    parser.add_argument("--first-seed", type=int, default=0, metavar="S",
+                        help="seeds S..S+N-1 (default 0; e.g. 100 for runs held out from a choice made on 0..99)")
     parser.add_argument("--config", metavar="FILE", help="detector config JSON or preset name (siso, mimo, paper_siso, paper_mimo; default: the recommended preset for the model size)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="Dask scheduler address (tcp://host:8786); default: local processes")
@@ -20,9 +22,12 @@ def run(args) -> int:
 
     if args.seeds < 1:
         raise ValueError("--seeds: must be >= 1")
+    if args.first_seed < 0:
+        raise ValueError("--first-seed: must be >= 0")
     if args.workers is not None and args.workers < 1:
         raise ValueError("--workers: must be >= 1")
-    summary = evaluate(args.scenario, args.seeds, config=args.config, scheduler=args.scheduler,
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    summary = evaluate(args.scenario, seeds, config=args.config, scheduler=args.scheduler,
                        workers=args.workers, progress=not args.json)
     if args.json:
         print(json.dumps(summary))

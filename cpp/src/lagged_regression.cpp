@@ -24,11 +24,15 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
     const LaggedColumn &c = columns[k], &prev = columns[k - 1];
     return c.signal == prev.signal && c.lag == prev.lag + 1 && c.sign == prev.sign;
   };
+  // ARX regresses the target on its own lags: when a column is the target at lag 1,
+  // h is (mostly) already in G, see below.
+  Eigen::Index target_lag1 = -1;
+  for (Eigen::Index i = 0; i < p && target_lag1 < 0; ++i)
+    if (columns[i].signal == target && columns[i].lag == 1) target_lag1 = i;
   const ConstSegment y(target + t0, n);
   for (Eigen::Index i = 0; i < p; ++i) {
     const LaggedColumn& ci = columns[i];
     const ConstSegment xi = column_segment(ci, t0, n);
-    h[i] = ci.sign * xi.dot(y);
     const bool ci_continues = continues(i);
     for (Eigen::Index j = 0; j <= i; ++j) {
       const LaggedColumn& cj = columns[j];
@@ -44,6 +48,20 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
         G(i, j) = s * xi.dot(column_segment(cj, t0, n));
       }
       G(j, i) = G(i, j);
+    }
+  }
+  for (Eigen::Index i = 0; i < p; ++i) {
+    const LaggedColumn& ci = columns[i];
+    if (target_lag1 >= 0 && i + 1 < p && continues(i + 1)) {
+      // sum_t x(t - l) y(t) is the sum_t x(t - l - 1) y(t - 1) of G(i + 1, target_lag1)
+      // over rows shifted by one: gain the row t0 + n - 1, lose the row t0 - 1 (both
+      // readable: column i + 1 reaches x(t0 - l - 1), the lag-1 column y(t0 - 1)).
+      const double shifted = G(i + 1, target_lag1) * columns[i + 1].sign * columns[target_lag1].sign;
+      const double enter = ci.signal[t0 + n - 1 - ci.lag] * target[t0 + n - 1];
+      const double leave = ci.signal[t0 - 1 - ci.lag] * target[t0 - 1];
+      h[i] = ci.sign * (shifted + enter - leave);
+    } else {
+      h[i] = ci.sign * column_segment(ci, t0, n).dot(y);
     }
   }
 }

@@ -1,6 +1,7 @@
 #include "mpmpp/output_error.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <string>
@@ -148,26 +149,65 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const
   // once b_j is eliminated by least squares (other channels held), so a few poles are
   // tried and Levenberg-Marquardt starts from the best: Prony's pole or a grid point.
   static constexpr double kGrid[] = {-0.5, 0.0, 0.5, 0.8, 0.9, 0.95, 0.98};
+  constexpr int P = static_cast<int>(std::size(kGrid)) + 1;  // Prony's pole first
   const OeChannel& ch = channels_[j];
+  const int nb = ch.nb;
   simulate(u, y, skip, N, out);
   // Target for channel j: the data minus the other channels' simulation.
   residual_ = error_ + yhat_[j].segment(pad_, N);
   const double rr = residual_.tail(N - skip).squaredNorm();
+
+  std::array<double, P> pole;
+  pole[0] = -out.f[j][1];
+  for (int g = 1; g < P; ++g) pole[g] = std::min(kGrid[g - 1], options_.max_pole_radius);
+  // The P filters v_g = q^-d / (1 - pole_g q^-1) u_j in one pass, interleaved (row t of
+  // grid_v_ is v_g(t) for every g: independent recursions side by side vectorise, where
+  // one filter at a time is a chain of dependent multiply-adds), then the
+  // least-squares sums in b_j of all P poles together, again vectorised across poles:
+  //   G_g(k, l) = sum_{t >= skip} v_g(t - k) v_g(t - l),  h_g(k) = sum v_g(t - k) residual(t).
+  grid_v_.resize((nb + N) * P);
+  std::fill_n(grid_v_.data(), nb * P, 0.0);  // v_g(t < 0) = 0: zero initial state
+  double* v = grid_v_.data() + nb * P;
+  const auto uj = u.col(static_cast<Eigen::Index>(j));
+  for (Eigen::Index t = 0; t < N; ++t) {
+    const double x = t >= ch.delay ? uj[t - ch.delay] : 0.0;
+    double* vt = v + t * P;
+    for (int g = 0; g < P; ++g) vt[g] = x + pole[g] * vt[g - P];
+  }
+  const int n_products = nb * (nb + 1) / 2;  // rows of grid_sums_: G_g(k, l), l <= k; h_g(k)
+  grid_sums_.resize((n_products + nb) * P);
+  double* sums = grid_sums_.data();
+  const auto sum_over_rows = [&](int k, const auto& other) {  // sum_t v_g(t - k) other(t, g)
+    std::array<double, P> acc{};
+    for (Eigen::Index t = skip; t < N; ++t) {
+      const double* vk = v + (t - k) * P;
+      for (int g = 0; g < P; ++g) acc[g] += vk[g] * other(t, g);
+    }
+    std::copy(acc.begin(), acc.end(), sums);
+    sums += P;
+  };
+  for (int k = 0; k < nb; ++k)
+    for (int l = 0; l <= k; ++l)
+      sum_over_rows(k, [v, l](Eigen::Index t, int g) { return v[(t - l) * P + g]; });
+  const double* res = residual_.data();
+  for (int k = 0; k < nb; ++k)
+    sum_over_rows(k, [res](Eigen::Index t, int) { return res[t]; });
+
+  G_.resize(nb, nb);
+  h_.resize(nb);
   double best = INFINITY;
-  const double prony_pole = -out.f[j][1];
-  for (int g = -1; g < static_cast<int>(std::size(kGrid)); ++g) {
-    const double pole = g < 0 ? prony_pole : std::min(kGrid[g], options_.max_pole_radius);
-    f1_ << 1.0, -pole;
-    filter_into(unit_, f1_, ch.delay, u.col(j), v_[j].segment(pad_, N));
-    grid_columns_.clear();
-    for (int k = 0; k < ch.nb; ++k) grid_columns_.push_back({v_[j].data() + pad_, k, 1.0});
-    detail::lagged_normal_equations(grid_columns_, residual_.data(), skip, N - skip, G_, h_);
+  for (int g = 0; g < P; ++g) {
+    const double* acc = grid_sums_.data() + g;
+    for (int k = 0; k < nb; ++k)
+      for (int l = 0; l <= k; ++l, acc += P) G_(k, l) = G_(l, k) = *acc;
+    for (int k = 0; k < nb; ++k, acc += P) h_[k] = *acc;
     ldlt_.compute(G_);
     delta_ = ldlt_.solve(h_);
     const double cost = 0.5 * (rr - h_.dot(delta_));  // LS cost with b_j eliminated
     if (ldlt_.info() == Eigen::Success && delta_.allFinite() && cost < best) {
       best = cost;
       out.b[j] = delta_;
+      f1_ << 1.0, -pole[g];
       out.f[j] = f1_;
     }
   }

@@ -103,11 +103,12 @@ class OutputErrorEstimator {
   OeOptions options_;
   Eigen::Index p_ = 0, pad_ = 0;
   int nonlinear_channels_ = 0;
-  std::vector<detail::LaggedColumn> columns_, grid_columns_;
+  std::vector<detail::LaggedColumn> columns_;
   Eigen::Vector2d f1_;
   detail::NormalEquationsSolver solver_;
   Eigen::MatrixXd G_, H_, A_;
   Eigen::VectorXd h_, delta_, theta_, candidate_theta_, error_, residual_, unit_;
+  Eigen::VectorXd grid_v_, grid_sums_;  // pole_grid_start: interleaved filters, sums
   // Per channel, zero-padded (pad_ leading zeros) so lagged columns may reach t < 0.
   std::vector<Eigen::VectorXd> yhat_, w_, v_, s_, r_;
   OeResult candidate_;

@@ -37,7 +37,6 @@ OutputErrorEstimator::OutputErrorEstimator(std::vector<OeChannel> channels, OeOp
   if (options_.init_fir_length < 0 || options_.init_fir_length > detail::kMaxLag)
     throw InputError("init_fir_length must be in [0, 1000000]");
   const std::size_t m = channels_.size();
-  yhat_.resize(m);
   w_.resize(m);
   v_.resize(m);
   s_.resize(m);
@@ -154,7 +153,9 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const
   const int nb = ch.nb;
   simulate(u, y, skip, N, out);
   // Target for channel j: the data minus the other channels' simulation.
-  residual_ = error_ + yhat_[j].segment(pad_, N);
+  residual_ = error_;
+  for (Eigen::Index k = 0; k < nb; ++k)
+    residual_ += out.b[j][k] * Eigen::Map<const Eigen::VectorXd>(w_[j].data() + pad_ - k, N);
   const double rr = residual_.tail(N - skip).squaredNorm();
 
   std::array<double, P> pole;
@@ -176,22 +177,20 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const
   }
   const int n_products = nb * (nb + 1) / 2;  // rows of grid_sums_: G_g(k, l), l <= k; h_g(k)
   grid_sums_.resize((n_products + nb) * P);
-  double* sums = grid_sums_.data();
-  const auto sum_over_rows = [&](int k, const auto& other) {  // sum_t v_g(t - k) other(t, g)
-    std::array<double, P> acc{};
-    for (Eigen::Index t = skip; t < N; ++t) {
-      const double* vk = v + (t - k) * P;
-      for (int g = 0; g < P; ++g) acc[g] += vk[g] * other(t, g);
-    }
-    std::copy(acc.begin(), acc.end(), sums);
-    sums += P;
-  };
-  for (int k = 0; k < nb; ++k)
-    for (int l = 0; l <= k; ++l)
-      sum_over_rows(k, [v, l](Eigen::Index t, int g) { return v[(t - l) * P + g]; });
   const double* res = residual_.data();
   for (int k = 0; k < nb; ++k)
-    sum_over_rows(k, [res](Eigen::Index t, int) { return res[t]; });
+    for (int l = 0; l <= k; ++l) {  // one pass: G_g(k, l) and, on the diagonal, h_g(k)
+      std::array<double, P> g_kl{}, h_k{};
+      const bool diagonal = l == k;
+      for (Eigen::Index t = skip; t < N; ++t) {
+        const double *vk = v + (t - k) * P, *vl = v + (t - l) * P;
+        for (int g = 0; g < P; ++g) g_kl[g] += vk[g] * vl[g];
+        if (diagonal)
+          for (int g = 0; g < P; ++g) h_k[g] += vk[g] * res[t];
+      }
+      std::copy(g_kl.begin(), g_kl.end(), grid_sums_.data() + (k * (k + 1) / 2 + l) * P);
+      if (diagonal) std::copy(h_k.begin(), h_k.end(), grid_sums_.data() + (n_products + k) * P);
+    }
 
   G_.resize(nb, nb);
   h_.resize(nb);
@@ -215,17 +214,18 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const
 
 double OutputErrorEstimator::simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
                                       Eigen::Index skip, Eigen::Index N, const OeResult& par) {
-  error_ = Eigen::Map<const Eigen::VectorXd>(y, N);
+  using ConstSegment = Eigen::Map<const Eigen::VectorXd>;
   for (std::size_t j = 0; j < channels_.size(); ++j) {
     // w_j = q^-d_j / F_j u_j is both the b-sensitivity and, through yhat_j = B_j w_j,
-    // the simulation: one recursive filter per channel instead of two.
+    // the simulation: one recursive filter per channel instead of two. yhat_j is not
+    // stored: e = y - sum_jk b_jk w_j(t - k) in one pass per term.
     filter_into(unit_, par.f[j], channels_[j].delay, u.col(j), w_[j].segment(pad_, N));
-    auto yhat = yhat_[j].segment(pad_, N);
     const double* w = w_[j].data() + pad_;
-    yhat = par.b[j][0] * Eigen::Map<const Eigen::VectorXd>(w, N);
-    for (Eigen::Index k = 1; k < par.b[j].size(); ++k)
-      yhat += par.b[j][k] * Eigen::Map<const Eigen::VectorXd>(w - k, N);  // pad_ >= nb - 1
-    error_ -= yhat;
+    for (Eigen::Index k = 0; k < par.b[j].size(); ++k) {
+      const ConstSegment w_k(w - k, N);  // pad_ >= nb - 1
+      if (j == 0 && k == 0) error_ = ConstSegment(y, N) - par.b[j][k] * w_k;
+      else error_ -= par.b[j][k] * w_k;
+    }
   }
   return 0.5 * error_.tail(N - skip).squaredNorm();
 }
@@ -349,7 +349,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                                                   2 * channels_[j].nf, L - 1}));
   }
   for (std::size_t j = 0; j < m; ++j)
-    for (auto* buf : {&yhat_[j], &w_[j], &v_[j], &s_[j], &r_[j]}) {
+    for (auto* buf : {&w_[j], &v_[j], &s_[j], &r_[j]}) {
       buf->resize(pad_ + N);
       buf->head(pad_).setZero();
     }
@@ -424,7 +424,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
       } else if (lambda > 1e12) {
         // No descent direction left at any damping: theta is a (numerical) minimum.
         out.converged = true;
-        cost = simulate(u, y.data(), skip, N, out);  // restore yhat_/error_ at theta
+        cost = simulate(u, y.data(), skip, N, out);  // restore w_/error_ at theta
         break;
       } else {
         lambda *= 10.0;

@@ -132,6 +132,24 @@ def test_arx_oe_miso_pipeline_equals_reference():
     np.testing.assert_allclose([c.gain for c in r.channels], gains, rtol=1e-8)
 
 
+def test_arx_oe_reuses_its_estimator_without_changing_results(siso_closed_loop):
+    # arx_oe keeps one estimator per settings (and thread): a reused estimator gives
+    # exactly what a fresh one gives, on another window, and other settings are not
+    # served by it.
+    y, u = siso_closed_loop
+    first = identify.arx_oe(y[:1000], u[:1000], 9, 10, 17, fir_length=64)
+    again = identify.arx_oe(y[300:], u[300:], 9, 10, 17, fir_length=64)
+    fresh = identify._core.ArxOeEstimator(9, [10], [17], identify.channels(17), [64]).estimate(
+        y[300:], u[300:, None])
+    assert np.array_equal(again.oe.theta, fresh.oe.theta)
+    assert np.array_equal(again.channels[0].fir, fresh.channels[0].fir)
+    assert not np.array_equal(first.oe.theta, again.oe.theta)
+    other = identify.arx_oe(y[300:], u[300:], 5, 6, 17, fir_length=30)
+    assert len(other.noise) == 5 and len(other.channels[0].fir) == 30
+    assert identify.arx_oe(y[300:], u[300:], 9, [10], [17], fir_length=[64]).oe.theta.tolist() == \
+        fresh.oe.theta.tolist()
+
+
 def test_fir_length_default_is_one_percent_of_peak():
     g = ss.lfilter(np.r_[np.zeros(17), 0.1003], [1.0, -0.9048], np.r_[1.0, np.zeros(999)])
     expected = np.nonzero(np.abs(g) >= 0.01 * np.abs(g).max())[0][-1] + 1

@@ -91,12 +91,19 @@ NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixX
     scale_[k] = 1.0 / std::sqrt(G(k, k));
   }
   scaled_ = scale_.asDiagonal() * G * scale_.asDiagonal();
-  if (!positive_definite_above(rank_tolerance * static_cast<double>(p))) {
-    out.status = Status::Singular;
-    return out;
+  // Section 3.1: ||Rs^-1||_2 >= 2/delta  <=>  lambda_min(Rs) <= delta/2. When
+  // delta/2 >= the collinearity bound, lambda_min > delta/2 also rules out collinear
+  // regressors: the usual well-conditioned window needs one test factorisation, not two.
+  const double collinear = rank_tolerance * static_cast<double>(p), rule = 0.5 * delta;
+  bool above_rule = delta > 0.0 && rule >= collinear && positive_definite_above(rule);
+  if (!above_rule) {
+    if (!positive_definite_above(collinear)) {
+      out.status = Status::Singular;
+      return out;
+    }
+    if (delta > 0.0 && rule < collinear) above_rule = positive_definite_above(rule);
   }
-  // Section 3.1: ||Rs^-1||_2 >= 2/delta  <=>  lambda_min(Rs) <= delta/2.
-  out.regularised = delta > 0.0 && !positive_definite_above(0.5 * delta);
+  out.regularised = delta > 0.0 && !above_rule;
   shift_ = out.regularised ? 0.5 * delta : 0.0;
   positive_definite_above(-shift_);  // factor of Rs + shift I (positive definite here)
   theta = llt_.solve(scale_.cwiseProduct(h));

@@ -114,8 +114,22 @@ NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixX
 void NormalEquationsSolver::covariance_factor(Eigen::MatrixXd& C) const {
   // theta = S (Rs + cI)^-1 S h and cov(h) = sigma^2 G = sigma^2 S^-1 Rs S^-1 give
   // cov(theta) = sigma^2 S (Rs + cI)^-1 Rs (Rs + cI)^-1 S.
+  // (Rs + cI)^-1 = L^-T L^-1 from the Cholesky factor, by plain loops: for these small p
+  // (tens) Eigen's blocked triangular solve with an identity right-hand side spends
+  // several times the ~p^3/3 multiply-adds on blocking and packing.
   const Eigen::Index p = scaled_.rows();
-  C = llt_.solve(Eigen::MatrixXd::Identity(p, p));
+  const Eigen::MatrixXd& L = llt_.matrixLLT();  // L in the lower triangle
+  Eigen::MatrixXd& Li = inverse_factor_;
+  Li.setZero(p, p);
+  for (Eigen::Index j = 0; j < p; ++j) {  // column j of L^-1 by forward substitution
+    Li(j, j) = 1.0 / L(j, j);
+    for (Eigen::Index i = j + 1; i < p; ++i)
+      Li(i, j) = -L.row(i).segment(j, i - j).dot(Li.col(j).segment(j, i - j)) / L(i, i);
+  }
+  C.resize(p, p);
+  for (Eigen::Index j = 0; j < p; ++j)
+    for (Eigen::Index i = j; i < p; ++i)  // (L^-T L^-1)(i, j) = sum_{k >= i} Li(k, i) Li(k, j)
+      C(i, j) = C(j, i) = Li.col(i).tail(p - i).dot(Li.col(j).tail(p - i));
   if (shift_ > 0.0) C = (C * scaled_ * C).eval();
   C = scale_.asDiagonal() * C * scale_.asDiagonal();
 }

@@ -60,6 +60,12 @@ def test_arx_regularisation_rule_matches_ridge_reference(siso_closed_loop):
         theta, _, regularised = ref.arx(y, u[:, None], 9, [10], [17], delta=delta)
         assert r.regularised == regularised == expect
         np.testing.assert_allclose(r.theta, theta, rtol=1e-8, atol=1e-8)
+        # Covariance: the sandwich sigma^2 M G M, M = (G + delta/2 diag(G))^-1 (the ridge
+        # in original coordinates; M = G^-1 when the rule does not engage).
+        Phi, _ = ref.arx_regressors(y, u[:, None], 9, [10], [17])
+        G = Phi.T @ Phi
+        M = np.linalg.inv(G + (0.5 * delta if expect else 0.0) * np.diag(np.diag(G)))
+        np.testing.assert_allclose(r.covariance, r.noise_variance * M @ G @ M, rtol=1e-6)
 
 
 def _oe_reference(y, u, chans, x0, skip):

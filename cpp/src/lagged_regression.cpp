@@ -30,22 +30,55 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
   for (Eigen::Index i = 0; i < p && target_lag1 < 0; ++i)
     if (columns[i].signal == target && columns[i].lag == 1) target_lag1 = i;
   const ConstSegment y(target + t0, n);
+  // Runs of columns continuing each other (one signal at consecutive lags). An entry
+  // G(i, j) (j <= i) needs a dot product only when i or j starts a run: per pair of
+  // runs (a, b) the first column of their block, x_i . x_{b0} for every i in a, and
+  // its first row, x_{a0} . x_j. A run's columns are overlapping views of one signal
+  // (a Hankel matrix, column c at offset c), so each batch is one matrix-vector
+  // product that reads x_{b0} (or x_{a0}) once for all its columns.
+  struct Run {
+    Eigen::Index first, length;
+  };
+  thread_local std::vector<Run> runs;
+  thread_local Eigen::VectorXd batch;
+  runs.clear();
+  for (Eigen::Index k = 0; k < p; ++k) {
+    if (continues(k)) ++runs.back().length;
+    else runs.push_back({k, 1});
+  }
+  // Columns first + skip .. first + length - 1 of a run, the last lag first.
+  const auto hankel = [&](const Run& r, Eigen::Index skip) {
+    const LaggedColumn& c = columns[r.first];
+    const Eigen::Index last_lag = c.lag + r.length - 1;
+    return Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(
+        c.signal + t0 - last_lag, n, r.length - skip, Eigen::OuterStride<>(1));
+  };
+  for (std::size_t ia = 0; ia < runs.size(); ++ia) {
+    const Run& a = runs[ia];
+    const LaggedColumn& ca = columns[a.first];
+    for (std::size_t ib = 0; ib <= ia; ++ib) {
+      const Run& b = runs[ib];
+      const LaggedColumn& cb = columns[b.first];
+      const double s = ca.sign * cb.sign;
+      batch.noalias() = hankel(a, 0).transpose() * column_segment(cb, t0, n);
+      for (Eigen::Index m = 0; m < a.length; ++m) G(a.first + m, b.first) = s * batch[a.length - 1 - m];
+      if (ib == ia) continue;
+      batch.noalias() = hankel(b, 1).transpose() * column_segment(ca, t0, n);
+      for (Eigen::Index m = 1; m < b.length; ++m) G(a.first, b.first + m) = s * batch[b.length - 1 - m];
+    }
+  }
   for (Eigen::Index i = 0; i < p; ++i) {
     const LaggedColumn& ci = columns[i];
-    const ConstSegment xi = column_segment(ci, t0, n);
     const bool ci_continues = continues(i);
     for (Eigen::Index j = 0; j <= i; ++j) {
       const LaggedColumn& cj = columns[j];
-      const double s = ci.sign * cj.sign;
       if (ci_continues && continues(j)) {
         // Both columns shift by one lag against (i-1, j-1): the sum over the rows
         // gains the term at t0 and loses the one at t0 + n (Toeplitz recursion),
         // O(1) instead of an O(n) dot product.
         const double enter = ci.signal[t0 - ci.lag] * cj.signal[t0 - cj.lag];
         const double leave = ci.signal[t0 + n - ci.lag] * cj.signal[t0 + n - cj.lag];
-        G(i, j) = G(i - 1, j - 1) + s * (enter - leave);
-      } else {
-        G(i, j) = s * xi.dot(column_segment(cj, t0, n));
+        G(i, j) = G(i - 1, j - 1) + ci.sign * cj.sign * (enter - leave);
       }
       G(j, i) = G(i, j);
     }

@@ -97,6 +97,15 @@ def test_oe_miso_general_equals_least_squares():
     np.testing.assert_allclose(r.covariance, sigma2 * np.linalg.inv(J.T @ J), rtol=1e-6)
 
 
+def test_oe_first_order_with_two_b_taps_equals_least_squares():
+    # nf = 1 with nb = 2: the start's pole grid solves a 2-tap least squares per pole.
+    y, u = open_loop(600, 7, [([0.3, 0.15], [1, -0.7], 3)])
+    r = identify.oe(y, u, [3], "oe", nb=[2], nf=[1])
+    theta = _oe_reference(y, u, [(2, 1, 3)], [0.3, 0.15, -0.7], 0)
+    assert r.converged
+    np.testing.assert_allclose(r.theta, theta, rtol=1e-8, atol=1e-8)
+
+
 def test_fir_recovers_known_fir_and_equals_lstsq():
     g = np.array([0.5, 0.3, -0.2, 0.1, 0.05])
     rng = np.random.default_rng(4)

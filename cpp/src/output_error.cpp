@@ -151,11 +151,15 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const
   constexpr int P = static_cast<int>(std::size(kGrid)) + 1;  // Prony's pole first
   const OeChannel& ch = channels_[j];
   const int nb = ch.nb;
-  simulate(u, y, skip, N, out);
-  // Target for channel j: the data minus the other channels' simulation.
-  residual_ = error_;
-  for (Eigen::Index k = 0; k < nb; ++k)
-    residual_ += out.b[j][k] * Eigen::Map<const Eigen::VectorXd>(w_[j].data() + pad_ - k, N);
+  // Target for channel j: the data minus the other channels' simulation (none: SISO).
+  if (channels_.size() == 1) {
+    residual_ = Eigen::Map<const Eigen::VectorXd>(y, N);
+  } else {
+    simulate(u, y, skip, N, out);
+    residual_ = error_;
+    for (Eigen::Index k = 0; k < nb; ++k)
+      residual_ += out.b[j][k] * Eigen::Map<const Eigen::VectorXd>(w_[j].data() + pad_ - k, N);
+  }
   const double rr = residual_.tail(N - skip).squaredNorm();
 
   std::array<double, P> pole;

@@ -1,6 +1,7 @@
 #include "mpmpp/output_error.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <string>
@@ -36,7 +37,6 @@ OutputErrorEstimator::OutputErrorEstimator(std::vector<OeChannel> channels, OeOp
   if (options_.init_fir_length < 0 || options_.init_fir_length > detail::kMaxLag)
     throw InputError("init_fir_length must be in [0, 1000000]");
   const std::size_t m = channels_.size();
-  yhat_.resize(m);
   w_.resize(m);
   v_.resize(m);
   s_.resize(m);
@@ -148,26 +148,69 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const
   // once b_j is eliminated by least squares (other channels held), so a few poles are
   // tried and Levenberg-Marquardt starts from the best: Prony's pole or a grid point.
   static constexpr double kGrid[] = {-0.5, 0.0, 0.5, 0.8, 0.9, 0.95, 0.98};
+  constexpr int P = static_cast<int>(std::size(kGrid)) + 1;  // Prony's pole first
   const OeChannel& ch = channels_[j];
-  simulate(u, y, skip, N, out);
-  // Target for channel j: the data minus the other channels' simulation.
-  residual_ = error_ + yhat_[j].segment(pad_, N);
+  const int nb = ch.nb;
+  // Target for channel j: the data minus the other channels' simulation (none: SISO).
+  if (channels_.size() == 1) {
+    residual_ = Eigen::Map<const Eigen::VectorXd>(y, N);
+  } else {
+    simulate(u, y, skip, N, out);
+    residual_ = error_;
+    for (Eigen::Index k = 0; k < nb; ++k)
+      residual_ += out.b[j][k] * Eigen::Map<const Eigen::VectorXd>(w_[j].data() + pad_ - k, N);
+  }
   const double rr = residual_.tail(N - skip).squaredNorm();
+
+  std::array<double, P> pole;
+  pole[0] = -out.f[j][1];
+  for (int g = 1; g < P; ++g) pole[g] = std::min(kGrid[g - 1], options_.max_pole_radius);
+  // The P filters v_g = q^-d / (1 - pole_g q^-1) u_j in one pass, interleaved (row t of
+  // grid_v_ is v_g(t) for every g: independent recursions side by side vectorise, where
+  // one filter at a time is a chain of dependent multiply-adds), then the
+  // least-squares sums in b_j of all P poles together, again vectorised across poles:
+  //   G_g(k, l) = sum_{t >= skip} v_g(t - k) v_g(t - l),  h_g(k) = sum v_g(t - k) residual(t).
+  grid_v_.resize((nb + N) * P);
+  std::fill_n(grid_v_.data(), nb * P, 0.0);  // v_g(t < 0) = 0: zero initial state
+  double* v = grid_v_.data() + nb * P;
+  const auto uj = u.col(static_cast<Eigen::Index>(j));
+  for (Eigen::Index t = 0; t < N; ++t) {
+    const double x = t >= ch.delay ? uj[t - ch.delay] : 0.0;
+    double* vt = v + t * P;
+    for (int g = 0; g < P; ++g) vt[g] = x + pole[g] * vt[g - P];
+  }
+  const int n_products = nb * (nb + 1) / 2;  // rows of grid_sums_: G_g(k, l), l <= k; h_g(k)
+  grid_sums_.resize((n_products + nb) * P);
+  const double* res = residual_.data();
+  for (int k = 0; k < nb; ++k)
+    for (int l = 0; l <= k; ++l) {  // one pass: G_g(k, l) and, on the diagonal, h_g(k)
+      std::array<double, P> g_kl{}, h_k{};
+      const bool diagonal = l == k;
+      for (Eigen::Index t = skip; t < N; ++t) {
+        const double *vk = v + (t - k) * P, *vl = v + (t - l) * P;
+        for (int g = 0; g < P; ++g) g_kl[g] += vk[g] * vl[g];
+        if (diagonal)
+          for (int g = 0; g < P; ++g) h_k[g] += vk[g] * res[t];
+      }
+      std::copy(g_kl.begin(), g_kl.end(), grid_sums_.data() + (k * (k + 1) / 2 + l) * P);
+      if (diagonal) std::copy(h_k.begin(), h_k.end(), grid_sums_.data() + (n_products + k) * P);
+    }
+
+  G_.resize(nb, nb);
+  h_.resize(nb);
   double best = INFINITY;
-  const double prony_pole = -out.f[j][1];
-  for (int g = -1; g < static_cast<int>(std::size(kGrid)); ++g) {
-    const double pole = g < 0 ? prony_pole : std::min(kGrid[g], options_.max_pole_radius);
-    f1_ << 1.0, -pole;
-    filter_into(unit_, f1_, ch.delay, u.col(j), v_[j].segment(pad_, N));
-    grid_columns_.clear();
-    for (int k = 0; k < ch.nb; ++k) grid_columns_.push_back({v_[j].data() + pad_, k, 1.0});
-    detail::lagged_normal_equations(grid_columns_, residual_.data(), skip, N - skip, G_, h_);
+  for (int g = 0; g < P; ++g) {
+    const double* acc = grid_sums_.data() + g;
+    for (int k = 0; k < nb; ++k)
+      for (int l = 0; l <= k; ++l, acc += P) G_(k, l) = G_(l, k) = *acc;
+    for (int k = 0; k < nb; ++k, acc += P) h_[k] = *acc;
     ldlt_.compute(G_);
     delta_ = ldlt_.solve(h_);
     const double cost = 0.5 * (rr - h_.dot(delta_));  // LS cost with b_j eliminated
     if (ldlt_.info() == Eigen::Success && delta_.allFinite() && cost < best) {
       best = cost;
       out.b[j] = delta_;
+      f1_ << 1.0, -pole[g];
       out.f[j] = f1_;
     }
   }
@@ -175,17 +218,18 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const
 
 double OutputErrorEstimator::simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
                                       Eigen::Index skip, Eigen::Index N, const OeResult& par) {
-  error_ = Eigen::Map<const Eigen::VectorXd>(y, N);
+  using ConstSegment = Eigen::Map<const Eigen::VectorXd>;
   for (std::size_t j = 0; j < channels_.size(); ++j) {
     // w_j = q^-d_j / F_j u_j is both the b-sensitivity and, through yhat_j = B_j w_j,
-    // the simulation: one recursive filter per channel instead of two.
+    // the simulation: one recursive filter per channel instead of two. yhat_j is not
+    // stored: e = y - sum_jk b_jk w_j(t - k) in one pass per term.
     filter_into(unit_, par.f[j], channels_[j].delay, u.col(j), w_[j].segment(pad_, N));
-    auto yhat = yhat_[j].segment(pad_, N);
     const double* w = w_[j].data() + pad_;
-    yhat = par.b[j][0] * Eigen::Map<const Eigen::VectorXd>(w, N);
-    for (Eigen::Index k = 1; k < par.b[j].size(); ++k)
-      yhat += par.b[j][k] * Eigen::Map<const Eigen::VectorXd>(w - k, N);  // pad_ >= nb - 1
-    error_ -= yhat;
+    for (Eigen::Index k = 0; k < par.b[j].size(); ++k) {
+      const ConstSegment w_k(w - k, N);  // pad_ >= nb - 1
+      if (j == 0 && k == 0) error_ = ConstSegment(y, N) - par.b[j][k] * w_k;
+      else error_ -= par.b[j][k] * w_k;
+    }
   }
   return 0.5 * error_.tail(N - skip).squaredNorm();
 }
@@ -309,7 +353,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                                                   2 * channels_[j].nf, L - 1}));
   }
   for (std::size_t j = 0; j < m; ++j)
-    for (auto* buf : {&yhat_[j], &w_[j], &v_[j], &s_[j], &r_[j]}) {
+    for (auto* buf : {&w_[j], &v_[j], &s_[j], &r_[j]}) {
       buf->resize(pad_ + N);
       buf->head(pad_).setZero();
     }
@@ -384,7 +428,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
       } else if (lambda > 1e12) {
         // No descent direction left at any damping: theta is a (numerical) minimum.
         out.converged = true;
-        cost = simulate(u, y.data(), skip, N, out);  // restore yhat_/error_ at theta
+        cost = simulate(u, y.data(), skip, N, out);  // restore w_/error_ at theta
         break;
       } else {
         lambda *= 10.0;

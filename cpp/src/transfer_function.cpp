@@ -111,26 +111,30 @@ TransferFunction TransferFunction::from_foptd(double gain, double time_constant_
 }
 
 namespace {
-// y[t] = c[t] - a1 y[t-1] in place, four samples per step: given p = y[t-1],
+// y[t] = c[t] - a1 y[t-1] with c[t] = b0 x[t] (zero initial state), four samples per
+// step: given p = y[t-1],
 //   y[t+k] = d_k + (-a1)^(k+1) p,  d_0 = c[t],  d_k = c[t+k] - a1 d_(k-1),
 // so the loop-carried dependency is one multiply-add per four samples instead of one
 // per sample (the d_k of the next block overlap with it). Same result up to rounding.
-void first_order_recursion(double a1, double* y, Eigen::Index n) {
+// The one-tap numerator b0 is applied on the fly: no separate pass writing c.
+template <bool kUnitGain>  // b0 == 1: the OE sensitivity filters; skips a multiply per sample
+void first_order_recursion(double b0, double a1, const double* x, double* y, Eigen::Index n) {
+  const auto c = [b0, x](Eigen::Index t) { return kUnitGain ? x[t] : b0 * x[t]; };
   const double m1 = -a1, m2 = m1 * m1, m3 = m2 * m1, m4 = m2 * m2;
   double p = 0.0;
   Eigen::Index t = 0;
   for (; t + 4 <= n; t += 4) {
-    const double d0 = y[t];
-    const double d1 = y[t + 1] - a1 * d0;
-    const double d2 = y[t + 2] - a1 * d1;
-    const double d3 = y[t + 3] - a1 * d2;
+    const double d0 = c(t);
+    const double d1 = c(t + 1) - a1 * d0;
+    const double d2 = c(t + 2) - a1 * d1;
+    const double d3 = c(t + 3) - a1 * d2;
     y[t] = d0 + m1 * p;
     y[t + 1] = d1 + m2 * p;
     y[t + 2] = d2 + m3 * p;
     y[t + 3] = d3 + m4 * p;
     p = y[t + 3];
   }
-  for (; t < n; ++t) p = y[t] = y[t] - a1 * p;
+  for (; t < n; ++t) p = y[t] = c(t) - a1 * p;
 }
 }  // namespace
 
@@ -145,6 +149,11 @@ void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
   // The first term is assigned, not added to zeros: one pass fewer, same values.
   const Eigen::Index d = std::min<Eigen::Index>(delay, n);
   out.head(d).setZero();
+  if (num.size() == 1 && den.size() == 2) {  // b0 q^-d / (1 + a1 q^-1): one fused pass
+    if (num[0] == 1.0) first_order_recursion<true>(1.0, den[1], x.data(), out.data() + d, n - d);
+    else first_order_recursion<false>(num[0], den[1], x.data(), out.data() + d, n - d);
+    return;
+  }
   if (num.size() == 0) out.tail(n - d).setZero();
   else out.tail(n - d) = num[0] * x.head(n - d);
   for (Eigen::Index k = 1; k < num.size(); ++k) {
@@ -156,7 +165,7 @@ void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
   if (na == 1) return;  // FIR: no recursion
   double* y = out.data();
   if (na == 2) {
-    first_order_recursion(den[1], y, n);
+    first_order_recursion<true>(1.0, den[1], y, y, n);  // in place: c[t] is read before y[t] is written
     return;
   }
   const double* a = den.data();

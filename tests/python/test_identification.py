@@ -60,6 +60,12 @@ def test_arx_regularisation_rule_matches_ridge_reference(siso_closed_loop):
         theta, _, regularised = ref.arx(y, u[:, None], 9, [10], [17], delta=delta)
         assert r.regularised == regularised == expect
         np.testing.assert_allclose(r.theta, theta, rtol=1e-8, atol=1e-8)
+        # Covariance: the sandwich sigma^2 M G M, M = (G + delta/2 diag(G))^-1 (the ridge
+        # in original coordinates; M = G^-1 when the rule does not engage).
+        Phi, _ = ref.arx_regressors(y, u[:, None], 9, [10], [17])
+        G = Phi.T @ Phi
+        M = np.linalg.inv(G + (0.5 * delta if expect else 0.0) * np.diag(np.diag(G)))
+        np.testing.assert_allclose(r.covariance, r.noise_variance * M @ G @ M, rtol=1e-6)
 
 
 def _oe_reference(y, u, chans, x0, skip):
@@ -89,6 +95,15 @@ def test_oe_miso_general_equals_least_squares():
     J = ref.oe_jacobian(theta, u, chans, 0)
     sigma2 = 2 * r.cost / (800 - 8)
     np.testing.assert_allclose(r.covariance, sigma2 * np.linalg.inv(J.T @ J), rtol=1e-6)
+
+
+def test_oe_first_order_with_two_b_taps_equals_least_squares():
+    # nf = 1 with nb = 2: the start's pole grid solves a 2-tap least squares per pole.
+    y, u = open_loop(600, 7, [([0.3, 0.15], [1, -0.7], 3)])
+    r = identify.oe(y, u, [3], "oe", nb=[2], nf=[1])
+    theta = _oe_reference(y, u, [(2, 1, 3)], [0.3, 0.15, -0.7], 0)
+    assert r.converged
+    np.testing.assert_allclose(r.theta, theta, rtol=1e-8, atol=1e-8)
 
 
 def test_fir_recovers_known_fir_and_equals_lstsq():
@@ -130,6 +145,24 @@ def test_arx_oe_miso_pipeline_equals_reference():
     theta, a, gains, _ = ref.arx_oe(y, u, 6, [6, 6], [4, 2], [(1, 1, 4), (1, 1, 2)], [20, 20])
     np.testing.assert_allclose(r.oe.theta, theta, rtol=1e-8, atol=1e-8)
     np.testing.assert_allclose([c.gain for c in r.channels], gains, rtol=1e-8)
+
+
+def test_arx_oe_reuses_its_estimator_without_changing_results(siso_closed_loop):
+    # arx_oe keeps one estimator per settings (and thread): a reused estimator gives
+    # exactly what a fresh one gives, on another window, and other settings are not
+    # served by it.
+    y, u = siso_closed_loop
+    first = identify.arx_oe(y[:1000], u[:1000], 9, 10, 17, fir_length=64)
+    again = identify.arx_oe(y[300:], u[300:], 9, 10, 17, fir_length=64)
+    fresh = identify._core.ArxOeEstimator(9, [10], [17], identify.channels(17), [64]).estimate(
+        y[300:], u[300:, None])
+    assert np.array_equal(again.oe.theta, fresh.oe.theta)
+    assert np.array_equal(again.channels[0].fir, fresh.channels[0].fir)
+    assert not np.array_equal(first.oe.theta, again.oe.theta)
+    other = identify.arx_oe(y[300:], u[300:], 5, 6, 17, fir_length=30)
+    assert len(other.noise) == 5 and len(other.channels[0].fir) == 30
+    assert identify.arx_oe(y[300:], u[300:], 9, [10], [17], fir_length=[64]).oe.theta.tolist() == \
+        fresh.oe.theta.tolist()
 
 
 def test_fir_length_default_is_one_percent_of_peak():

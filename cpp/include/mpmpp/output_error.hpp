@@ -87,7 +87,7 @@ class OutputErrorEstimator {
   void pole_grid_start(std::size_t j, const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
                        Eigen::Index skip, Eigen::Index N, OeResult& out);
   void stabilise(Eigen::VectorXd& f) const;
-  // w_j, yhat_j for the given polynomials, e = y - sum_j yhat_j; returns sum(e^2)/2 over rows.
+  // w_j for the given polynomials and e = y - sum_j B_j w_j; returns sum(e^2)/2 over rows >= skip.
   double simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y, Eigen::Index skip,
                   Eigen::Index N, const OeResult& par);
   void jacobian_columns(Eigen::Index N, const OeResult& par);
@@ -103,13 +103,14 @@ class OutputErrorEstimator {
   OeOptions options_;
   Eigen::Index p_ = 0, pad_ = 0;
   int nonlinear_channels_ = 0;
-  std::vector<detail::LaggedColumn> columns_, grid_columns_;
+  std::vector<detail::LaggedColumn> columns_;
   Eigen::Vector2d f1_;
   detail::NormalEquationsSolver solver_;
   Eigen::MatrixXd G_, H_, A_;
   Eigen::VectorXd h_, delta_, theta_, candidate_theta_, error_, residual_, unit_;
+  Eigen::VectorXd grid_v_, grid_sums_;  // pole_grid_start: interleaved filters, sums
   // Per channel, zero-padded (pad_ leading zeros) so lagged columns may reach t < 0.
-  std::vector<Eigen::VectorXd> yhat_, w_, v_, s_, r_;
+  std::vector<Eigen::VectorXd> w_, v_, s_, r_;
   OeResult candidate_;
   // Factored on an empty matrix so copies of an unfitted estimator are defined (UBSan).
   Eigen::LDLT<Eigen::MatrixXd> ldlt_{Eigen::MatrixXd(0, 0)};

@@ -52,6 +52,7 @@ class NormalEquationsSolver {
 
   Eigen::VectorXd scale_;
   Eigen::MatrixXd scaled_, shifted_;
+  mutable Eigen::MatrixXd inverse_factor_;  // covariance_factor's workspace: L^-1
   // Factored once on an empty matrix so that copying a solver that has not solved yet
   // copies a defined state (a default LLT leaves its info flag uninitialised: UBSan).
   Eigen::LLT<Eigen::MatrixXd> llt_{Eigen::MatrixXd(0, 0)};

@@ -27,19 +27,32 @@ class ActiveSetFactorization {
 
   // The products and solves of the method. The triangular solves are written out (column axpys
   // and dot products): k is small and Eigen's blocked triangular kernels cost more to set up.
-  // out = J' a.
+  // out = J' a. On MPC-sized n the products are plain loops: Eigen's kernels (even the lazy,
+  // coefficient-wise ones) cost more to set up than the n^2 multiplications.
   void J_transpose_times(const Eigen::Ref<const Eigen::VectorXd>& a, Eigen::Ref<Eigen::VectorXd> out) const {
-    if (n_ <= kLazyProductMaxSize)
-      out.noalias() = J_.transpose().lazyProduct(a);
-    else
+    if (n_ > kLazyProductMaxSize) {
       out.noalias() = J_.transpose() * a;
+      return;
+    }
+    for (int c = 0; c < n_; ++c) {
+      const double* J_c = J_.col(c).data();
+      double sum = 0.0;
+      for (int r = 0; r < n_; ++r) sum += J_c[r] * a[r];
+      out[c] = sum;
+    }
   }
   // out = J(:, first .. first+c.size()-1) c.
   void J_columns_times(int first, const Eigen::Ref<const Eigen::VectorXd>& c, Eigen::Ref<Eigen::VectorXd> out) const {
-    if (n_ <= kLazyProductMaxSize)
-      out.noalias() = J_.middleCols(first, c.size()).lazyProduct(c);
-    else
+    if (n_ > kLazyProductMaxSize) {
       out.noalias() = J_.middleCols(first, c.size()) * c;
+      return;
+    }
+    for (int r = 0; r < n_; ++r) out[r] = 0.0;
+    for (int j = 0; j < c.size(); ++j) {
+      const double* J_j = J_.col(first + j).data();
+      const double c_j = c[j];
+      for (int r = 0; r < n_; ++r) out[r] += J_j[r] * c_j;
+    }
   }
   // v <- R^{-1} v (back substitution by columns of R), v of length size().
   template <typename V>

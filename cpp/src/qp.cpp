@@ -282,6 +282,19 @@ struct QpSolver::Impl {
   // with w = J^{-1} x, R'w1 = b_active, w2 = -J2'q, R mult = w1 + J1'q.
   void solve_on_active_set() {
     const int k = factorization.size();
+    if (k == 0) {
+      // No active constraint (most MPC samples): x = -J J'q (= -P^{-1} q) and x'Px = |J'q|^2,
+      // the steps below without their block set-up.
+      factorization.J_transpose_times(q, Jq);
+      factorization.J_columns_times(0, Jq, x);
+      double squared_norm = 0.0;
+      for (int i = 0; i < n; ++i) {
+        x[i] = -x[i];
+        squared_norm += Jq[i] * Jq[i];
+      }
+      x_P_x = squared_norm;
+      return;
+    }
     factorization.J_transpose_times(q, Jq);
     for (int j = 0; j < k; ++j) w[j] = active[j].sigma * bound(active[j]);
     w.tail(n - k) = -Jq.tail(n - k);
@@ -305,7 +318,7 @@ struct QpSolver::Impl {
     int first = 0, last = n;
     while (first < last && x[first] == 0.0) ++first;
     while (last > first && x[last - 1] == 0.0) --last;
-    if (last > first && m <= detail::kLazyProductMaxSize)  // gemv set-up costs more than this
+    if (last > first && m <= detail::kSmallSize)  // gemv set-up costs more than this
       Ax.noalias() = A.middleCols(first, last - first).lazyProduct(x.segment(first, last - first));
     else if (last > first)
       Ax.noalias() = A.middleCols(first, last - first) * x.segment(first, last - first);

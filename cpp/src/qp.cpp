@@ -318,9 +318,16 @@ struct QpSolver::Impl {
     int first = 0, last = n;
     while (first < last && x[first] == 0.0) ++first;
     while (last > first && x[last - 1] == 0.0) --last;
-    if (last > first && m <= detail::kSmallSize)  // gemv set-up costs more than this
-      Ax.noalias() = A.middleCols(first, last - first).lazyProduct(x.segment(first, last - first));
-    else if (last > first)
+    if (last > first && m <= detail::kSmallSize) {  // gemv set-up costs more than this
+      const int columns = last - first;
+      detail::with_static_size(columns, [&](auto size) {
+        constexpr int C = decltype(size)::value;
+        using Columns = Eigen::Matrix<double, Eigen::Dynamic, C>;
+        using Entries = Eigen::Matrix<double, C, 1>;
+        Ax.noalias() = Eigen::Map<const Columns>(A.col(first).data(), m, columns)
+                           .lazyProduct(Eigen::Map<const Entries>(x.data() + first, columns));
+      });
+    } else if (last > first)
       Ax.noalias() = A.middleCols(first, last - first) * x.segment(first, last - first);
     else
       Ax.setZero();

@@ -9,6 +9,7 @@
 // O(n^2) update (a Householder reflection to add, Givens rotations to drop); nothing here
 // allocates after construction.
 #include <Eigen/Dense>
+#include <type_traits>
 
 namespace mpmpp::detail {
 
@@ -17,6 +18,31 @@ namespace mpmpp::detail {
 // the products are plain loops over contiguous columns. (Eigen's fixed-size kernels, dispatched
 // on n, were no faster at n = 4 and slower at n = 9: callgrind on the paper's QPs.)
 constexpr int kSmallSize = 12;
+
+// with_static_size(size, kernel) calls kernel(std::integral_constant<int, N>()) with N = size
+// for 1 <= size <= kSmallSize (a jump table), N = Eigen::Dynamic otherwise: for products whose
+// inner dimension is small but whose other one is not, where a compile-time inner size lets
+// Eigen unroll the inner loop.
+template <typename Kernel>
+void with_static_size(int size, Kernel&& kernel) {
+  using std::integral_constant;
+  switch (size) {
+    case 1: return kernel(integral_constant<int, 1>());
+    case 2: return kernel(integral_constant<int, 2>());
+    case 3: return kernel(integral_constant<int, 3>());
+    case 4: return kernel(integral_constant<int, 4>());
+    case 5: return kernel(integral_constant<int, 5>());
+    case 6: return kernel(integral_constant<int, 6>());
+    case 7: return kernel(integral_constant<int, 7>());
+    case 8: return kernel(integral_constant<int, 8>());
+    case 9: return kernel(integral_constant<int, 9>());
+    case 10: return kernel(integral_constant<int, 10>());
+    case 11: return kernel(integral_constant<int, 11>());
+    case 12: return kernel(integral_constant<int, 12>());
+    default: return kernel(integral_constant<int, Eigen::Dynamic>());
+  }
+}
+static_assert(kSmallSize == 12, "with_static_size has one case per size up to kSmallSize");
 
 class ActiveSetFactorization {
  public:

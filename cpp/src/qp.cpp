@@ -16,6 +16,7 @@
 // which no active inequality can be dropped proves primal infeasibility (GI, Step 2c).
 #include "mpmpp/qp.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <new>
@@ -155,27 +156,36 @@ struct QpSolver::Impl {
       throw InputError("l has " + std::to_string(l_in.size()) + " entries, expected " + std::to_string(m));
     if (u_in.size() != m)
       throw InputError("u has " + std::to_string(u_in.size()) + " entries, expected " + std::to_string(m));
-    check_finite(q_in, "q");
+    if (!q_in.allFinite()) throw InputError("q has a NaN or infinite entry");
     // Placement new is how an Eigen::Map is pointed at other data.
     new (&q) ConstMap(q_in.data(), n);
     new (&l) ConstMap(l_in.data(), m);
     new (&u) ConstMap(u_in.data(), m);
     const double inf = settings.infinite_bound;
     const double tol = settings.feasibility_tol;
-    // Vectorised passes for what every row needs; which entry is bad and why is worked out only
-    // on failure. min(u - l) is NaN when an entry is NaN, < 0 when l_i > u_i, and 0 exactly when
-    // some row is an equality (usually none in MPC: the per-row comparison is then skipped).
-    const auto L = l.array();
-    const auto U = u.array();
-    const double min_gap = m > 0 ? (U - L).minCoeff<Eigen::PropagateNaN>() : kInfinity;
-    if (!(min_gap >= 0.0) || (m > 0 && (L.maxCoeff() >= inf || U.minCoeff() <= -inf))) reject_bounds();
-    // As arm() does, except for finite bounds beyond infinite_bound (rare): their thresholds
-    // stay finite here and are disarmed by most_violated() if such a row is ever picked.
-    lower_trigger.array() = L - tol * (1.0 + L.abs());
-    upper_trigger.array() = U + tol * (1.0 + U.abs());
+    // One pass over the rows for what every row needs, written so that the compiler vectorises
+    // it (flags as selects, no branches; on MPC-sized m the set-up of several Eigen reductions
+    // costs more than the work); which entry is bad and why is worked out only on failure.
+    // !(u - l >= 0) holds for NaN and for l_i > u_i. The thresholds are arm()'s, except for
+    // finite bounds beyond infinite_bound (rare): they stay finite here and are disarmed by
+    // most_violated() if such a row is ever picked. Equality rows (usually none in MPC) are
+    // classified and disarmed in a second pass, only when there are some now or were before.
+    const double* lo = l_in.data();
+    const double* up = u_in.data();
+    double* lower = lower_trigger.data();
+    double* upper = upper_trigger.data();
+    double invalid = 0.0, some_equality = 0.0;
+    for (int i = 0; i < m; ++i) {
+      const bool valid = (up[i] - lo[i] >= 0.0) & (lo[i] < inf) & (up[i] > -inf);
+      invalid = valid ? invalid : 1.0;
+      some_equality = lo[i] == up[i] ? 1.0 : some_equality;
+      lower[i] = lo[i] - tol * (1.0 + std::abs(lo[i]));
+      upper[i] = up[i] + tol * (1.0 + std::abs(up[i]));
+    }
+    if (invalid != 0.0) reject_bounds();
     int equalities = 0;
     bool changed = false;
-    if (min_gap == 0.0 || num_equalities > 0) {
+    if (some_equality != 0.0 || num_equalities > 0) {
       for (int i = 0; i < m; ++i) {
         const bool equality = l[i] == u[i];
         changed |= equality != is_equality[i];
@@ -272,6 +282,19 @@ struct QpSolver::Impl {
   // with w = J^{-1} x, R'w1 = b_active, w2 = -J2'q, R mult = w1 + J1'q.
   void solve_on_active_set() {
     const int k = factorization.size();
+    if (k == 0) {
+      // No active constraint (most MPC samples): x = -J J'q (= -P^{-1} q) and x'Px = |J'q|^2,
+      // the steps below without their block set-up.
+      factorization.J_transpose_times(q, Jq);
+      factorization.J_columns_times(0, Jq, x);
+      double squared_norm = 0.0;
+      for (int i = 0; i < n; ++i) {
+        x[i] = -x[i];
+        squared_norm += Jq[i] * Jq[i];
+      }
+      x_P_x = squared_norm;
+      return;
+    }
     factorization.J_transpose_times(q, Jq);
     for (int j = 0; j < k; ++j) w[j] = active[j].sigma * bound(active[j]);
     w.tail(n - k) = -Jq.tail(n - k);
@@ -295,9 +318,16 @@ struct QpSolver::Impl {
     int first = 0, last = n;
     while (first < last && x[first] == 0.0) ++first;
     while (last > first && x[last - 1] == 0.0) --last;
-    if (last > first && m <= detail::kLazyProductMaxSize)  // gemv set-up costs more than this
-      Ax.noalias() = A.middleCols(first, last - first).lazyProduct(x.segment(first, last - first));
-    else if (last > first)
+    if (last > first && m <= detail::kSmallSize) {  // gemv set-up costs more than this
+      const int columns = last - first;
+      detail::with_static_size(columns, [&](auto size) {
+        constexpr int C = decltype(size)::value;
+        using Columns = Eigen::Matrix<double, Eigen::Dynamic, C>;
+        using Entries = Eigen::Matrix<double, C, 1>;
+        Ax.noalias() = Eigen::Map<const Columns>(A.col(first).data(), m, columns)
+                           .lazyProduct(Eigen::Map<const Entries>(x.data() + first, columns));
+      });
+    } else if (last > first)
       Ax.noalias() = A.middleCols(first, last - first) * x.segment(first, last - first);
     else
       Ax.setZero();
@@ -346,8 +376,8 @@ struct QpSolver::Impl {
   const QpResult& finish(QpStatus status, int iterations, bool exact = false) {
     result.status = status;
     result.iterations = iterations;
-    result.x = x;
-    result.y.setZero();
+    std::copy(x.data(), x.data() + n, result.x.data());  // sizes fixed: no Eigen set-up needed
+    std::fill(result.y.data(), result.y.data() + m, 0.0);
     // P x + q = sum_j mult_j sigma_j a_j  and OSQP's  P x + q + A'y = 0  give y = -sigma mult.
     for (int j = 0; j < static_cast<int>(active.size()); ++j) result.y[active[j].row] = -active[j].sigma * mult[j];
     if (!exact) {

@@ -118,8 +118,8 @@ TEST(Detector, VersionTwoFilesLoadWithoutReferenceCovariance) {
   nlohmann::json doc = nlohmann::json::parse(random_detector().to_json());
   doc["version"] = 2;
   for (auto& c : doc["channels"]) c.erase("reference_covariance");
-  for (const ChannelScorer& s : Detector::from_json(doc.dump(), "v2.json").scorers())
-    EXPECT_EQ(s.reference_covariance.size(), 0);
+  const Detector v2 = Detector::from_json(doc.dump(), "v2.json");  // named: a temporary would die before the loop
+  for (const ChannelScorer& s : v2.scorers()) EXPECT_EQ(s.reference_covariance.size(), 0);
 }
 
 // Resampling::Estimator: the window's deviation is carried into the training precision,

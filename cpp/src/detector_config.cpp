@@ -1,7 +1,9 @@
 #include "mpmpp/detector_config.hpp"
 
 #include <cmath>
+#include <cstddef>
 #include <limits>
+#include <utility>
 
 #include "detector_config_json.hpp"
 #include "mpmpp/error.hpp"
@@ -156,35 +158,39 @@ int DetectorConfig::alarm_count() const {
   return std::max(1, static_cast<int>(std::ceil(threshold * n_T - 1e-9)));
 }
 
-const char* to_string(OeStructure s) {
-  switch (s) {
-    case OeStructure::Foptd: return "foptd";
-    case OeStructure::Fir: return "fir";
-  }
+namespace {
+
+// Each enum's JSON names, in declaration order: to_string and *_from_string read the one table.
+template <typename E>
+using EnumName = std::pair<E, const char*>;
+
+const EnumName<OeStructure> kOeStructureNames[] = {{OeStructure::Foptd, "foptd"}, {OeStructure::Fir, "fir"}};
+const EnumName<Resampling> kResamplingNames[] = {
+    {Resampling::Independent, "independent"}, {Resampling::Covariance, "covariance"}, {Resampling::Estimator, "estimator"}};
+
+template <typename E, std::size_t N>
+const char* name_of(E value, const EnumName<E> (&names)[N]) {
+  for (const auto& [v, name] : names)
+    if (v == value) return name;
   return "?";
 }
 
-OeStructure oe_structure_from_string(const std::string& s) {
-  if (s == "foptd") return OeStructure::Foptd;
-  if (s == "fir") return OeStructure::Fir;
-  throw InputError("detector config: oe_structure '" + s + "' is not one of foptd, fir");
-}
-
-const char* to_string(Resampling r) {
-  switch (r) {
-    case Resampling::Independent: return "independent";
-    case Resampling::Covariance: return "covariance";
-    case Resampling::Estimator: return "estimator";
+template <typename E, std::size_t N>
+E value_of(const std::string& s, const EnumName<E> (&names)[N], const char* field) {
+  std::string listed;
+  for (const auto& [v, name] : names) {
+    if (s == name) return v;
+    listed += (listed.empty() ? "" : ", ") + std::string(name);
   }
-  return "?";
+  throw InputError(std::string("detector config: ") + field + " '" + s + "' is not one of " + listed);
 }
 
-Resampling resampling_from_string(const std::string& s) {
-  if (s == "independent") return Resampling::Independent;
-  if (s == "covariance") return Resampling::Covariance;
-  if (s == "estimator") return Resampling::Estimator;
-  throw InputError("detector config: resampling '" + s + "' is not one of independent, covariance, estimator");
-}
+}  // namespace
+
+const char* to_string(OeStructure s) { return name_of(s, kOeStructureNames); }
+OeStructure oe_structure_from_string(const std::string& s) { return value_of(s, kOeStructureNames, "oe_structure"); }
+const char* to_string(Resampling r) { return name_of(r, kResamplingNames); }
+Resampling resampling_from_string(const std::string& s) { return value_of(s, kResamplingNames, "resampling"); }
 
 std::string DetectorConfig::to_json() const { return detail::config_to_json(*this).dump(2); }
 

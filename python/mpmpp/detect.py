@@ -252,7 +252,7 @@ class Detector:
         return self._core.train_end_s
 
     @staticmethod
-    def _train_from_series(model, config, series, train_end_s):
+    def _train_from_series(model, config, series, channels, train_end_s):
         windows = series.windows
         t0 = windows[0]["start_s"] if windows else 0.0
         train = [k for k, w in enumerate(windows)
@@ -263,9 +263,8 @@ class Detector:
                              f"({n_in} in all, window {config.window_s:g} s, step {config.step_s:g} s); "
                              "need at least 3")
         covariances = series.covariances
-        kinds = [kind for kind, _, _ in _core.WindowFeatures(model, config).channels]
         scorers = [train_scorer(series.features[k][train], config, _channel_seed(config.seed, k),
-                                covariances[k][train] if covariances else None, noise=kinds[k] == "noise")
+                                covariances[k][train] if covariances else None, noise=channels[k][0] == "noise")
                    for k in range(len(series.features))]
         return _core.Detector(model, config, float(train_end_s), scorers)
 
@@ -282,8 +281,9 @@ class Detector:
         if not np.isfinite(train_end_s) or train_end_s <= 0:
             raise ValueError(f"train_end_s: must be a positive number of seconds, got {train_end_s}")
         time_s, u, y = _arrays(model, data)
-        series = _core.WindowFeatures(model, config).extract_series(time_s, u, y)
-        return cls(cls._train_from_series(model, config, series, float(train_end_s))), series
+        features = _core.WindowFeatures(model, config)
+        series = features.extract_series(time_s, u, y)
+        return cls(cls._train_from_series(model, config, series, features.channels, float(train_end_s))), series
 
     def monitor(self, data: pd.DataFrame) -> DetectionResult:
         time_s, u, y = _arrays(self.model, data)

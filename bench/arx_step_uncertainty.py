@@ -2,8 +2,10 @@
 
 Paper MIMO example, output reel_moisture, one 2 h window (ending at --end-h) per seed:
 the spread over seeds of ARX-OE's FIR coefficients (A(q) estimated in the window), of the
-same least squares on data filtered by the true inverse noise model 1/H33, and the OE step's
-own covariance sigma^2 (J'J)^-1 (which treats A(q) as exact). docs/detection.md uses it.
+same least squares on data filtered by the true inverse noise model 1/H33, the OE step's
+own covariance sigma^2 (J'J)^-1 (which treats A(q) as exact) and ARX-OE's two-step
+covariance (two_step_covariance.hpp: A(q)'s uncertainty carried through). docs/detection.md
+uses it.
 
     python bench/arx_step_uncertainty.py [--seeds 60] [--end-h 15]
 """
@@ -44,10 +46,10 @@ def main():
     h = model.noise(OUTPUT)
     window = 1440  # 2 h at 5 s
     end = int(args.end_h * 3600 / model.sample_time_s)
-    estimated, true_filter, oe_sd = [], [], []
+    estimated, true_filter, oe_sd, two_step_sd = [], [], [], []
     for seed in range(args.seeds):
         data = mpmpp.simulate(scenario, seed=seed).iloc[end - window:end]
-        r = arx_oe_model(model, data, OUTPUT, na=18, nb=11, structure="fir")
+        r = arx_oe_model(model, data, OUTPUT, na=18, nb=11, structure="fir", two_step_covariance=True)
         lengths = [len(c.fir) - model.process(OUTPUT, name).delay for c, name in zip(r.channels, inputs)]
         y = data[OUTPUT].to_numpy() - data[OUTPUT].mean()
         U = data[inputs].to_numpy() - data[inputs].to_numpy().mean(axis=0)
@@ -56,12 +58,14 @@ def main():
         estimated.append(np.asarray(r.oe.theta))
         true_filter.append(fir_least_squares(yf, Uf, model, inputs, lengths))
         oe_sd.append(np.sqrt(np.diag(np.asarray(r.oe.covariance))))
+        two_step_sd.append(np.sqrt(np.diag(np.asarray(r.two_step_covariance))))
     labels = [f"{name}[{i}]" for name, L in zip(inputs, lengths) for i in range(L)]
     print(f"{OUTPUT}, window ending at {args.end_h:g} h, {args.seeds} seeds: sd of each FIR coefficient")
-    print(f"{'coefficient':22s} {'ARX-OE (A estimated)':>21s} {'true 1/H filter':>16s} {'OE covariance':>14s}")
+    print(f"{'coefficient':22s} {'ARX-OE (A estimated)':>21s} {'true 1/H filter':>16s} {'OE covariance':>14s} "
+          f"{'two-step covariance':>20s}")
     for k, label in enumerate(labels):
         print(f"{label:22s} {np.std(estimated, axis=0)[k]:21.5f} {np.std(true_filter, axis=0)[k]:16.5f} "
-              f"{np.mean(oe_sd, axis=0)[k]:14.5f}")
+              f"{np.mean(oe_sd, axis=0)[k]:14.5f} {np.mean(two_step_sd, axis=0)[k]:20.5f}")
 
 
 if __name__ == "__main__":

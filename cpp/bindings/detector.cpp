@@ -116,6 +116,7 @@ void bind_detector(py::module_& m) {
       .def_readwrite("feature_scale", &ChannelScorer::feature_scale)
       .def_readwrite("feature_decorrelation", &ChannelScorer::feature_decorrelation)
       .def_readwrite("reference_covariance", &ChannelScorer::reference_covariance)
+      .def_readwrite("mean_covariance", &ChannelScorer::mean_covariance)
       .def_readwrite("support_vectors", &ChannelScorer::support_vectors)
       .def_readwrite("dual_coef", &ChannelScorer::dual_coef)
       .def_readwrite("offset", &ChannelScorer::offset)

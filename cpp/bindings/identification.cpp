@@ -76,7 +76,9 @@ void bind_identification(py::module_& m) {
       .def_readonly("channels", &ArxOeResult::channels)
       .def_readonly("noise", &ArxOeResult::noise, "a_1 .. a_na of A(q) = 1/H(q)")
       .def_readonly("arx", &ArxOeResult::arx)
-      .def_readonly("oe", &ArxOeResult::oe);
+      .def_readonly("oe", &ArxOeResult::oe)
+      .def_readonly("two_step_covariance", &ArxOeResult::two_step_covariance,
+                    "covariance of oe.theta with the ARX step's A(q) uncertainty (empty unless asked for)");
 
   py::class_<WindowEstimate>(m, "WindowEstimate")
       .def_readonly("start", &WindowEstimate::start)
@@ -111,7 +113,7 @@ void bind_identification(py::module_& m) {
       .def(py::init([](int na, std::vector<int> arx_nb, std::vector<int> delays,
                        std::vector<OeChannel> structures, std::vector<int> fir_length,
                        const std::string& detrend, double delta, int max_iterations,
-                       double max_pole_radius) {
+                       double max_pole_radius, bool two_step_covariance) {
              ArxOeConfig c;
              c.arx = ArxOrders{na, std::move(arx_nb), std::move(delays)};
              c.structures = std::move(structures);
@@ -119,13 +121,15 @@ void bind_identification(py::module_& m) {
              c.detrend = parse_detrend(detrend);
              c.arx_options.delta = delta;
              c.oe_options = make_oe_options(max_iterations, max_pole_radius, 0);
+             c.two_step_covariance = two_step_covariance;
              return ArxOeEstimator(std::move(c));
            }),
            py::arg("na"), py::arg("arx_nb"), py::arg("delays"), py::arg("structures"),
            py::arg("fir_length"), py::arg("detrend") = "mean",
            py::arg("delta") = ArxOptions{}.delta,
            py::arg("max_iterations") = OeOptions{}.max_iterations,
-           py::arg("max_pole_radius") = OeOptions{}.max_pole_radius)
+           py::arg("max_pole_radius") = OeOptions{}.max_pole_radius,
+           py::arg("two_step_covariance") = false)
       .def("estimate", py::overload_cast<const ConstVec&, const ConstMat&>(&ArxOeEstimator::estimate),
            py::arg("y"), py::arg("u"), py::call_guard<py::gil_scoped_release>())
       .def("estimate_windows", &ArxOeEstimator::estimate_windows, py::arg("y"), py::arg("u"),

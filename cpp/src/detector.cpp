@@ -46,8 +46,10 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
       throw InputError("detector: the window covariance must be " + std::to_string(x.size()) + " x " +
                        std::to_string(x.size()));
     Eigen::MatrixXd reference_root, window_inverse_root;
+    const Eigen::MatrixXd deviation_covariance =
+        mean_covariance.size() != 0 ? Eigen::MatrixXd(window_covariance + mean_covariance) : Eigen::MatrixXd(window_covariance);
     if (!symmetric_root(reference_covariance, false, reference_root) ||
-        !symmetric_root(window_covariance, true, window_inverse_root))
+        !symmetric_root(deviation_covariance, true, window_inverse_root))
       return std::numeric_limits<double>::quiet_NaN();
     deviation = reference_root * (window_inverse_root * deviation);
   }
@@ -96,6 +98,12 @@ void ChannelScorer::validate(int feature_length, const std::string& where) const
        !reference_covariance.allFinite() || !reference_covariance.isApprox(reference_covariance.transpose())))
     fail("reference_covariance must be empty or a finite symmetric " + std::to_string(feature_length) + " x " +
          std::to_string(feature_length) + " matrix");
+  if (mean_covariance.size() != 0 &&
+      (reference_covariance.size() == 0 || mean_covariance.rows() != feature_length ||
+       mean_covariance.cols() != feature_length || !mean_covariance.allFinite() ||
+       !mean_covariance.isApprox(mean_covariance.transpose())))
+    fail("mean_covariance must be empty or, with reference_covariance, a finite symmetric " +
+         std::to_string(feature_length) + " x " + std::to_string(feature_length) + " matrix");
   if (support_vectors.rows() < 1 || support_vectors.cols() != feature_length)
     fail("support_vectors must be n_sv x " + std::to_string(feature_length));
   if (dual_coef.size() != support_vectors.rows()) fail("dual_coef must have one entry per support vector");
@@ -267,6 +275,7 @@ std::string Detector::to_json() const {
     jc["feature_scale"] = vector_json(s.feature_scale);
     jc["feature_decorrelation"] = rows_json(s.feature_decorrelation);
     jc["reference_covariance"] = rows_json(s.reference_covariance);
+    jc["mean_covariance"] = rows_json(s.mean_covariance);
     jc["svm"] = json{{"kernel_scale", s.kernel_scale}, {"nu", s.nu},     {"n_train", s.n_train},
                      {"offset", s.offset},             {"dual_coef", vector_json(s.dual_coef)},
                      {"support_vectors", rows_json(s.support_vectors)}};
@@ -338,6 +347,8 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
     if (version >= 3)  // earlier files predate it: no window-covariance mapping
       s.reference_covariance =
           rd.matrix(rd.field(c, p, "reference_covariance"), p + ".reference_covariance", m, false);
+    if (version >= 4)  // earlier files predate it: the training mean taken as exact
+      s.mean_covariance = rd.matrix(rd.field(c, p, "mean_covariance"), p + ".mean_covariance", m, false);
     scorers.push_back(std::move(s));
   }
   try {

@@ -144,6 +144,12 @@ NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixX
   return out;
 }
 
+void NormalEquationsSolver::apply_sensitivity(Eigen::MatrixXd& B) const {
+  B = scale_.asDiagonal() * B;
+  llt_.solveInPlace(B);
+  B = scale_.asDiagonal() * B;
+}
+
 void NormalEquationsSolver::covariance_factor(Eigen::MatrixXd& C) const {
   // theta = S (Rs + cI)^-1 S h and cov(h) = sigma^2 G = sigma^2 S^-1 Rs S^-1 give
   // cov(theta) = sigma^2 S (Rs + cI)^-1 Rs (Rs + cI)^-1 S.

@@ -25,6 +25,10 @@ ArxOeConfig output_problem_config(const Model& model, const DetectorConfig& conf
   c.arx.na = config.arx_order_a;
   c.detrend = Detrend::Mean;
   c.arx_options.delta = config.arx_regularisation;
+  // Estimator resampling weighs each window by its FIR estimate's covariance, which must
+  // include the ARX step's A(q) uncertainty: without it output 3's G32 spread is half
+  // the real one in the paper MIMO example (docs/detection.md).
+  c.two_step_covariance = config.resampling == Resampling::Estimator;
   for (int j : inputs) {
     const TransferFunction& g = *model.process[i][j];
     const int d = g.delay();
@@ -112,7 +116,7 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
       features[p.channels[e]] = g.tail(g.size() - p.skip[e]);
       const Eigen::Index d = features[p.channels[e]].size();
       if (want_covariances) {  // symmetrised bit for bit: batch (row-major copy) and streaming agree
-        const auto block = result_.oe.covariance.block(offset, offset, d, d);
+        const auto block = result_.two_step_covariance.block(offset, offset, d, d);
         (*covariances)[p.channels[e]] = 0.5 * (block + block.transpose());
       }
       offset += d;

@@ -89,12 +89,12 @@ _estimators = threading.local()
 
 
 def _estimator(m, na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend, delta,
-               max_iterations, max_pole_radius):
+               max_iterations, max_pole_radius, two_step_covariance):
     """The ArxOeEstimator of these settings, reused by later calls with the same settings
     in the same thread: building one through pybind11 costs ~10 us (~7% of a 1,440-sample
     window) and its C++ workspace is then allocated once, not per call."""
     key = (m, na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend, delta,
-           max_iterations, max_pole_radius)
+           max_iterations, max_pole_radius, two_step_covariance)
     try:
         hash(key)
     except TypeError:  # per-input lists
@@ -108,7 +108,7 @@ def _estimator(m, na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend, 
         int(na), _per_input(nb, m, "nb"), _per_input(delays, m, "delays"),
         channels(delays, structure, oe_nb, oe_nf, m=m), _per_input(fir_length, m, "fir_length"),
         detrend=detrend, delta=delta, max_iterations=max_iterations,
-        max_pole_radius=max_pole_radius)
+        max_pole_radius=max_pole_radius, two_step_covariance=bool(two_step_covariance))
     if len(cache) >= 16:  # a few settings in practice; bound the memory anyway
         cache.clear()
     try:
@@ -121,14 +121,16 @@ def _estimator(m, na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend, 
 def arx_oe(y, u, na: int, nb: IntOrList, delays: IntOrList, *, structure: str = "foptd",
            oe_nb: IntOrList = 1, oe_nf: IntOrList = 1, fir_length: IntOrList = 60,
            detrend: str = "mean", delta: float = 1e-4, max_iterations: int = 200,
-           max_pole_radius: float = 0.9999):
+           max_pole_radius: float = 0.9999, two_step_covariance: bool = False):
     """ARX-OE estimate of one output from one window: detrend ('none', 'mean', 'linear'),
     ARX(na, nb, delays), filter by A(q), OE of the given structure. Returns an
-    ``ArxOeResult``: channels[j] (b, f, delay, fir, gain), noise (a_1..a_na), arx, oe.
-    RuntimeError when the window is not informative."""
+    ``ArxOeResult``: channels[j] (b, f, delay, fir, gain), noise (a_1..a_na), arx, oe, and
+    with ``two_step_covariance`` (FIR structure only) the covariance of oe.theta that
+    includes the ARX step's A(q) uncertainty. RuntimeError when the window is not
+    informative."""
     y, u = _as_signals(y, u)
     est = _estimator(u.shape[1], na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend,
-                     delta, max_iterations, max_pole_radius)
+                     delta, max_iterations, max_pole_radius, two_step_covariance)
     return est.estimate(y, u)
 
 
@@ -139,14 +141,15 @@ def arx_oe_windows(y, u, window: int, step: int, na: int, nb: IntOrList, delays:
     not informative (missing samples, constant input, ...) has ok=False and the reason."""
     y, u = _as_signals(y, u)
     defaults = dict(structure="foptd", oe_nb=1, oe_nf=1, fir_length=60, detrend="mean",
-                    delta=1e-4, max_iterations=200, max_pole_radius=0.9999)
+                    delta=1e-4, max_iterations=200, max_pole_radius=0.9999, two_step_covariance=False)
     unknown = set(options) - set(defaults)
     if unknown:
         raise ValueError(f"unknown option(s) for arx_oe_windows: {sorted(unknown)}")
     defaults.update(options)
     est = _estimator(u.shape[1], na, nb, delays, defaults["structure"], defaults["oe_nb"],
                      defaults["oe_nf"], defaults["fir_length"], defaults["detrend"],
-                     defaults["delta"], defaults["max_iterations"], defaults["max_pole_radius"])
+                     defaults["delta"], defaults["max_iterations"], defaults["max_pole_radius"],
+                     defaults["two_step_covariance"])
     return est.estimate_windows(y, u, int(window), int(step))
 
 
@@ -161,7 +164,7 @@ def channel_inputs(model, output: str) -> list[str]:
 def arx_oe_model(model, data, output: str, *, na: int = 9, nb: IntOrList | None = None,
                  structure: str = "nominal", fir_length: IntOrList | None = None,
                  window: int | None = None, step: int | None = None, detrend: str = "mean",
-                 delta: float = 1e-4):
+                 delta: float = 1e-4, two_step_covariance: bool = False):
     """ARX-OE of one output of a model + data pair (MISO over the inputs the model
     connects to it, delays from the nominal channels).
 
@@ -199,7 +202,7 @@ def arx_oe_model(model, data, output: str, *, na: int = 9, nb: IntOrList | None 
     y = data[output].to_numpy(dtype=float)
     u = data[inputs].to_numpy(dtype=float)
     options = dict(structure=structure, oe_nb=oe_nb, oe_nf=oe_nf, fir_length=lengths,
-                   detrend=detrend, delta=delta)
+                   detrend=detrend, delta=delta, two_step_covariance=two_step_covariance)
     nb = na + 1 if nb is None else nb
     if window is None:
         return arx_oe(y, u, na, nb, delays, **options)

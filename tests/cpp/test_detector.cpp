@@ -98,28 +98,74 @@ TEST(Detector, SaveLoadRoundTripIsExact) {
   std::remove(path.c_str());
 }
 
+namespace {
+
+// doc as a file of `version`: refused with the missing field named.
+void expect_required_field(nlohmann::json doc, int version, const std::string& field) {
+  doc["version"] = version;
+  try {
+    Detector::from_json(doc.dump(), "v" + std::to_string(version) + ".json");
+    ADD_FAILURE() << "a version " << version << " file without " << field << " loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing field '" + field + "'"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+
 TEST(Detector, VersionOneFilesLoadWithoutDecorrelation) {
   nlohmann::json doc = nlohmann::json::parse(random_detector().to_json());
   doc["version"] = 1;  // written before feature_decorrelation existed
   for (auto& c : doc["channels"]) c.erase("feature_decorrelation");
   for (auto& c : doc["channels"]) c.erase("reference_covariance");  // version 3
+  for (auto& c : doc["channels"]) c.erase("mean_covariance");       // version 4
   const Detector old = Detector::from_json(doc.dump(), "v1.json");
   for (const ChannelScorer& s : old.scorers()) EXPECT_EQ(s.feature_decorrelation.size(), 0);
-  doc["version"] = 2;  // the field is required from version 2 on
-  try {
-    Detector::from_json(doc.dump(), "v2.json");
-    FAIL() << "a version 2 file without feature_decorrelation loaded";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("missing field 'feature_decorrelation'"), std::string::npos) << e.what();
-  }
+  expect_required_field(doc, 2, "feature_decorrelation");
 }
 
-TEST(Detector, VersionTwoFilesLoadWithoutReferenceCovariance) {
+TEST(Detector, VersionTwoAndThreeFilesLoadWithoutTheLaterCovariances) {
   nlohmann::json doc = nlohmann::json::parse(random_detector().to_json());
+  doc["version"] = 3;
+  for (auto& c : doc["channels"]) c.erase("mean_covariance");
+  const Detector v3 = Detector::from_json(doc.dump(), "v3.json");  // named: a temporary would die before the loop
+  for (const ChannelScorer& s : v3.scorers()) EXPECT_EQ(s.mean_covariance.size(), 0);
+  expect_required_field(doc, 4, "mean_covariance");
   doc["version"] = 2;
   for (auto& c : doc["channels"]) c.erase("reference_covariance");
-  const Detector v2 = Detector::from_json(doc.dump(), "v2.json");  // named: a temporary would die before the loop
+  const Detector v2 = Detector::from_json(doc.dump(), "v2.json");
   for (const ChannelScorer& s : v2.scorers()) EXPECT_EQ(s.reference_covariance.size(), 0);
+  expect_required_field(doc, 3, "reference_covariance");
+}
+
+// The training mean's own covariance C_mean adds to every window's: scoring (x, C) with
+// mean_covariance M is scoring (x, C + M) without it; the file keeps M exactly.
+TEST(Detector, MeanCovarianceAddsToTheWindowCovariance) {
+  std::mt19937_64 rng(9);
+  ChannelScorer exact_mean = random_scorer(2, rng, true);
+  Eigen::MatrixXd C(2, 2), M(2, 2);
+  C << 4e-5, -3e-5, -3e-5, 3e-5;
+  M << 1e-5, 2e-6, 2e-6, 5e-6;
+  exact_mean.reference_covariance = C + M;
+  ChannelScorer with_mean = exact_mean;
+  with_mean.mean_covariance = M;
+  std::normal_distribution<double> n(0.0, 0.01);
+  for (int r = 0; r < 10; ++r) {
+    const Eigen::VectorXd x = exact_mean.feature_mean + Eigen::VectorXd::NullaryExpr(2, [&] { return n(rng); });
+    EXPECT_NEAR(with_mean.score(x, C), exact_mean.score(x, C + M), 1e-12);
+  }
+  // A window like the training ones (C = C_ref - C_mean) is mapped onto itself.
+  const Eigen::VectorXd x = exact_mean.feature_mean + Eigen::Vector2d(0.004, -0.002);
+  ChannelScorer plain = exact_mean;
+  plain.reference_covariance.resize(0, 0);
+  EXPECT_NEAR(with_mean.score(x, C), plain.score(x), 1e-12);
+
+  ChannelScorer orphan = with_mean;
+  orphan.reference_covariance.resize(0, 0);  // C_mean only makes sense with C_ref
+  EXPECT_THROW(orphan.validate(2, "channel"), InputError);
+  ChannelScorer asymmetric = with_mean;
+  asymmetric.mean_covariance(0, 1) += 1.0;
+  EXPECT_THROW(asymmetric.validate(2, "channel"), InputError);
 }
 
 // Resampling::Estimator: the window's deviation is carried into the training precision,
@@ -154,12 +200,14 @@ TEST(Detector, ReferenceCovarianceMapsTheDeviationAndRoundTrips) {
       const int d = f.feature_length(static_cast<int>(k));
       const Eigen::MatrixXd a = Eigen::MatrixXd::NullaryExpr(d, d, [&] { return n(rng); });
       scorers.back().reference_covariance = a * a.transpose() + 1e-4 * Eigen::MatrixXd::Identity(d, d);
+      scorers.back().mean_covariance = 0.25 * scorers.back().reference_covariance;
     }
   }
   const Detector d(m, c, 7200.0, scorers);
   const Detector back = Detector::from_json(d.to_json(), "estimator.json");
   EXPECT_EQ(back.to_json(), d.to_json());
   EXPECT_EQ(back.scorers()[0].reference_covariance, d.scorers()[0].reference_covariance);
+  EXPECT_EQ(back.scorers()[0].mean_covariance, d.scorers()[0].mean_covariance);
   EXPECT_EQ(back.config().resampling, Resampling::Estimator);
   ChannelScorer asymmetric = scorers[0];
   asymmetric.reference_covariance(0, 1) += 1.0;
@@ -180,7 +228,8 @@ TEST(Detector, CorruptTruncatedOrNewerFilesAreClearErrors) {
   expect_error(text.substr(0, text.size() / 2), "truncated or corrupt");
   expect_error("", "truncated or corrupt");
   std::string newer = text;
-  newer.replace(newer.find("\"version\": 3"), 12, "\"version\": 7");
+  const std::string current = "\"version\": " + std::to_string(Detector::kFormatVersion);
+  newer.replace(newer.find(current), current.size(), "\"version\": 7");
   expect_error(newer, "version 7");
   std::string foreign = text;
   foreign.replace(foreign.find("mpmpp-detector"), 14, "something-else");

@@ -3,6 +3,7 @@
 // signals) must give Phi'Phi and Phi'y up to rounding.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "mpmpp/detail/lagged_regression.hpp"
@@ -61,3 +62,40 @@ TEST(LaggedNormalEquations, ColumnsUnrelatedToTheTargetMatchPhiTransposePhi) {
 }
 
 }  // namespace
+
+namespace {
+
+// apply_sensitivity is d theta / d h: (G + ridge)^-1 in original coordinates, the ridge being
+// delta/2 diag(G) when the rule engages. Checked against a dense solve of that matrix, and
+// applied to h itself it must give theta.
+void expect_sensitivity_is_the_regularised_inverse(const Eigen::MatrixXd& G, const Eigen::VectorXd& h,
+                                                   double delta, bool expect_ridge) {
+  mpmpp::detail::NormalEquationsSolver solver;
+  Eigen::VectorXd theta;
+  const auto outcome = solver.solve(G, h, delta, 1e-10, theta);
+  ASSERT_EQ(outcome.status, mpmpp::detail::NormalEquationsSolver::Status::Ok);
+  EXPECT_EQ(outcome.regularised, expect_ridge);
+  Eigen::MatrixXd reg = G;
+  if (expect_ridge) reg.diagonal() *= 1.0 + 0.5 * delta;
+  Eigen::MatrixXd B(G.rows(), 3);
+  for (Eigen::Index i = 0; i < B.size(); ++i) B.data()[i] = std::sin(static_cast<double>(i + 1));
+  const Eigen::MatrixXd expected = reg.ldlt().solve(B);
+  solver.apply_sensitivity(B);
+  EXPECT_LE((B - expected).cwiseAbs().maxCoeff(), 1e-9 * expected.cwiseAbs().maxCoeff());
+  Eigen::MatrixXd H = h;
+  solver.apply_sensitivity(H);
+  EXPECT_LE((H.col(0) - theta).cwiseAbs().maxCoeff(), 1e-12 * theta.cwiseAbs().maxCoeff());
+}
+
+}  // namespace
+
+TEST(NormalEquationsSolver, SensitivityIsTheInverseOfTheSolvedMatrix) {
+  const Eigen::Index N = 400, p = 5;
+  Eigen::MatrixXd phi(N, p);
+  for (Eigen::Index k = 0; k < p; ++k) phi.col(k) = random_signal(N, 10 + static_cast<unsigned>(k));
+  const Eigen::VectorXd y = random_signal(N, 20);
+  expect_sensitivity_is_the_regularised_inverse(phi.transpose() * phi, phi.transpose() * y, 1e-4, false);
+  // Two nearly collinear columns (scaled lambda_min ~ 1e-6 < delta/2): the ridge engages.
+  phi.col(1) = phi.col(0) + 1e-3 * phi.col(1);
+  expect_sensitivity_is_the_regularised_inverse(phi.transpose() * phi, phi.transpose() * y, 1e-4, true);
+}

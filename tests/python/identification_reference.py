@@ -200,3 +200,47 @@ def closed_loop(G, H, sigma, N, seeds, kp, ki, move_limit):
 PAPER_SISO = dict(G=[[([0.1003], [1.0, -0.9048], 17)]], H=[([1.0, -0.3], [1.0, 0.6])],
                   sigma=np.array([0.05]), kp=np.array([0.28]), ki=np.array([0.028]),
                   move_limit=np.array([0.04]))
+
+
+def fir_regressors(u, fir, first):
+    """Rows t = first..N-1: [u_j(t-d_j) .. u_j(t-d_j-nb_j+1) ...] with zeros before sample 0;
+    fir = [(nb, d), ...]."""
+    N = u.shape[0]
+    cols = []
+    for j, (nb, d) in enumerate(fir):
+        for i in range(nb):
+            col = np.zeros(N)
+            col[d + i:] = u[:N - d - i, j]
+            cols.append(col[first:])
+    return np.column_stack(cols)
+
+
+def fir_on_filtered(y, u, a, fir):
+    """The OE step's FIR least squares on A(q)-filtered data over t >= na: (theta, Z, eps)."""
+    na = len(a) - 1
+    yf = ss.lfilter(a, [1.0], y)
+    Z = fir_regressors(ss.lfilter(a, [1.0], u, axis=0), fir, na)
+    theta = np.linalg.lstsq(Z, yf[na:], rcond=None)[0]
+    return theta, Z, yf[na:] - Z @ theta
+
+
+def two_step_fir_covariance(y, u, na, nb, delays, fir, arx_theta, fir_theta):
+    """Sandwich covariance of the FIR estimate with the ARX step's uncertainty: influence
+    w_t = z_t eps_t + M21 (Phi'Phi)^-1 phi_t e_t, M21 = d(Z' eps)/d a (dense form)."""
+    N = len(y)
+    a = np.r_[1.0, arx_theta[:na]]
+    Phi, target = arx_regressors(y, u, na, nb, delays)
+    t0 = N - len(target)
+    e = target - Phi @ arx_theta
+    yf = ss.lfilter(a, [1.0], y)
+    Z = fir_regressors(ss.lfilter(a, [1.0], u, axis=0), fir, na)
+    eps = yf[na:] - Z @ fir_theta
+    Zraw = fir_regressors(u, fir, 0)
+    vhat = y - Zraw @ fir_theta
+    M21 = np.zeros((Z.shape[1], Phi.shape[1]))
+    for k in range(1, na + 1):  # d z_t / d a_k = zraw_{t-k}, d eps_t / d a_k = vhat_{t-k}
+        M21[:, k - 1] = Zraw[na - k:N - k].T @ eps + Z.T @ vhat[na - k:N - k]
+    W = Z * eps[:, None]
+    W[t0 - na:] += (Phi * e[:, None]) @ np.linalg.solve(Phi.T @ Phi, M21.T)
+    ZZi = np.linalg.inv(Z.T @ Z)
+    return ZZi @ (W.T @ W) @ ZZi * (N - na) / (N - na - Z.shape[1]), M21, Z

@@ -1,8 +1,10 @@
 """Resampling with the estimator's own covariance (DetectorConfig.resampling = "estimator"):
-the window covariances are the OE step's, the training draws have covariance
-alpha^2 max(S, C_ref) (direction by direction), each monitored deviation is carried into the training precision
-(x <- mean + C_ref^1/2 C^-1/2 (x - mean), checked against analytic cases), noise channels use
-noise_alpha, and a trained detector scores identically after save/load and in streaming."""
+the window covariances are ARX-OE's two-step ones, the training mean's covariance is the
+windows' scaled by mean_variance_ratio, the training draws have covariance alpha^2 max(S, C_ref)
+(direction by direction), each monitored deviation is carried into the training precision
+(x <- mean + C_ref^1/2 (C + C_mean)^-1/2 (x - mean), checked against analytic cases), noise
+channels use noise_alpha, and a trained detector scores identically after save/load and in
+streaming."""
 import copy
 
 import numpy as np
@@ -11,11 +13,11 @@ import scipy.linalg
 
 import mpmpp
 from mpmpp import _core, scenarios
-from mpmpp.detect import Detector, _directional_max, _draw_models, make_config, train_scorer
+from mpmpp.detect import Detector, _directional_max, _draw_models, make_config, mean_variance_ratio, train_scorer
 from mpmpp.evaluate import nominal_model
 from mpmpp.identify import arx_oe_model, channel_inputs
 
-ESTIMATOR = {"preset": "mimo"}  # resampling "estimator", alpha 1.75, noise_alpha 5, outlier fraction 0.05
+ESTIMATOR = {"preset": "mimo"}  # resampling "estimator", alpha 1.25, noise_alpha 5, outlier fraction 0.05
 
 
 def estimator_config(**changes):
@@ -59,6 +61,34 @@ def test_reference_covariance_is_the_mean_window_covariance(scorer):
     s, _, C_ref = scorer
     np.testing.assert_allclose(s.reference_covariance, C_ref, rtol=1e-14)
     assert s.feature_decorrelation.shape == (2, 2)  # the draws are correlated: whitened
+    assert s.mean_covariance.shape == (2, 2) and not s.mean_covariance.any()  # mean_ratio 0: exact mean
+
+
+def test_mean_variance_ratio_analytic_cases():
+    W = 100
+    assert mean_variance_ratio([0, 100, 200, 300], W) == pytest.approx(1 / 4)  # disjoint: 1/n
+    assert mean_variance_ratio([0, 0, 0], W) == pytest.approx(1.0)              # one window thrice
+    # Two windows overlapping by half: var((A + B)/2 + (B + C)/2) / 4 with A, B, C halves = 3/4.
+    assert mean_variance_ratio([0, 50], W) == pytest.approx(0.75)
+    # The paper MIMO training: 73 windows of 2 h every 5 min in 8 h.
+    assert mean_variance_ratio(np.arange(73) * 60, 1440) == pytest.approx(0.2928, abs=1e-4)
+    with pytest.raises(ValueError, match="mean_variance_ratio"):
+        mean_variance_ratio([], W)
+
+
+def test_mean_covariance_widens_the_frame_and_every_window():
+    X, covs, C_ref = windows_and_covariances(seed=6)
+    s = train_scorer(X, estimator_config(), seed=1, covariances=covs, mean_ratio=0.25)
+    np.testing.assert_allclose(s.mean_covariance, 0.25 * C_ref, rtol=1e-14)
+    np.testing.assert_allclose(s.reference_covariance, 1.25 * C_ref, rtol=1e-14)
+    plain = without_reference(s)
+    mean = np.asarray(s.feature_mean)
+    for x in mean + 0.03 * np.random.default_rng(3).standard_normal((10, 2)):
+        # A window as precise as the training ones: no mapping (C + C_mean = C_ref + C_mean).
+        assert s.score_rows(x[None, :], C_ref.reshape(1, 4))[0] == pytest.approx(plain.score_rows(x[None, :])[0], abs=1e-12)
+        C = np.array([[3e-4, 5e-5], [5e-5, 2e-5]])
+        mapped = mean + symmetric_root(1.25 * C_ref, 0.5) @ symmetric_root(C + 0.25 * C_ref, -0.5) @ (x - mean)
+        assert s.score_rows(x[None, :], C.reshape(1, 4))[0] == pytest.approx(plain.score_rows(mapped[None, :])[0], abs=1e-12)
 
 
 def test_draws_have_covariance_alpha_squared_directional_max():
@@ -140,7 +170,7 @@ def test_config_needs_the_fir_structure_and_a_valid_noise_alpha():
         make_config({**ESTIMATOR, "noise_alpha": -1})
     c = make_config(ESTIMATOR)
     back = mpmpp.DetectorConfig.from_json(c.to_json())
-    assert (back.resampling, back.noise_alpha, back.alpha, back.outlier_fraction) == ("estimator", 5.0, 1.75, 0.05)
+    assert (back.resampling, back.noise_alpha, back.alpha, back.outlier_fraction) == ("estimator", 5.0, 1.25, 0.05)
 
 
 @pytest.fixture(scope="module")
@@ -154,7 +184,7 @@ def short_mimo():
     return model, mpmpp.simulate(sc, seed=3)
 
 
-def test_window_covariances_are_the_oe_covariance_blocks(short_mimo):
+def test_window_covariances_are_the_two_step_covariance_blocks(short_mimo):
     model, data = short_mimo
     config = make_config(ESTIMATOR, model)
     time_s = data["time"].to_numpy()
@@ -166,10 +196,10 @@ def test_window_covariances_are_the_oe_covariance_blocks(short_mimo):
         ks = [k for k, (kind, o, _) in enumerate(channels) if kind == "process" and o == i]
         assert len(ks) == len(channel_inputs(model, output))
         estimates = arx_oe_model(model, data, output, na=config.arx_order_a, nb=config.arx_order_b + 1,
-                                 structure="fir", window=W, step=step)
+                                 structure="fir", window=W, step=step, two_step_covariance=True)
         assert len(estimates) == len(series.windows)
         for w in (0, len(estimates) // 2, len(estimates) - 1):
-            C = np.asarray(estimates[w].result.oe.covariance)
+            C = np.asarray(estimates[w].result.two_step_covariance)
             offset = 0
             for k in ks:
                 d = series.features[k].shape[1]
@@ -187,6 +217,10 @@ def test_detector_round_trip_and_streaming_equal_batch(short_mimo, tmp_path):
     process = [s for s, (kind, _, _) in zip(detector._core.scorers, _core.WindowFeatures(model, detector.config).channels)
                if kind == "process"]
     assert all(s.reference_covariance.shape == (len(s.feature_mean),) * 2 for s in process)
+    # C_mean = ratio * (C_ref - C_mean): the training windows' mean covariance scaled by the
+    # ratio of their layout (73 windows of 2 h every 5 min in 8 h).
+    for s in process:
+        np.testing.assert_allclose(s.mean_covariance, 0.2928 / 1.2928 * s.reference_covariance, rtol=1e-3)
     batch = detector.monitor(data)
     path = tmp_path / "estimator_detector.json"
     detector.save(path)

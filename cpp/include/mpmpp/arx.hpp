@@ -65,6 +65,9 @@ class ArxEstimator {
   // Shortest window the orders allow: at least two equations per parameter
   // (a choice: N_eq = p + 1 would "fit" but give a meaningless noise variance).
   Eigen::Index min_window() const { return t0_ + 2 * p_; }
+  // After estimate(): B <- (Phi'Phi + ridge)^-1 B with the window's factorisation (the
+  // ridge when ArxResult::regularised): how theta moves with Phi'y.
+  void apply_sensitivity(Eigen::MatrixXd& B) const { solver_.apply_sensitivity(B); }
 
  private:
   ArxOrders orders_;

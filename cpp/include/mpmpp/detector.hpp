@@ -52,6 +52,15 @@ struct ChannelScorer {
   // precisely (a noise change that leaves the A-filtered inputs less informative) is not taken
   // for a process change, and a more precise one shows a real change more clearly.
   Eigen::MatrixXd reference_covariance;
+  // Resampling::Estimator (else empty): C_mean, the covariance of feature_mean itself. The
+  // training mean averages only a few independent windows (8 h of 2 h windows), so a new
+  // window's deviation x - mean has covariance C + C_mean, not C; score(x, C) whitens by
+  // (C + C_mean)^-1/2, and training sets reference_covariance = C_ref + C_mean so that a
+  // window like the training ones maps to itself. Without it, a channel whose estimates turn
+  // collinear after training (paper MIMO G32 after the H22 change: coefficient correlation
+  // -0.93 -> -0.99) sees the mean's error as a change in its thin direction (mean squared
+  // Mahalanobis distance per coefficient 2.5 instead of 1 over 30 seeds; 1.0 with C_mean).
+  Eigen::MatrixXd mean_covariance;
 
   // score(x) for channels without reference_covariance (InputError otherwise); score(x, C)
   // takes the window's covariance (ignored without reference_covariance; NaN when C is not
@@ -114,7 +123,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 3;  // 2 added feature_decorrelation, 3 reference_covariance
+  static constexpr int kFormatVersion = 4;  // 2 added feature_decorrelation, 3 reference_covariance, 4 mean_covariance
 
  private:
   Model model_;

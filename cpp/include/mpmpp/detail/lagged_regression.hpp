@@ -45,6 +45,9 @@ class NormalEquationsSolver {
   // Unscaled (sum-form) covariance factor C with cov(theta) = sigma^2 C after solve():
   // S (Rs + cI)^-1 Rs (Rs + cI)^-1 S, the sandwich form that reduces to G^-1 when c = 0.
   void covariance_factor(Eigen::MatrixXd& C) const;
+  // After solve(): B <- (d theta / d h) B = S (Rs + cI)^-1 S B, i.e. (G + ridge)^-1 B, how
+  // theta moves with the right-hand side (the influence a two-step covariance needs).
+  void apply_sensitivity(Eigen::MatrixXd& B) const;
 
  private:
   // True when Rs - shift I is positive definite (leaves its factor in llt_).

@@ -88,6 +88,37 @@ TEST(ArxOe, LowNoisePipelineRecoversFoptd) {
   EXPECT_EQ(r.noise.size(), 9);
 }
 
+// Open loop, white noise (H0 = 1), u independent of it: the A(q) error is uncorrelated with
+// the inputs (M21 -> 0), so the two-step covariance tends to the OE step's sigma^2 (Z'Z)^-1.
+// (The closed-loop case, where they differ, is checked against NumPy, finite differences and
+// Monte Carlo in tests/python/test_two_step_covariance.py.)
+TEST(ArxOe, TwoStepCovarianceTendsToTheOeCovarianceInOpenLoop) {
+  const Eigen::Index N = 6000;
+  const Eigen::MatrixXd u = white_inputs(N, 2, 21);
+  const TransferFunction g1(Eigen::Vector2d(0.5, 0.3), Eigen::VectorXd::Ones(1), 2);
+  const TransferFunction g2(Eigen::Vector2d(-0.2, 0.1), Eigen::VectorXd::Ones(1), 1);
+  const Eigen::VectorXd y = g1.filter(u.col(0)) + g2.filter(u.col(1)) + 0.3 * white_inputs(N, 1, 22).col(0);
+  mpmpp::ArxOeConfig c;
+  c.arx = {4, {4, 4}, {2, 1}};
+  c.structures = {mpmpp::OeChannel::fir(3, 2), mpmpp::OeChannel::fir(3, 1)};
+  c.fir_length = {5, 4};
+  c.two_step_covariance = true;
+  mpmpp::ArxOeEstimator est(c);
+  const auto r = est.estimate(y, u);
+  const Eigen::MatrixXd& C = r.two_step_covariance;
+  ASSERT_EQ(C.rows(), 6);
+  ASSERT_EQ(C.cols(), 6);
+  EXPECT_TRUE(C.isApprox(C.transpose(), 1e-12));
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(C).eigenvalues().minCoeff(), 0.0);
+  for (Eigen::Index k = 0; k < 6; ++k) EXPECT_NEAR(C(k, k) / r.oe.covariance(k, k), 1.0, 0.15) << k;
+  // The workspace carries nothing between windows: another window, then this one again.
+  est.estimate(y.head(3000), u.topRows(3000));
+  EXPECT_EQ(est.estimate(y, u).two_step_covariance, C);
+
+  c.structures = {mpmpp::OeChannel::foptd(2), mpmpp::OeChannel::fir(3, 1)};
+  EXPECT_THROW(mpmpp::ArxOeEstimator{c}, mpmpp::InputError);  // FIR structures only
+}
+
 TEST(ArxOe, NonInformativeWindowsThrowOrAreFlagged) {
   const Eigen::MatrixXd u = white_inputs(800, 1, 7);
   Eigen::VectorXd y = 0.5 * u.col(0) + 0.1 * white_inputs(800, 1, 8).col(0);

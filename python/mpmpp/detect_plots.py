@@ -60,11 +60,14 @@ def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), ev
         s = result.scores[:, k]
         ax_s.plot(t, s, ".", markersize=2.5, color="tab:blue")
         ax_s.axhline(0, color="k", linewidth=0.5)
-        ax_s.set_ylabel(f"score {name}", fontsize=8)
+        # Channel names go in the panel titles: as y labels the long MIMO ones overlap.
+        ax_s.set_title(f"{name}: SVM score h", fontsize=8, loc="left")
+        ax_s.set_ylabel("score", fontsize=8)
         ax_i.plot(t, result.indicator[:, k], color="tab:green", linewidth=1)
         ax_i.axhline(result.threshold, color="r", linestyle="-.", linewidth=1)
         ax_i.set_ylim(-0.05, 1.05)
-        ax_i.set_ylabel(f"indicator {name}", fontsize=8)
+        ax_i.set_title(f"{name}: indicator s (eq. 23), threshold s_T", fontsize=8, loc="left")
+        ax_i.set_ylabel("s", fontsize=8)
         for start in result.alarm_starts(k):
             ax_i.axvline((start - t0) / 3600, color="k", linestyle=":", linewidth=1)
         _events(ax_s, events)

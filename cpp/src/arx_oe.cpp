@@ -54,9 +54,7 @@ ArxOeEstimator::ArxOeEstimator(ArxOeConfig config)
     if (config_.fir_length[j] < 1 || config_.fir_length[j] > detail::kMaxLag)
       throw InputError("fir_length[" + std::to_string(j) + "] must be in [1, 1000000], got " +
                        std::to_string(config_.fir_length[j]));
-  if (config_.two_step_covariance)
-    for (const OeChannel& c : config_.structures)
-      if (c.nf != 0) throw InputError("two_step_covariance needs FIR structures (nf = 0) for every input");
+  if (config_.two_step_covariance) TwoStepCovariance::require_fir(config_.structures);
   start_impulse_.resize(m);
   arx_.check_signals_ = false;  // estimate() checks the raw window and the detrended one
   oe_.check_signals_ = false;   // A(q)-filtering a non-constant signal keeps it non-constant
@@ -106,7 +104,7 @@ void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   }
   oe_.estimate(yf_, uf_, na, out.oe, &start_impulse_);
   if (config_.two_step_covariance)
-    out.two_step_covariance = two_step_.compute(y_, u_, yf_, uf_, arx_, out.arx, config_.structures, out.oe);
+    two_step_.compute(y_, u_, yf_, uf_, arx_, out.arx, config_.structures, out.oe, out.two_step_covariance);
   else
     out.two_step_covariance.resize(0, 0);
 

@@ -12,6 +12,15 @@ ConstSegment column_segment(const LaggedColumn& c, Eigen::Index t0, Eigen::Index
 }
 }  // namespace
 
+void lagged_matrix(const std::vector<LaggedColumn>& columns, Eigen::Index t0, Eigen::Index n,
+                   Eigen::MatrixXd& phi) {
+  phi.resize(n, static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    const LaggedColumn& c = columns[k];
+    phi.col(static_cast<Eigen::Index>(k)) = c.sign * ConstSegment(c.signal + t0 - c.lag, n);
+  }
+}
+
 void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const double* target,
                              Eigen::Index t0, Eigen::Index n, Eigen::MatrixXd& G,
                              Eigen::VectorXd& h) {

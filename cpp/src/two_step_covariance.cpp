@@ -29,29 +29,22 @@ void fill_fir_lags(Eigen::MatrixXd& out, const Eigen::Ref<const Eigen::MatrixXd>
 
 }  // namespace
 
-const Eigen::MatrixXd& TwoStepCovariance::compute(const Eigen::Ref<const Eigen::VectorXd>& y,
-                                                  const Eigen::Ref<const Eigen::MatrixXd>& u,
-                                                  const Eigen::Ref<const Eigen::VectorXd>& yf,
-                                                  const Eigen::Ref<const Eigen::MatrixXd>& uf,
-                                                  const ArxEstimator& arx_estimator, const ArxResult& arx,
-                                                  const std::vector<OeChannel>& fir, const OeResult& oe) {
-  const ArxOrders& orders = arx_estimator.orders();
-  const Eigen::Index N = y.size(), na = orders.na, p1 = arx.theta.size(), p2 = oe.theta.size();
-  const Eigen::Index t0 = arx_estimator.first_equation();
-  for (const OeChannel& c : fir)
-    if (c.nf != 0) throw InputError("two-step covariance: every OE channel must be FIR (nf = 0)");
-  if (N - na <= p2 || N - t0 <= p1) throw NumericalError("two-step covariance: window too short for the orders");
+void TwoStepCovariance::require_fir(const std::vector<OeChannel>& channels) {
+  for (const OeChannel& c : channels)
+    if (c.nf != 0) throw InputError("two_step_covariance needs FIR structures (nf = 0) for every input");
+}
 
-  // ARX step: regressors phi_t = [-y(t-1..t-na), u_j(t-d_j-i)] and residual e, t >= t0.
-  phi_.resize(N - t0, p1);
-  for (Eigen::Index k = 1; k <= na; ++k) {
-    fill_lagged(phi_.col(k - 1), y, t0, k);
-    phi_.col(k - 1) *= -1.0;
-  }
-  Eigen::Index c = na;
-  for (std::size_t j = 0; j < orders.nb.size(); ++j)
-    for (int i = 0; i < orders.nb[j]; ++i, ++c)
-      fill_lagged(phi_.col(c), u.col(static_cast<Eigen::Index>(j)), t0, orders.delays[j] + i);
+void TwoStepCovariance::compute(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                const Eigen::Ref<const Eigen::VectorXd>& yf, const Eigen::Ref<const Eigen::MatrixXd>& uf,
+                                const ArxEstimator& arx_estimator, const ArxResult& arx,
+                                const std::vector<OeChannel>& fir, const OeResult& oe, Eigen::MatrixXd& covariance) {
+  require_fir(fir);
+  const Eigen::Index N = y.size(), na = arx_estimator.orders().na, p2 = oe.theta.size();
+  const Eigen::Index t0 = arx_estimator.first_equation();
+  if (N - na <= p2) throw NumericalError("two-step covariance: window too short for the orders");
+
+  // ARX step: its regressors phi_t (rows t >= t0) and residual e.
+  arx_estimator.regressors(arx.equations, phi_);
   e_.noalias() = y.tail(N - t0) - phi_ * arx.theta;
 
   // OE step: filtered lags z_t and residual eps for t >= na; unfiltered lags from t = 0.
@@ -75,7 +68,7 @@ const Eigen::MatrixXd& TwoStepCovariance::compute(const Eigen::Ref<const Eigen::
   m21_.noalias() += zraw_.transpose() * eps_leads_;
 
   // x = (Phi'Phi)^-1 [M21'; 0]: the ARX estimate's error mapped into theta2's equations.
-  x_.setZero(p1, p2);
+  x_.setZero(arx.theta.size(), p2);
   x_.topRows(na) = m21_.transpose();
   arx_estimator.apply_sensitivity(x_);
 
@@ -87,8 +80,7 @@ const Eigen::MatrixXd& TwoStepCovariance::compute(const Eigen::Ref<const Eigen::
   if (llt_.info() != Eigen::Success) throw NumericalError("two-step covariance: OE regressors are singular");
   zz_inv_ = llt_.solve(Eigen::MatrixXd::Identity(p2, p2));
   const double dof = static_cast<double>(N - na) / static_cast<double>(N - na - p2);
-  covariance_.noalias() = dof * (zz_inv_ * (w_.transpose() * w_) * zz_inv_);
-  return covariance_;
+  covariance.noalias() = dof * (zz_inv_ * (w_.transpose() * w_) * zz_inv_);
 }
 
 }  // namespace mpmpp

@@ -1,6 +1,6 @@
-// lagged_normal_equations against the explicit regressor matrix: the lag-structure
-// shortcuts (Toeplitz updates of G, h read from G when the target is one of the lagged
-// signals) must give Phi'Phi and Phi'y up to rounding.
+// lagged_normal_equations and lagged_matrix against the explicit regressor matrix: the
+// lag-structure shortcuts (Toeplitz updates of G, h read from G when the target is one of
+// the lagged signals) must give Phi'Phi and Phi'y up to rounding, lagged_matrix Phi exactly.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,6 +30,10 @@ void expect_explicit_normal_equations(const std::vector<LaggedColumn>& columns,
   const Eigen::Map<const Eigen::VectorXd> y(target + t0, n);
   const Eigen::MatrixXd G_ref = phi.transpose() * phi;
   const Eigen::VectorXd h_ref = phi.transpose() * y;
+
+  Eigen::MatrixXd materialised;
+  mpmpp::detail::lagged_matrix(columns, t0, n, materialised);
+  EXPECT_EQ(materialised, phi);
 
   Eigen::MatrixXd G;
   Eigen::VectorXd h;

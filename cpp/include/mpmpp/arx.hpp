@@ -68,6 +68,12 @@ class ArxEstimator {
   // After estimate(): B <- (Phi'Phi + ridge)^-1 B with the window's factorisation (the
   // ridge when ArxResult::regularised): how theta moves with Phi'y.
   void apply_sensitivity(Eigen::MatrixXd& B) const { solver_.apply_sensitivity(B); }
+  // After estimate(): that window's regressor matrix Phi (rows t0 .. t0 + equations - 1,
+  // `equations` = its ArxResult::equations). Reads the y and u given to estimate(), which
+  // must still be alive.
+  void regressors(Eigen::Index equations, Eigen::MatrixXd& phi) const {
+    detail::lagged_matrix(columns_, t0_, equations, phi);
+  }
 
  private:
   ArxOrders orders_;

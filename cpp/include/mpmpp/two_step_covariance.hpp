@@ -28,20 +28,21 @@ namespace mpmpp {
 
 class TwoStepCovariance {
  public:
+  // InputError unless every channel is FIR (nf = 0): the only structure it is derived for.
+  static void require_fir(const std::vector<OeChannel>& channels);
+
   // y: the detrended window, u: its detrended inputs (N x m), yf/uf: the same filtered
-  // by the estimated A(q); arx_estimator: the ARX step that just estimated arx from y, u;
-  // fir: the OE channels (all FIR: nf = 0, InputError otherwise); oe: the OE estimate
-  // (fitted over t >= na). Returns the covariance of oe.theta (p x p); reuses its
-  // workspace between windows.
-  const Eigen::MatrixXd& compute(const Eigen::Ref<const Eigen::VectorXd>& y,
-                                 const Eigen::Ref<const Eigen::MatrixXd>& u,
-                                 const Eigen::Ref<const Eigen::VectorXd>& yf,
-                                 const Eigen::Ref<const Eigen::MatrixXd>& uf,
-                                 const ArxEstimator& arx_estimator, const ArxResult& arx,
-                                 const std::vector<OeChannel>& fir, const OeResult& oe);
+  // by the estimated A(q); arx_estimator: the ARX step that just estimated arx from y, u
+  // (both still alive); fir: the OE channels (require_fir); oe: the OE estimate (fitted
+  // over t >= na). Writes the covariance of oe.theta (p x p); reuses its workspace
+  // between windows.
+  void compute(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,
+               const Eigen::Ref<const Eigen::VectorXd>& yf, const Eigen::Ref<const Eigen::MatrixXd>& uf,
+               const ArxEstimator& arx_estimator, const ArxResult& arx, const std::vector<OeChannel>& fir,
+               const OeResult& oe, Eigen::MatrixXd& covariance);
 
  private:
-  Eigen::MatrixXd phi_, z_, zraw_, vhat_lags_, eps_leads_, m21_, x_, w_, zz_inv_, covariance_;
+  Eigen::MatrixXd phi_, z_, zraw_, vhat_lags_, eps_leads_, m21_, x_, w_, zz_inv_;
   Eigen::VectorXd e_, eps_, vhat_;
   Eigen::LLT<Eigen::MatrixXd> llt_{Eigen::MatrixXd(0, 0)};
 };

@@ -17,6 +17,9 @@ struct LaggedColumn {
   double sign;
 };
 
+// Phi itself, rows t0 .. t0 + n - 1 (for the callers that need per-row products).
+void lagged_matrix(const std::vector<LaggedColumn>& columns, Eigen::Index t0, Eigen::Index n,
+                   Eigen::MatrixXd& phi);
 // G = Phi^T Phi and h = Phi^T target[t0 .. t0 + n) (G, h resized only when p changes).
 void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const double* target,
                              Eigen::Index t0, Eigen::Index n, Eigen::MatrixXd& G,

@@ -6,6 +6,18 @@ BUILD ?= build/cpp
 JOBS ?= 2
 OUT ?= out
 
+# The example cases and QP problems live in ../shared beside the checkout (CI lays it out so).
+# A local clone made elsewhere (git clone . /tmp/x) finds them beside the repository it was
+# cloned from; MPMPP_SHARED_DIR, read by ctest's configure step and by pytest, overrides both.
+ifeq ($(origin MPMPP_SHARED_DIR),undefined)
+  ifeq ($(wildcard ../shared),)
+    ORIGIN_SHARED := $(wildcard $(shell git config --get remote.origin.url 2>/dev/null)/../shared)
+    ifneq ($(ORIGIN_SHARED),)
+      export MPMPP_SHARED_DIR := $(abspath $(ORIGIN_SHARED))
+    endif
+  endif
+endif
+
 .PHONY: all demo test test-cpp test-python install system-deps venv sanitize clean
 
 all: test

@@ -6,17 +6,8 @@ BUILD ?= build/cpp
 JOBS ?= 2
 OUT ?= out
 
-# The example cases and QP problems live in ../shared beside the checkout (CI lays it out so).
-# A local clone made elsewhere (git clone . /tmp/x) finds them beside the repository it was
-# cloned from; MPMPP_SHARED_DIR, read by ctest's configure step and by pytest, overrides both.
-ifeq ($(origin MPMPP_SHARED_DIR),undefined)
-  ifeq ($(wildcard ../shared),)
-    ORIGIN_SHARED := $(wildcard $(shell git config --get remote.origin.url 2>/dev/null)/../shared)
-    ifneq ($(ORIGIN_SHARED),)
-      export MPMPP_SHARED_DIR := $(abspath $(ORIGIN_SHARED))
-    endif
-  endif
-endif
+# The example cases are in examples/. The QP problem sets in ../shared (CI lays it out beside
+# the checkout; MPMPP_SHARED_DIR points elsewhere) are optional: their tests skip without them.
 
 .PHONY: all demo test test-cpp test-python install system-deps venv sanitize clean
 
@@ -32,9 +23,10 @@ venv: system-deps $(VENV)/bin/python
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q "scikit-build-core>=0.8" "pybind11>=2.11"
 
-# The package is rebuilt incrementally in build/<wheel tag> on every install.
+# The package is rebuilt incrementally in build/<wheel tag> on every install; the script shows
+# the compiler's progress and works around scikit-build-core's 5 s CMake probe.
 install: venv
-	$(PY) -m pip install -q --no-build-isolation ".[test]"
+	bash scripts/install-package.sh $(PY) build/install.log
 
 # The C++ build also puts _core next to python/mpmpp, and pytest imports that build
 # (PYTHONPATH=python); MPMPP_BUILD_DIR lets the streaming test run the stream_csv example.
@@ -43,6 +35,7 @@ install: venv
 test-cpp: install
 	cmake -S . -B $(BUILD) -DMPMPP_BUILD_TESTS=ON -DMPMPP_BUILD_PYTHON=ON -DMPMPP_INPLACE=ON \
 	      -DPython_EXECUTABLE=$(abspath $(PY)) -DCMAKE_BUILD_TYPE=Release
+	@echo "building the C++ engine and its tests in $(BUILD)"
 	cmake --build $(BUILD) -j $(JOBS)
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 

@@ -57,7 +57,7 @@ def main():
     print(f"{'demo':<6} {'simulate s':>10} {'mpmpp detect s':>14} {'total s':>8} {'target':>7} "
           f"{'peer detect s':>13} {'peer / mpmpp':>12}")
     for name, target in (("siso", 1.0), ("mimo", 3.0)):
-        scenario = load_scenario(f"paper-{name}")
+        scenario = load_scenario(f"paper_{name}")
         model = nominal_model(scenario)
         config = make_config(name)  # the recommended preset, as the demo uses
         sim, det, peer = [], [], []

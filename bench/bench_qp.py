@@ -38,7 +38,8 @@ sys.path.insert(0, str(ROOT / "tests" / "python"))
 import mpmpp  # noqa: E402
 from mpmpp import scenarios  # noqa: E402
 from mpmpp.simulate import run as simulate_run  # noqa: E402
-from qp_reference import SHARED_DIR, mpc_like_sequence  # noqa: E402
+from qp_reference import mpc_like_sequence  # noqa: E402
+from shared_problems import QP_DIR  # noqa: E402
 
 DAQP_INF = 1e30
 
@@ -46,7 +47,7 @@ DAQP_INF = 1e30
 def mpc_qpbenchmark(family):
     qps = []
     for k in range(30):
-        d = np.load(SHARED_DIR / "qp" / "mpc_qpbenchmark" / f"{family}{k}.npz", allow_pickle=True)
+        d = np.load(QP_DIR / "mpc_qpbenchmark" / f"{family}{k}.npz", allow_pickle=True)
         qps.append(dict(P=d["P"], q=d["q"], A=d["G"], l=np.full(len(d["h"]), -np.inf), u=d["h"]))
     return qps
 

@@ -37,7 +37,7 @@ def main():
     print(f"{'demo':<5} {'samples':>7} {'windows':>7} {'batch s':>8} {'stream s':>8} {'batch/stream':>12} "
           f"{'per window ms':>13} {'per sample us':>13} {'py push s':>9}")
     for name in ("siso", "mimo"):
-        scenario = load_scenario(f"paper-{name}")
+        scenario = load_scenario(f"paper_{name}")
         model = nominal_model(scenario)
         data = mpmpp.simulate(scenario, seed=0)
         detector = mpmpp.Detector.train(model, data, None, make_config(f"paper_{name}"))

@@ -29,7 +29,7 @@ def write_dataset(out_dir: str) -> tuple[str, str]:
     import mpmpp
     from mpmpp.evaluate import load_scenario, nominal_model
 
-    scenario = load_scenario("paper-siso")
+    scenario = load_scenario("paper_siso")
     model = nominal_model(scenario)
     data = mpmpp.simulate(scenario, seed=0)
     data = data[["time", *model.inputs, *model.outputs]].copy()

@@ -1,7 +1,9 @@
-"""The ``mpmpp`` command line (contract: shared FORMATS.md).
+"""The ``mpmpp`` command line (contract: docs/formats.md).
 
 Each subcommand lives in its own module under ``mpmpp.commands`` exposing
-``add_arguments(parser)`` and ``run(args) -> int``.
+``add_arguments(parser)`` and ``run(args) -> int``. Only the module of the command being
+run is imported (and nothing heavy for ``mpmpp --help``), so the command line answers at
+once; the engine, NumPy, pandas and matplotlib load when a command needs them.
 Bad input (ValueError, OSError on the user's files) becomes one line on stderr
 and exit code 2, never a traceback.
 """
@@ -11,7 +13,6 @@ import argparse
 import importlib
 import sys
 
-from . import __version__
 
 # name -> (one-line help, module implementing it)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -26,21 +27,48 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
+class _Version(argparse.Action):
+    """--version, reading the engine's version only when asked."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, help="show the version and exit")
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ._core import __version__
+
+        print(f"mpmpp {__version__}")
+        parser.exit()
+
+
+def _named_command(argv: list[str]) -> str | None:
+    """The subcommand in ``argv``: the first argument that is not an option."""
+    for arg in argv:
+        if not arg.startswith("-"):
+            return arg if arg in COMMANDS else None
+    return None
+
+
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; only the subcommand named in ``argv`` gets its arguments (all of them when
+    ``argv`` is None), the others are listed by name and help text."""
     parser = argparse.ArgumentParser(
         prog="mpmpp",
-        description="Model-plant mismatch detection and model diagnosis from routine closed-loop data.",
+        description="Model-plant mismatch detection and model diagnosis from routine closed-loop data. "
+                    "File formats: docs/formats.md in the repository.",
     )
-    parser.add_argument("--version", action="version", version=f"mpmpp {__version__}")
+    parser.add_argument("--version", action=_Version)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    wanted = None if argv is None else _named_command(argv)
     for name, (help_text, module) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
-        importlib.import_module(module).add_arguments(p)
+        if argv is None or name == wanted:
+            importlib.import_module(module).add_arguments(p)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()

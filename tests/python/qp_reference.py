@@ -10,8 +10,6 @@ References, all independent of mpmpp:
   own stationarity check (ill-conditioned P), OSQP at eps 1e-10 with solution polishing;
 - duals: the KKT conditions checked directly with NumPy (stationarity, sign and complementarity).
 """
-import os
-from pathlib import Path
 
 import numpy as np
 import quadprog
@@ -19,8 +17,6 @@ import scipy.linalg
 from scipy.optimize import linprog
 
 INFINITE_BOUND = 1e20
-# The shared data lives beside the repository (CI clones it there); MPMPP_SHARED_DIR overrides.
-SHARED_DIR = Path(os.environ.get("MPMPP_SHARED_DIR", Path(__file__).resolve().parents[2].parent / "shared"))
 
 
 def _finite(v):

@@ -1,11 +1,16 @@
-"""The command line frame: --version, --help everywhere, check's output."""
+"""The command line frame: --version, --help everywhere (and cheap), check's output."""
 import json
+import math
+import subprocess
+import sys
 
+import numpy as np
+import pathlib
 import pytest
 
 import mpmpp
 from mpmpp import cli
-from shared_cases import CASES
+from example_cases import GAIN_CHANGE, data_path, model_path
 
 
 def test_version(capsys):
@@ -24,7 +29,7 @@ def test_help_everywhere(command, capsys):
 
 
 def test_check_json_summary(capsys):
-    model, data = CASES / "P1" / "model.json", CASES / "P1" / "data.csv"
+    model, data = model_path(GAIN_CHANGE), data_path(GAIN_CHANGE)
     assert cli.main(["check", str(model), str(data), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     m, df = mpmpp.load_model(model), mpmpp.load_data(data, mpmpp.load_model(model))
@@ -43,6 +48,65 @@ def test_check_counts_missing_and_integrating_channel(tmp_path, capsys):
     (tmp_path / "d.csv").write_text("time,u,y,y_sp,x\n0,1,,0,1\n1,,2,0,\n2,1,2,0,3\n")
     assert cli.main(["check", str(tmp_path / "m.json"), str(tmp_path / "d.csv")]) == 0
     out = capsys.readouterr().out
-    assert "dc gain infinite" in out
+    assert "y <- u: integrating (infinite dc gain)" in out
     assert "missing values: u 1, y 1, x 1 (2 rows affected" in out
     assert "setpoints: y_sp" in out and "candidates for diagnose): x" in out
+
+
+def test_help_loads_no_engine_and_no_heavy_library():
+    # What `mpmpp --help` costs: only argparse and the command table. A fresh interpreter,
+    # since this test process has long imported everything.
+    code = ("import sys; from mpmpp import cli; cli.build_parser(['--help']); cli.build_parser(['check', '-h']); "
+            "print(sorted(m for m in ('numpy', 'pandas', 'matplotlib', 'mpmpp._core') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={"PYTHONPATH": str(pathlib.Path(mpmpp.__file__).parents[1])}).stdout
+    assert out.strip() == "['numpy']"  # check's own module needs NumPy; --help alone needs nothing
+
+
+def test_lazy_package_names_are_the_functions():
+    import mpmpp.simulate  # noqa: F401  (binds the submodule on the package, as any import does)
+    import mpmpp.detect  # noqa: F401
+    assert callable(mpmpp.simulate) and mpmpp.simulate.__name__ == "simulate"
+    assert mpmpp.detect.__name__ == "detect" and mpmpp.scenarios.paper_siso()["name"]
+    with pytest.raises(AttributeError, match="no_such_name"):
+        mpmpp.no_such_name
+
+
+@pytest.mark.parametrize("gain, tau, dead", [(0.9, 68.9, 65.0), (-2.5, 300.0, 72.5), (1.3, 0.0, 20.0),
+                                             (0.4, 12.0, 0.0)])
+def test_check_shows_gain_time_constant_dead_time(gain, tau, dead, tmp_path, capsys):
+    # Analytic: check reads back exactly what the zero-order-hold discretisation was given.
+    g = mpmpp.TransferFunction.from_foptd(gain=gain, time_constant_s=tau, dead_time_s=dead, sample_time_s=5.0)
+    mpmpp.save_model(mpmpp.Model("m", 5.0, ["u"], ["y"], {"y": {"u": g}}), tmp_path / "m.json")
+    assert cli.main(["check", str(tmp_path / "m.json"), "--json"]) == 0
+    f = json.loads(capsys.readouterr().out)["model"]["channels"][0]["foptd"]
+    assert f["exact"]
+    assert f["gain"] == pytest.approx(gain, rel=1e-9)
+    assert f["time_constant_s"] == pytest.approx(tau, rel=1e-9, abs=1e-9)
+    assert f["dead_time_s"] == pytest.approx(dead, rel=1e-9, abs=1e-9)
+    assert cli.main(["check", str(tmp_path / "m.json"), "--detail"]) == 0
+    out = capsys.readouterr().out
+    assert f"gain {gain:.4g}, time constant {tau:.4g} s, dead time {dead:.4g} s" in out
+    assert f"in q^-1: {g}" in out
+
+
+def test_check_reads_a_higher_order_channel_from_its_step_response(tmp_path, capsys):
+    # Two lags (60 s, 20 s) behind 8 samples of delay. Reference: SciPy's step response, the
+    # dead time where it leaves zero less the hold's sample, the time constant where it
+    # crosses 63% (interpolated) less the dead time.
+    from scipy import signal
+
+    ts, delay, gain = 5.0, 8, 1.5
+    a1, a2 = math.exp(-ts / 60.0), math.exp(-ts / 20.0)
+    num, den = [(1 - a1) * (1 - a2) * gain], [1.0, -(a1 + a2), a1 * a2]
+    g = mpmpp.TransferFunction(num, den, delay)
+    mpmpp.save_model(mpmpp.Model("m", ts, ["u"], ["y"], {"y": {"u": g}}), tmp_path / "m.json")
+    assert cli.main(["check", str(tmp_path / "m.json"), "--json"]) == 0
+    f = json.loads(capsys.readouterr().out)["model"]["channels"][0]["foptd"]
+    step = signal.lfilter(np.r_[np.zeros(delay), num], den, np.ones(400))
+    dead = (np.flatnonzero(step)[0] - 1) * ts
+    t63 = np.interp(1 - math.exp(-1), step / gain, np.arange(400) * ts)  # monotone response
+    assert not f["exact"] and f["gain"] == pytest.approx(gain, rel=1e-9)
+    assert f["dead_time_s"] == pytest.approx(dead, abs=1e-9)
+    assert f["time_constant_s"] == pytest.approx(t63 - dead, rel=1e-9)
+    assert 60.0 < f["time_constant_s"] < 60.0 + 20.0 + ts  # the slow lag, plus about the fast one

@@ -10,7 +10,7 @@ import mpmpp
 from mpmpp import _core
 from mpmpp.compare import compare
 
-from case_files import _Model, load_case
+from example_cases import NOISE_CHANGE, load_case
 
 G_NUM, G_DEN, G_DELAY = [0.1], [1.0, -0.9], 4
 H_NUM, H_DEN = [1.0, -0.3], [1.0, 0.5]
@@ -31,9 +31,9 @@ def _siso(n, seed, extra_gain=0.0, noise_scale_after=None):
     y = lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, u) + lfilter(H_NUM, H_DEN, e)
     y += extra_gain * lfilter([0, 0, 0, 0.05], [1.0, -0.8], w)
     data = pd.DataFrame({"time": 5.0 * np.arange(n), "u": u + 100.0, "y": y + 50.0, "w": w})
-    model = _Model({"name": "t", "sample_time_s": 5.0, "inputs": ["u"], "outputs": ["y"],
-                    "process": {"y": {"u": {"num": G_NUM, "den": G_DEN, "delay": G_DELAY}}},
-                    "noise": {"y": {"num": H_NUM, "den": H_DEN}}})
+    model = mpmpp.Model("t", 5.0, ["u"], ["y"],
+                        process={"y": {"u": mpmpp.TransferFunction(G_NUM, G_DEN, G_DELAY)}},
+                        noise={"y": mpmpp.TransferFunction(H_NUM, H_DEN)})
     return model, data, e
 
 
@@ -119,12 +119,12 @@ def test_bad_arguments_name_the_field():
         compare(model, data.drop(columns=["y"]))
 
 
-def test_p3_noise_change_is_where_it_fails(tmp_path):
-    model, data, answer = load_case("P3")
+def test_noise_change_is_where_it_fails(tmp_path):
+    model, data, truth = load_case(NOISE_CHANGE)
     res = compare(model, data)
     by = {oc.output: oc for oc in res.outputs}
-    onset = answer["findings"][0]["onset_s"]
-    assert by["moisture"].failing and abs(by["moisture"].failing[0].start_s - onset) <= 3600
-    assert not by["basis_weight"].failing
+    changed = by[truth["output"]]
+    assert changed.failing and abs(changed.failing[0].start_s - truth["onset_s"]) <= 3600
+    assert not any(oc.failing for name, oc in by.items() if name != truth["output"])
     paths = res.plot(tmp_path)
     assert len(paths) == 6 and all(p.stat().st_size > 1000 for p in paths)

@@ -1,42 +1,65 @@
 """The command line of compare / diagnose / update on a user's model + CSV pair."""
 import json
+import os
 
 import mpmpp
 from mpmpp.cli import main
 
-from case_files import CASES
+from example_cases import GAIN_CHANGE, NOISE_CHANGE, data_path, hidden_effect, model_path
 
 
 def test_compare_cli_writes_figures_and_json(tmp_path, capsys):
-    folder = CASES / "P3"
-    assert main(["compare", str(folder / "model.json"), str(folder / "data.csv"), "--json",
+    assert main(["compare", str(model_path(NOISE_CHANGE)), str(data_path(NOISE_CHANGE)), "--json",
                  "--out", str(tmp_path)]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert [o["output"] for o in doc["outputs"]] == ["basis_weight", "moisture"]
+    assert [o["output"] for o in doc["outputs"]] == mpmpp.load_model(model_path(NOISE_CHANGE)).outputs
     assert len(list(tmp_path.glob("*.png"))) == 6
 
 
 def test_diagnose_then_update_cli(tmp_path, capsys):
-    folder = CASES / "P1"
-    model, data = str(folder / "model.json"), str(folder / "data.csv")
+    truth = hidden_effect(GAIN_CHANGE)
+    model, data = str(model_path(GAIN_CHANGE)), str(data_path(GAIN_CHANGE))
     assert main(["diagnose", model, data, "--json", "--out", str(tmp_path)]) == 0
     doc = json.loads(capsys.readouterr().out)
-    assert doc["findings"][0]["effect"] == "gain"
-    assert (tmp_path / "diagnose_dry_weight.png").exists()
+    assert doc["findings"][0]["effect"] == truth["effect"]
+    assert (tmp_path / f"diagnose_{truth['output']}.png").exists()
     new = tmp_path / "new.json"
     assert main(["update", model, data, "--apply", "F1", "-o", str(new)]) == 0
     text = capsys.readouterr().out
     assert "error" in text and new.exists()
-    g_old = mpmpp.load_model(model).process("dry_weight", "stock_flow")
-    g_new = mpmpp.load_model(new).process("dry_weight", "stock_flow")
-    assert 1.6 < g_new.dc_gain() / g_old.dc_gain() < 2.4
+    g_old = mpmpp.load_model(model).process(truth["output"], truth["input"])
+    g_new = mpmpp.load_model(new).process(truth["output"], truth["input"])
+    assert abs(g_new.dc_gain() / g_old.dc_gain() - truth["ratio"]) < 0.2 * truth["ratio"]
+
+
+def test_update_never_overwrites_silently(tmp_path, capsys):
+    model = tmp_path / "model.json"
+    model.write_bytes(model_path(GAIN_CHANGE).read_bytes())
+    before = model.read_bytes()
+    data = str(data_path(GAIN_CHANGE))
+    # The input model itself, also under another spelling of its path: refused, untouched.
+    for target in (model, tmp_path / "." / "model.json"):
+        assert main(["update", str(model), data, "--apply", "F1", "-o", str(target)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and "is the input model" in err and "--force" in err
+        assert model.read_bytes() == before
+    # Any other existing file: refused too.
+    other = tmp_path / "other.json"
+    other.write_text("keep me")
+    assert main(["update", str(model), data, "--apply", "F1", "-o", str(other)]) == 2
+    assert "exists" in capsys.readouterr().err and other.read_text() == "keep me"
+    # With --force the input model is replaced, and the output says so.
+    os.chmod(model, 0o640)
+    assert main(["update", str(model), data, "--apply", "F1", "-o", str(model), "--force"]) == 0
+    assert f"replaced {model}" in capsys.readouterr().out
+    assert model.read_bytes() != before and mpmpp.load_model(model).outputs == [hidden_effect(GAIN_CHANGE)["output"]]
+    assert os.stat(model).st_mode & 0o777 == 0o640
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
-    folder = CASES / "P1"
-    assert main(["diagnose", str(folder / "model.json"), str(tmp_path / "missing.csv")]) == 2
+    model, data = str(model_path(GAIN_CHANGE)), str(data_path(GAIN_CHANGE))
+    assert main(["diagnose", model, str(tmp_path / "missing.csv")]) == 2
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "missing.csv" in err
-    assert main(["update", str(folder / "model.json"), str(folder / "data.csv"), "--apply", "F7",
-                 "-o", str(tmp_path / "x.json")]) == 2
+    assert main(["update", model, data, "--apply", "F7", "-o", str(tmp_path / "x.json")]) == 2
     assert "F7" in capsys.readouterr().err

@@ -9,19 +9,19 @@ from hypothesis import given, settings, strategies as st
 
 import mpmpp
 
-from shared_cases import CASES
+from example_cases import CASES, data_path, model_path
 
 
 def small_model(ts=5.0):
     return mpmpp.Model("m", ts, ["u"], ["y"], {"y": {"u": mpmpp.TransferFunction([0.5], [1.0, -0.5], 1)}})
 
 
-@pytest.mark.parametrize("case", ["P1", "P2", "P3"])
+@pytest.mark.parametrize("case", CASES)
 def test_case_data_matches_pandas(case):
-    model = mpmpp.load_model(CASES / case / "model.json")
-    df = mpmpp.load_data(CASES / case / "data.csv", model)
+    model = mpmpp.load_model(model_path(case))
+    df = mpmpp.load_data(data_path(case), model)
     # Reference: the csv module and Python's correctly rounded float().
-    with open(CASES / case / "data.csv", newline="") as f:
+    with open(data_path(case), newline="") as f:
         header, *rows = list(csv.reader(f))
     assert list(df.columns) == header
     np.testing.assert_array_equal(df.to_numpy(), np.array([[float(x) for x in r] for r in rows]))

@@ -71,7 +71,7 @@ def test_dask_local_cluster_gives_the_same_numbers_as_local_processes():
 def test_cli_evaluate_bad_arguments_exit_2(capsys):
     from mpmpp.cli import main
 
-    assert main(["evaluate", "paper-siso", "--seeds", "0"]) == 2
+    assert main(["evaluate", "paper_siso", "--seeds", "0"]) == 2
     assert "--seeds" in capsys.readouterr().err
     assert main(["evaluate", "/nonexistent/scenario.json", "--seeds", "1"]) == 2
     assert "cannot read the scenario" in capsys.readouterr().err

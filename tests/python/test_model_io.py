@@ -9,12 +9,12 @@ from scipy import signal
 
 import mpmpp
 
-from shared_cases import CASES
-CASE_MODELS = sorted(CASES.glob("P*/model.json"))
+from example_cases import CASES, EXAMPLES, MISSING_COUPLING, model_path
+CASE_MODELS = [model_path(case) for case in CASES]
 
 
 def test_example_cases_exist():
-    assert len(CASE_MODELS) >= 3, f"shared example cases expected under {CASES}"
+    assert all(path.is_file() for path in CASE_MODELS), f"example cases expected under {EXAMPLES}"
 
 
 @pytest.mark.parametrize("path", CASE_MODELS, ids=lambda p: p.parent.name)
@@ -128,7 +128,7 @@ def test_save_into_missing_directory_names_the_file(tmp_path):
         mpmpp.save_model(m, target)
 
 
-GOOD_TEXT = (CASES / "P2" / "model.json").read_text() if (CASES / "P2").is_dir() else "{}"
+GOOD_TEXT = model_path(MISSING_COUPLING).read_text()
 
 
 @settings(max_examples=200, deadline=None)

@@ -5,9 +5,9 @@ import pytest
 import scipy.io
 
 import mpmpp
-from qp_reference import SHARED_DIR, check_against_reference, check_qps, kkt_residuals, mpc_like_sequence, reference_solve
+from shared_problems import require_qp_set
+from qp_reference import check_against_reference, check_qps, kkt_residuals, mpc_like_sequence, reference_solve
 
-SHARED = SHARED_DIR / "qp"
 INF = np.inf
 
 
@@ -186,7 +186,7 @@ MAROS_MESZAROS_PSD = ["GENHS28", "HS51", "HS52", "HS53", "LOTSCHD", "QAFIRO", "Q
 
 
 def load_maros_meszaros(name):
-    d = scipy.io.loadmat(str(SHARED / "maros_meszaros" / f"{name}.mat"))
+    d = scipy.io.loadmat(str(require_qp_set("maros_meszaros") / f"{name}.mat"))
     dense = lambda M: M.toarray() if hasattr(M, "toarray") else np.asarray(M, float)
     return dict(P=dense(d["P"]), q=d["q"].ravel().astype(float), A=dense(d["A"]),
                 l=d["l"].ravel().astype(float), u=d["u"].ravel().astype(float), r=float(d["r"].ravel()[0]))
@@ -212,9 +212,9 @@ def test_maros_meszaros_semidefinite_is_reported_non_convex(name):
 
 
 def load_mpc_family(family):
-    qps = []
+    folder, qps = require_qp_set("mpc_qpbenchmark"), []
     for k in range(30):
-        d = np.load(SHARED / "mpc_qpbenchmark" / f"{family}{k}.npz", allow_pickle=True)
+        d = np.load(folder / f"{family}{k}.npz", allow_pickle=True)
         G, h = d["G"], d["h"]
         qps.append(dict(P=d["P"], q=d["q"], A=G, l=np.full(len(h), -INF), u=h))
     return qps

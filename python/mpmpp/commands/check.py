@@ -10,12 +10,13 @@ import json
 
 import numpy as np
 
-from ..io import load_data, load_model
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("model", metavar="MODEL", help="model file (JSON, FORMATS.md 'Model file')")
+    parser.add_argument("model", metavar="MODEL", help="model file (JSON, docs/formats.md 'Model file')")
     parser.add_argument("data", metavar="DATA", nargs="?", help="data file (CSV) to check against the model")
+    parser.add_argument("--detail", action="store_true",
+                        help="also show each channel as its discrete transfer function in q^-1")
     parser.add_argument("--json", action="store_true", help="print one JSON document instead of the summary")
 
 
@@ -25,11 +26,17 @@ def _finite_or_none(x: float):
 
 
 def _model_summary(path: str, model) -> dict:
+    from ..foptd import foptd_parameters
+
     channels = []
     for output, input_ in model.channels():
         g = model.process(output, input_)
+        f = foptd_parameters(g, model.sample_time_s)
         channels.append({"output": output, "input": input_, "num": g.num.tolist(), "den": g.den.tolist(),
-                         "delay": g.delay, "dc_gain": _finite_or_none(g.dc_gain()), "text": str(g)})
+                         "delay": g.delay, "dc_gain": _finite_or_none(g.dc_gain()), "text": str(g),
+                         "foptd": None if f is None else {"gain": f.gain, "time_constant_s": f.time_constant_s,
+                                                          "dead_time_s": f.dead_time_s, "exact": f.exact},
+                         "foptd_text": None if f is None else str(f)})
     noise = []
     for output in model.outputs:
         h = model.noise(output)
@@ -62,14 +69,23 @@ def _hours(seconds: float) -> str:
     return f"{seconds / 3600:.3g} h"
 
 
-def _print_summary(report: dict) -> None:
+def _channel_line(ch: dict) -> str:
+    if ch["foptd_text"] is not None:
+        return ch["foptd_text"]
+    if ch["dc_gain"] is None:
+        return "integrating (infinite dc gain), no first-order reading"
+    return f"dc gain {ch['dc_gain']:.6g}, no first-order reading (unstable or zero gain)"
+
+
+def _print_summary(report: dict, detail: bool) -> None:
     m = report["model"]
     print(f"model {m['path']}: '{m['name']}', {len(m['inputs'])} input(s), {len(m['outputs'])} output(s), "
           f"sample time {m['sample_time_s']:g} s")
     print(f"  inputs: {', '.join(m['inputs'])}; outputs: {', '.join(m['outputs'])}")
     for ch in m["channels"]:
-        gain = "infinite (integrating)" if ch["dc_gain"] is None else f"{ch['dc_gain']:.6g}"
-        print(f"  channel {ch['output']} <- {ch['input']}: {ch['text']}, dc gain {gain}")
+        print(f"  channel {ch['output']} <- {ch['input']}: {_channel_line(ch)}")
+        if detail:
+            print(f"    in q^-1: {ch['text']}")
     if not m["channels"]:
         print("  no process channels (the model claims no coupling at all)")
     for h in m["noise"]:
@@ -94,6 +110,8 @@ def _print_summary(report: dict) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..io import load_data, load_model
+
     model = load_model(args.model)
     report = {"model": _model_summary(args.model, model)}
     if args.data is not None:
@@ -101,5 +119,5 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(report, indent=2))
     else:
-        _print_summary(report)
+        _print_summary(report, args.detail)
     return 0

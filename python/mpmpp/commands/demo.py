@@ -28,7 +28,7 @@ def run(args) -> int:
     from ..simulate import simulate
 
     started = time.perf_counter()
-    scenario = load_scenario(f"paper-{args.example}")
+    scenario = load_scenario(f"paper_{args.example}")
     model = nominal_model(scenario)
     _step(f"simulating {scenario['name']} ({scenario['duration_s'] / 3600:g} h, seed {args.seed})", started)
     data = simulate(scenario, seed=args.seed)

@@ -6,7 +6,7 @@ import json
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("scenario", help="paper-siso | paper-mimo | a scenario JSON file")
+    parser.add_argument("scenario", help="paper_siso | paper_mimo (the paper's examples) | a scenario JSON file")
     parser.add_argument("--seeds", type=int, default=20, metavar="N", help="number of runs (default 20)")
     parser.add_argument("--first-seed", type=int, default=0, metavar="S",
                         help="seeds S..S+N-1 (default 0; e.g. 100 for runs held out from a choice made on 0..99)")

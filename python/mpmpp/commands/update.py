@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 
 from ._pair import add_pair_arguments, load_pair
 
@@ -10,22 +11,40 @@ def add_arguments(parser) -> None:
     add_pair_arguments(parser)
     parser.add_argument("--apply", required=True, metavar="ID[,ID...]",
                         help="finding ids from `mpmpp diagnose` (e.g. F1,F2)")
-    parser.add_argument("-o", "--output", required=True, metavar="NEW_MODEL", help="model file to write")
+    parser.add_argument("-o", "--output", required=True, metavar="NEW_MODEL",
+                        help="model file to write (must not exist yet, unless --force)")
+    parser.add_argument("--force", action="store_true",
+                        help="replace NEW_MODEL if it exists, even when it is MODEL itself")
     parser.add_argument("--train-end", type=float, metavar="SECONDS",
                         help="as for diagnose (the same findings are re-derived)")
+
+
+def replaces_existing(model_path: str, output_path: str, force: bool) -> bool:
+    """Whether writing ``output_path`` replaces an existing file; that is an error without ``force``.
+    Checked before any work, so a refusal costs nothing; the input model is named as such,
+    since losing it loses the nominal model the findings were measured against."""
+    if not os.path.exists(output_path):
+        return False
+    if not force:
+        if os.path.exists(model_path) and os.path.samefile(model_path, output_path):
+            raise ValueError(f"{output_path}: is the input model; write the new model to another file "
+                             f"or pass --force to replace it")
+        raise ValueError(f"{output_path}: exists; choose another file or pass --force to replace it")
+    return True
 
 
 def run(args) -> int:
     from ..update import update
 
+    replaces = replaces_existing(args.model, args.output, args.force)
     model, data = load_pair(args.model, args.data)
     result = update(model, data, args.apply, train_end_s=args.train_end)
     result.save(args.output)
     if args.out:
         result.plot(args.out)
     if args.json:
-        print(json.dumps({**result.to_dict(), "model": args.output}))
+        print(json.dumps({**result.to_dict(), "model": args.output, "replaced": replaces}))
     else:
         print(result.summary())
-        print(f"  wrote {args.output}")
+        print(f"  {'replaced' if replaces else 'wrote'} {args.output}")
     return 0

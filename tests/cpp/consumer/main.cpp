@@ -4,7 +4,7 @@
 #include <mpmpp/model_io.hpp>
 
 int main(int argc, char** argv) {
-  const std::string path = argc > 1 ? argv[1] : "../shared/cases/P1/model.json";
+  const std::string path = argc > 1 ? argv[1] : "examples/siso_gain_change/model.json";
   try {
     const mpmpp::Model model = mpmpp::load_model(path);
     const mpmpp::TransferFunction& g = *model.process[0][0];  // outputs[0] <- inputs[0]

@@ -1,5 +1,5 @@
 # ctest driver (cmake -P): install the build tree into a fresh prefix, configure and
-# build the consumer project against it, run it on a shared example model.
+# build the consumer project against it, run it on an example model.
 # Inputs: BUILD_DIR, WORK_DIR, SOURCE_DIR, CXX_COMPILER, MODEL, EXTRA_FLAGS (optional).
 file(REMOVE_RECURSE "${WORK_DIR}")
 set(prefix "${WORK_DIR}/prefix")

@@ -1,0 +1,91 @@
+"""A process channel read as first order plus dead time: gain, time constant and dead time in
+seconds, the way control engineers state a loop's dynamics.
+
+Exact for the channels ``TransferFunction.from_foptd`` makes (zero-order hold, also with a
+dead time that is not a whole number of samples); any other stable channel gets the FOPTD
+that matches its step response at the dead time and at 63% of the final value.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+# Step response length for the approximate reading: the slowest pole decays to e^-12.
+_SETTLING_TIME_CONSTANTS = 12
+_MAX_STEP_SAMPLES = 1_000_000
+
+
+@dataclass(frozen=True)
+class Foptd:
+    gain: float
+    time_constant_s: float
+    dead_time_s: float
+    exact: bool  # False: fitted to the step response (higher order, zeros, ...)
+
+    def __str__(self) -> str:
+        text = f"gain {self.gain:.4g}, time constant {self.time_constant_s:.4g} s, dead time {self.dead_time_s:.4g} s"
+        return text if self.exact else text + " (approximate: step-response fit)"
+
+
+def _taps(g) -> tuple[np.ndarray, int]:
+    """Numerator without leading/trailing zero taps, and the delay including the leading ones."""
+    num = np.asarray(g.num, dtype=float)
+    nz = np.flatnonzero(num)
+    if nz.size == 0:
+        return num[:0], g.delay
+    return num[nz[0]:nz[-1] + 1], g.delay + int(nz[0])
+
+
+def _exact(num: np.ndarray, den: np.ndarray, delay: int, ts: float) -> Foptd | None:
+    """Inverse of the zero-order-hold discretisation of K e^(-theta s) / (tau s + 1)."""
+    if len(den) == 1 and len(num) == 1:
+        return Foptd(num[0] / den[0], 0.0, delay * ts, True)
+    if len(den) != 2 or delay < 1 or len(num) > 2:
+        return None
+    a = -den[1] / den[0]
+    if not 0.0 < a < 1.0:
+        return None
+    b = num / den[0]
+    gain = b.sum() / (1.0 - a)
+    tau = -ts / math.log(a)
+    if len(b) == 1:
+        return Foptd(gain, tau, (delay - 1) * ts, True)
+    # Fractional dead time f*Ts: b0 = K (1 - a^(1-f)), b1 = K (a^(1-f) - a) (modified z-transform).
+    af = 1.0 - b[0] / gain
+    if not a < af < 1.0:
+        return None
+    frac = 1.0 - math.log(af) / math.log(a)
+    return Foptd(gain, tau, (delay - 1 + frac) * ts, True)
+
+
+def _from_step(g, delay: int, ts: float) -> Foptd | None:
+    """Dead time where the step response leaves zero, time constant where it reaches 63%."""
+    if not g.is_stable():
+        return None
+    poles = np.abs(np.asarray(g.poles()))
+    slowest = poles.max() if poles.size else 0.0
+    settle = 1 if slowest == 0 else math.ceil(_SETTLING_TIME_CONSTANTS / -math.log(slowest))
+    n = min(delay + len(g.num) + settle + 2, _MAX_STEP_SAMPLES)
+    step = np.asarray(g.step(n))
+    gain = g.dc_gain()
+    if gain == 0 or not np.isfinite(gain):
+        return None
+    moved = np.flatnonzero(np.abs(step) > 1e-9 * abs(gain))
+    # A ZOH lag first moves one sample after its dead time.
+    dead = max(int(moved[0]) - 1, 0) * ts
+    frac = step / gain
+    k = int(np.argmax(frac >= 1.0 - math.exp(-1.0)))
+    t63 = k * ts if k == 0 else (k - 1 + (1.0 - math.exp(-1.0) - frac[k - 1]) / (frac[k] - frac[k - 1])) * ts
+    return Foptd(gain, max(t63 - dead, 0.0), dead, False)
+
+
+def foptd_parameters(g, sample_time_s: float) -> Foptd | None:
+    """``g`` (a discrete TransferFunction at ``sample_time_s``) as gain, time constant and dead
+    time; None where no such reading exists (unstable or integrating channels, zero gain)."""
+    num, delay = _taps(g)
+    if num.size == 0:
+        return None
+    den = np.asarray(g.den, dtype=float)
+    return _exact(num, den, delay, sample_time_s) or _from_step(g, delay, sample_time_s)

@@ -35,7 +35,7 @@ show_progress() {
 }
 
 for attempt in 1 2; do
-  echo "building and installing mpmpp into $(dirname "$PY")/.. (the C++ engine takes minutes on 2 cores; log: $LOG)"
+  echo "building and installing mpmpp for $PY (the C++ engine takes minutes on 2 cores; log: $LOG)"
   "$PY" -m pip install -v --no-build-isolation ".[test]" >"$LOG" 2>&1 &
   pid=$!
   shown=0

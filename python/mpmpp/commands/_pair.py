@@ -10,8 +10,8 @@ def load_pair(model_path: str, data_path: str):
 
 
 def add_pair_arguments(parser) -> None:
-    parser.add_argument("model", metavar="MODEL", help="nominal model file (JSON, FORMATS.md)")
-    parser.add_argument("data", metavar="DATA", help="operating data (CSV, FORMATS.md)")
+    parser.add_argument("model", metavar="MODEL", help="nominal model file (JSON, formats.md)")
+    parser.add_argument("data", metavar="DATA", help="operating data (CSV, formats.md)")
     parser.add_argument("--out", metavar="DIR", help="write PNG figures and tables here")
     parser.add_argument("--json", action="store_true", help="print one JSON document on stdout")
 

@@ -1,4 +1,4 @@
-"""``mpmpp diagnose MODEL DATA``: ranked findings (FORMATS.md ``diagnose --json``)."""
+"""``mpmpp diagnose MODEL DATA``: ranked findings (formats.md ``diagnose --json``)."""
 from __future__ import annotations
 
 from ._pair import add_pair_arguments, load_pair, report

@@ -1,6 +1,6 @@
 """``mpmpp simulate SCENARIO.json -o DATA.csv [--seed N] [--plot FIG.png] [--record-qps QPS.npz]``
 and ``mpmpp simulate --paper siso|mimo ...``: a closed-loop run of a scenario (docs/scenario.md)
-written as a data file (FORMATS.md)."""
+written as a data file (formats.md)."""
 from __future__ import annotations
 
 import argparse
@@ -13,7 +13,7 @@ import numpy as np
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", metavar="SCENARIO", nargs="?", help="scenario file (JSON, docs/scenario.md)")
     parser.add_argument("--paper", choices=["siso", "mimo"], help="the paper's example instead of a file")
-    parser.add_argument("-o", "--output", metavar="DATA.csv", help="data file to write (CSV, FORMATS.md)")
+    parser.add_argument("-o", "--output", metavar="DATA.csv", help="data file to write (CSV, formats.md)")
     parser.add_argument("--seed", type=int, help="noise seed (default: the scenario's)")
     parser.add_argument("--plot", metavar="FIG.png", help="also plot CV/MV profiles (like the paper's Figs 3, 5, 6)")
     parser.add_argument("--record-qps", metavar="QPS.npz",

@@ -19,16 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-HOUR = 3600.0
+from mpmpp.scenarios import HOUR, tf_spec
+
 TS = 5.0
 SIGNIFICANT_DIGITS = 6
-
-
-def _tf(num, den, delay=0):
-    spec = {"num": list(num), "den": list(den)}
-    if delay:
-        spec["delay"] = delay
-    return spec
 
 
 def _mv(target, max_move, move_weight):
@@ -49,8 +43,8 @@ _SISO = {
     "sample_time_s": TS,
     "inputs": ["stock_flow"],
     "outputs": ["dry_weight"],
-    "process": {"dry_weight": {"stock_flow": _tf([0.063], [1.0, -0.93], 14)}},
-    "noise": {"dry_weight": _tf([1.0, -0.4], [1.0, 0.5])},
+    "process": {"dry_weight": {"stock_flow": tf_spec([0.063], [1.0, -0.93], 14)}},
+    "noise": {"dry_weight": tf_spec([1.0, -0.4], [1.0, 0.5])},
     "truth": {"sigma": {"dry_weight": 0.05}},
     "controller": {"prediction_horizon": 40, "control_horizon": 4,
                    "cv": {"dry_weight": _cv(52.0)}, "mv": {"stock_flow": _mv(140.0, 0.1667, 0.05)}},
@@ -66,11 +60,11 @@ _MIMO_MODEL = {
     "sample_time_s": TS,
     "inputs": ["stock_flow", "steam_pressure"],
     "outputs": ["basis_weight", "moisture"],
-    "process": {"basis_weight": {"stock_flow": _tf([0.064], [1.0, -0.92], 12)},
-                "moisture": {"stock_flow": _tf([0.015], [1.0, -0.95], 20),
-                             "steam_pressure": _tf([-0.05], [1.0, -0.9], 8)}},
-    "noise": {"basis_weight": _tf([1.0, -0.2], [1.0, 0.5]),
-              "moisture": _tf([1.0, 0.3], [1.0, 0.4])},
+    "process": {"basis_weight": {"stock_flow": tf_spec([0.064], [1.0, -0.92], 12)},
+                "moisture": {"stock_flow": tf_spec([0.015], [1.0, -0.95], 20),
+                             "steam_pressure": tf_spec([-0.05], [1.0, -0.9], 8)}},
+    "noise": {"basis_weight": tf_spec([1.0, -0.2], [1.0, 0.5]),
+              "moisture": tf_spec([1.0, 0.3], [1.0, 0.4])},
     "controller": {"prediction_horizon": 40, "control_horizon": 4,
                    "cv": {"basis_weight": _cv(80.0), "moisture": _cv(7.5)},
                    "mv": {"stock_flow": _mv(160.0, 0.1667, 0.03), "steam_pressure": _mv(110.0, 1.0, 0.03)}},
@@ -86,7 +80,7 @@ _COUPLING = copy.deepcopy(_MIMO_MODEL) | {
 _COUPLING["truth"] = {"sigma": _MIMO_SIGMA,
                       "process": copy.deepcopy(_MIMO_MODEL["process"])}
 # Steam pressure acts on basis weight (gain 0.35) from the start; the model says it does not.
-_COUPLING["truth"]["process"]["basis_weight"]["steam_pressure"] = _tf([0.035], [1.0, -0.9], 10)
+_COUPLING["truth"]["process"]["basis_weight"]["steam_pressure"] = tf_spec([0.035], [1.0, -0.9], 10)
 
 _NOISE = copy.deepcopy(_MIMO_MODEL) | {
     "name": "basis weight and moisture",
@@ -96,7 +90,7 @@ _NOISE = copy.deepcopy(_MIMO_MODEL) | {
     # Only the disturbance changes (its pole moves from -0.4 to +0.6: slower, larger
     # wander); the process model stays right.
     "events": [{"time_s": 7 * HOUR, "type": "noise", "output": "moisture",
-                "model": _tf([1.0, 0.3], [1.0, -0.6])}],
+                "model": tf_spec([1.0, 0.3], [1.0, -0.6])}],
 }
 
 EXAMPLES = {"siso_gain_change": _SISO, "mimo_missing_coupling": _COUPLING, "mimo_noise_change": _NOISE}

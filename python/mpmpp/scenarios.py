@@ -11,7 +11,8 @@ MINUTE = 60.0
 HOUR = 3600.0
 
 
-def _tf(num, den, delay=0):
+def tf_spec(num, den, delay=0):
+    """A transfer function as a model/scenario file writes it (``delay`` left out when 0)."""
     spec = {"num": list(num), "den": list(den)}
     if delay:
         spec["delay"] = delay
@@ -24,8 +25,8 @@ _SISO = {
     "inputs": ["stock_flow"],
     "outputs": ["dry_weight"],
     # The MPC's model is the initial true plant: no mismatch at the start.
-    "process": {"dry_weight": {"stock_flow": _tf([0.1003], [1.0, -0.9048], 17)}},
-    "noise": {"dry_weight": _tf([1.0, -0.3], [1.0, 0.6])},
+    "process": {"dry_weight": {"stock_flow": tf_spec([0.1003], [1.0, -0.9048], 17)}},
+    "noise": {"dry_weight": tf_spec([1.0, -0.3], [1.0, 0.6])},
     "truth": {"sigma": {"dry_weight": 0.05}},
     "controller": {  # Table 2
         "prediction_horizon": 40,
@@ -46,7 +47,7 @@ _SISO = {
     "duration_s": 15 * HOUR,
     "seed": 0,
     "events": [
-        {"time_s": 7 * HOUR, "type": "noise", "output": "dry_weight", "model": _tf([1.0, 0.3], [1.0, -0.6])},
+        {"time_s": 7 * HOUR, "type": "noise", "output": "dry_weight", "model": tf_spec([1.0, 0.3], [1.0, -0.6])},
         {"time_s": 11 * HOUR, "type": "gain", "output": "dry_weight", "input": "stock_flow", "factor": 2.0},
     ],
 }
@@ -61,19 +62,19 @@ _MIMO = {
     "inputs": _MIMO_MV,
     "outputs": _MIMO_CV,
     "process": {
-        "press_dry_weight": {"stock_flow": _tf([0.0763], [1.0, -0.0723], 15)},
-        "press_moisture": {"stock_flow": _tf([0.0305], [1.0, -0.0130], 19),
-                           "steam_4": _tf([-0.0026], [1.0, -0.0183], 23)},
+        "press_dry_weight": {"stock_flow": tf_spec([0.0763], [1.0, -0.0723], 15)},
+        "press_moisture": {"stock_flow": tf_spec([0.0305], [1.0, -0.0130], 19),
+                           "steam_4": tf_spec([-0.0026], [1.0, -0.0183], 23)},
         # CHOICE: G31's denominator is printed "1 - 0.0318^-1"; read as 1 - 0.0318 q^-1 like
         # every other entry of the matrix.
-        "reel_moisture": {"stock_flow": _tf([0.0239], [1.0, -0.0318], 9),
-                          "steam_4": _tf([-0.0056], [1.0, -0.0234], 7),
-                          "steam_3": _tf([-0.0101], [1.0, -0.1823], 19)},
+        "reel_moisture": {"stock_flow": tf_spec([0.0239], [1.0, -0.0318], 9),
+                          "steam_4": tf_spec([-0.0056], [1.0, -0.0234], 7),
+                          "steam_3": tf_spec([-0.0101], [1.0, -0.1823], 19)},
     },
     "noise": {
-        "press_dry_weight": _tf([1.0, -0.5], [1.0, 0.5]),
-        "press_moisture": _tf([1.0, -0.3], [1.0, 0.6]),
-        "reel_moisture": _tf([1.0, 0.2], [1.0, 0.7]),
+        "press_dry_weight": tf_spec([1.0, -0.5], [1.0, 0.5]),
+        "press_moisture": tf_spec([1.0, -0.3], [1.0, 0.6]),
+        "reel_moisture": tf_spec([1.0, 0.2], [1.0, 0.7]),
     },
     # CHOICE: the paper gives no MIMO noise level; sigma = 0.05 on every output, the one
     # level it does give (SISO, "to reflect the reality of a paper machine"). It also makes
@@ -100,7 +101,7 @@ _MIMO = {
     "seed": 0,
     "events": [
         {"time_s": 575 * MINUTE, "type": "noise", "output": "press_moisture",
-         "model": _tf([1.0, 0.3], [1.0, -0.6])},
+         "model": tf_spec([1.0, 0.3], [1.0, -0.6])},
         {"time_s": 1000 * MINUTE, "type": "gain", "output": "reel_moisture", "input": "stock_flow",
          "factor": 2.0},
         {"time_s": 1250 * MINUTE, "type": "gain", "output": "press_dry_weight", "input": "stock_flow",

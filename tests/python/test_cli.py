@@ -110,3 +110,10 @@ def test_check_reads_a_higher_order_channel_from_its_step_response(tmp_path, cap
     assert f["dead_time_s"] == pytest.approx(dead, abs=1e-9)
     assert f["time_constant_s"] == pytest.approx(t63 - dead, rel=1e-9)
     assert 60.0 < f["time_constant_s"] < 60.0 + 20.0 + ts  # the slow lag, plus about the fast one
+
+
+def test_paper_scenarios_have_one_spelling_and_accept_the_old_one():
+    from mpmpp.evaluate import load_scenario
+
+    assert load_scenario("paper_siso") == load_scenario("paper-siso") == mpmpp.scenarios.paper_siso()
+    assert load_scenario("paper_mimo") == load_scenario("paper-mimo") == mpmpp.scenarios.paper_mimo()

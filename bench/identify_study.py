@@ -5,9 +5,9 @@ Loops: flow / level-like / pressure-like first order plus dead time (tests/pytho
 plain NumPy PI-loop simulator), 2 h at 10 s (751 rows), routine operation (disturbances only)
 and with setpoint steps. Per loop and seed, ``model_from_data`` gives gain K, time constant tau
 and dead time theta with their reported uncertainty. The reference re-fits the selected
-structure (the same na, delay, numerator length) with SciPy's least_squares on the OE criterion
-(tests/python/identification_reference.py, written from the equations) and converts it with
-its own ZOH inversion. Columns: bias and spread (sd over seeds) in % of the true value for K
+structure (the same na, delay, numerator length) with SciPy's least_squares on the joint
+prediction-error criterion, all parameters at once (tests/python/identification_reference.py,
+written from the equations), and converts it with its own ZOH inversion. Columns: bias and spread (sd over seeds) in % of the true value for K
 and tau, in seconds for theta; "cover" is the share of seeds whose 95 % interval holds the
 truth; "n/a" counts seeds refused as not identified.
 
@@ -31,10 +31,10 @@ from mpmpp.model_identification import NotIdentified, model_from_data  # noqa: E
 
 
 def reference_foptd(y, u, na, delay, nb, ts):
-    """SciPy OE on A-filtered data for the given structure, then K, tau, theta by the ZOH inverse."""
-    theta, _, _, _ = ref.arx_oe(y, u[:, None], na, [na + 1], [delay], [(nb, 1, delay)], [1],
-                                detrend="constant")
-    b, a = theta[:nb], -theta[nb]
+    """SciPy's joint prediction-error fit of the given structure, then K, tau, theta by the ZOH
+    inverse."""
+    b, f, _ = ref.pem_ar_noise(y, u, na, nb, delay)
+    a = -f[1]
     gain = b.sum() / (1 - a)
     tau = -ts / np.log(a) if 0 < a < 1 else 0.0
     frac = 0.0

@@ -30,7 +30,7 @@ the sign opposite to the controller's action (the feedback path fitted as the pr
 from __future__ import annotations
 
 import os
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
@@ -46,6 +46,9 @@ CHI2_1_95 = 3.841458820694124    # 95 % quantile of chi-square(1): profile-likel
 SIGNIFICANT_Z = 2.0              # a gain with |K| / sd below this is not distinguishable from 0
 SIGN_FLIP_Z = 5.0                # "overwhelming evidence" for a gain against the controller's action
 DEFAULT_MAX_DEAD_TIME_S = 600.0
+# Candidates whose search criterion is this far above the best (n log(V / V_best)) are not
+# refined: refinement lowers V, but not by that much; 5 times the 95 % profile threshold.
+PRUNE = 5 * 3.841458820694124
 
 
 class NotIdentified(ValueError):
@@ -100,10 +103,10 @@ class IdentificationResult:
     selection: str = "BIC on one-step prediction errors over a common sample range"
 
     def to_dict(self) -> dict:
-        d = {k: v for k, v in asdict(self).items() if k != "model"}
-        for c, cd in zip(self.channels, d["channels"]):
-            cd["dead_time_sd"] = c.dead_time_sd
-            cd["dead_time_ci95"] = list(c.dead_time_ci95)
+        d = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "model"}
+        d["channels"] = [{**asdict(c), "dead_time_ci95": list(c.dead_time_ci95), "dead_time_sd": c.dead_time_sd}
+                         for c in self.channels]
+        d["outputs"] = [asdict(o) for o in self.outputs]
         return _finite(d)
 
     def summary(self) -> str:
@@ -199,15 +202,16 @@ class _Candidate:
 
 
 def _search(y, U, min_delay, max_delay, na_orders, numerator_lengths, t0):
-    """Coordinate search over each channel's (delay, numerator length) by ARX-OE, for every na;
-    the best of each na is refined to the joint fit (``_refine``) and the BIC-best of those
-    returned, with the search's profile {(channel, dead time in samples): cost} for its na and
-    the number of candidates fitted."""
+    """Coordinate search over each channel's (delay, numerator length) by ARX-OE for every na.
+    The best of each na is refined to the joint fit (``_refine``) and the BIC-best na kept; at
+    that na every candidate not clearly worse (PRUNE) is refined too, and the BIC-best refined
+    candidate returned with the profile {(channel, dead time in samples): refined cost, inf for
+    pruned ones} and the number of candidates fitted."""
     m = U.shape[1]
-    finalists, profiles, count = [], {}, 0
+    finalists, tried, count = [], {}, 0
     for na in na_orders:
         delays, nb = [min_delay] * m, [1] * m
-        current, profile = None, {}
+        current, tried[na] = None, []
         for _sweep in range(1 if m == 1 else 2):
             for j in range(m):
                 for d in range(min_delay, max_delay + 1):
@@ -218,19 +222,31 @@ def _search(y, U, min_delay, max_delay, na_orders, numerator_lengths, t0):
                         count += 1
                         if c is None:
                             continue
-                        where = (j, _dead_time_samples(c, j))
-                        profile[where] = min(profile.get(where, np.inf), c.cost)
+                        tried[na].append((j, c))
                         if current is None or c.bic < current.bic:
                             current = c
                 if current is not None:
                     delays, nb = list(current.delays), list(current.nb)
-        profiles[na] = profile
         if current is not None:
-            finalists.append(current)
+            finalists.append(_refine(y, U, current, t0))
     if not finalists:
         raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
-    best = min((_refine(y, U, c, t0) for c in finalists), key=lambda c: c.bic)
-    return best, profiles[len(best.a)], count
+    best = min(finalists, key=lambda c: c.bic)
+    profile = {}
+    for j, c in tried[len(best.a)]:
+        if c.rows * np.log(c.cost / best.cost) <= PRUNE:
+            c = _refine(y, U, c, t0)
+            if c.bic < best.bic:
+                best = c
+            cost = c.cost
+        else:
+            cost = np.inf
+        where = (j, _dead_time_samples(c, j))
+        profile[where] = min(profile.get(where, np.inf), cost)
+    for j in range(m):
+        where = (j, _dead_time_samples(best, j))
+        profile[where] = min(profile.get(where, np.inf), best.cost)
+    return best, profile, count
 
 
 def _fit(y, U, na, delays, nb, t0):
@@ -260,13 +276,14 @@ def _candidate(y, U, a, delays, nb, oe_result, t0):
                       np.asarray(oe_result.theta), np.asarray(oe_result.covariance), n)
 
 
-def _refine(y, U, c: _Candidate, t0, max_iterations=100, tolerance=1e-9):
+def _refine(y, U, c: _Candidate, t0, max_iterations=200, tolerance=1e-12):
     """The joint prediction-error fit of G and H = 1/A for c's structure, by alternating the two
     least-squares problems it splits into: A given G (an AR fit of v = y - G u) and G given A
-    (the OE fit on A-filtered data). Each step lowers sum (A (y - G u))^2, so the ARX step's A,
-    which is biased when ARX orders are low, no longer biases G. None if a step fails."""
+    (the OE fit on A-filtered data), both over t >= na. Each step lowers sum (A (y - G u))^2,
+    so the ARX step's A, biased when the ARX orders are low, no longer biases G. Stops when a
+    step lowers that sum by less than ``tolerance`` (relative) or fails."""
     na = len(c.a)
-    best = c
+    best, level = c, np.inf
     for _ in range(max_iterations):
         v = y - sum(g.filter(U[:, j]) for j, g in enumerate(best.tf))
         lagged = np.column_stack([-v[na - i - 1:len(v) - i - 1] for i in range(na)])
@@ -279,9 +296,12 @@ def _refine(y, U, c: _Candidate, t0, max_iterations=100, tolerance=1e-9):
         except RuntimeError:
             return best
         trial = _candidate(y, U, a, best.delays, best.nb, r, t0)
-        if trial is None or trial.cost > best.cost * (1 - tolerance):
-            return trial if trial is not None and trial.cost <= best.cost else best
-        best = trial
+        if trial is None or not r.cost < level:
+            return best
+        best, done = trial, r.cost > level * (1 - tolerance)
+        level = r.cost
+        if done:
+            break
     return best
 
 
@@ -328,13 +348,20 @@ def _summarise(out, inp, c: _Candidate, j: int, profile, ts) -> ChannelSummary:
 
     gain_sd = _delta_sd(lambda q: value(q, 0), p, cov)
     tau_sd = _delta_sd(lambda q: value(q, 1), p, cov) if tau > 0 else float("nan")
-    # Profile likelihood: n log(V / V_best) <= chi2_1(95 %), n the common-range length.
-    best = min(v for (jj, _), v in profile.items() if jj == j)
-    inside = [s for (jj, s), v in profile.items() if jj == j and c.rows * np.log(v / best) <= CHI2_1_95]
-    lo, hi = min(inside + [dead / ts]) * ts, max(inside + [dead / ts]) * ts
+    lo, hi = _profile_interval({s: v for (jj, s), v in profile.items() if jj == j}, c.rows)
     return ChannelSummary(out, inp, float(gain), float(gain_sd), float(tau), float(tau_sd), float(dead),
-                          (float(lo), float(hi)), int(c.delays[j]), int(c.nb[j]),
+                          (float(lo * ts), float(hi * ts)), int(c.delays[j]), int(c.nb[j]),
                           bool(abs(gain) >= SIGNIFICANT_Z * gain_sd))
+
+
+def _profile_interval(cost_at: dict, rows: int) -> tuple[float, float]:
+    """95 % likelihood-ratio interval of the dead time (samples) from its profile: the dead times
+    with n log(V / V_best) <= chi2_1(95 %), widened to the nearest searched dead time outside
+    on each side (the profile is known only at the searched points; the boundary lies between)."""
+    points = sorted(cost_at)
+    best = min(cost_at.values())
+    inside = [i for i, s in enumerate(points) if rows * np.log(cost_at[s] / best) <= CHI2_1_95]
+    return points[max(inside[0] - 1, 0)], points[min(inside[-1] + 1, len(points) - 1)]
 
 
 def _delta_sd(fn, p, cov) -> float:

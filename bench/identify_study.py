@@ -9,7 +9,8 @@ structure (the same na, delay, numerator length) with SciPy's least_squares on t
 prediction-error criterion, all parameters at once (tests/python/identification_reference.py,
 written from the equations), and converts it with its own ZOH inversion. Columns: bias and spread (sd over seeds) in % of the true value for K
 and tau, in seconds for theta; "cover" is the share of seeds whose 95 % interval holds the
-truth; "n/a" counts seeds refused as not identified.
+truth; seeds refused as "not identified" are counted and left out of the statistics; "flagged
+uncertain" counts identified seeds whose summary warns that the model is loosely determined.
 
     PYTHONPATH=python python bench/identify_study.py --seeds 20
 """
@@ -44,7 +45,7 @@ def reference_foptd(y, u, na, delay, nb, ts):
 
 
 def run_case(loop, steps, seeds, ts=10.0, rows=751):
-    est, refs, covered, refused = [], [], [], 0
+    est, refs, covered, refused, uncertain = [], [], [], 0, 0
     truth = np.array([loop.gain, loop.time_constant_s, loop.dead_time_s])
     for seed in seeds:
         df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=steps)
@@ -54,13 +55,14 @@ def run_case(loop, steps, seeds, ts=10.0, rows=751):
             refused += 1
             continue
         c = r.channels[0]
+        uncertain += c.uncertain
         est.append([c.gain, c.time_constant_s, c.dead_time_s])
         lo = [c.gain - 1.96 * c.gain_sd, c.time_constant_s - 1.96 * c.time_constant_sd, c.dead_time_ci95[0]]
         hi = [c.gain + 1.96 * c.gain_sd, c.time_constant_s + 1.96 * c.time_constant_sd, c.dead_time_ci95[1]]
         covered.append((np.array(lo) <= truth) & (truth <= np.array(hi)))
         y, u = df["PV"].to_numpy(), df["OP"].to_numpy()
         refs.append(reference_foptd(y, u, r.outputs[0].noise_order, c.delay_samples, c.numerator_length, ts))
-    return truth, np.array(est), np.array(refs), np.array(covered), refused
+    return truth, np.array(est), np.array(refs), np.array(covered), refused, uncertain
 
 
 def row(label, truth, x, cover=None):
@@ -85,10 +87,11 @@ def main(argv=None):
     print(f"{'':<28}{'K bias    sd':>16}  {'tau bias   sd':>14}  {'theta bias  sd':>14}   cover")
     for loop in pi_loop.LOOPS:
         for steps in (False, True):
-            truth, est, refs, cov, refused = run_case(loop, steps, seeds)
+            truth, est, refs, cov, refused, uncertain = run_case(loop, steps, seeds)
             case = f"{loop.name} {'SP steps' if steps else 'routine'} ({len(est)}/{len(seeds)})"
             print(f"{case}  K={truth[0]:g} tau={truth[1]:g} s theta={truth[2]:g} s"
-                  + (f", {refused} not identified" if refused else ""))
+                  + (f", {refused} not identified" if refused else "")
+                  + (f", {uncertain} flagged uncertain" if uncertain else ""))
             print("  " + row("mpmpp", truth, est, cov))
             print("  " + row("scipy-ref", truth, refs))
             if len(est):

@@ -23,7 +23,7 @@ of the criterion over the searched dead times (likelihood-ratio 95 % interval), 
 delta method cannot see a discrete search.
 
 Verdicts: an input that does not move, or an output whose every channel has a gain that is not
-distinguishable from zero, is "not identified" (``NotIdentified``); a SISO loop whose gain has
+distinguishable from zero (Bonferroni over the searched dead times), is "not identified" (``NotIdentified``); a SISO loop whose gain has
 the sign opposite to the controller's action (the feedback path fitted as the process) needs
 |K| / sd(K) >= SIGN_FLIP_Z, else it is not identified either.
 """
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import asdict, dataclass, field, fields
+from statistics import NormalDist
 
 import numpy as np
 
@@ -43,7 +44,6 @@ NA_ORDERS = (1, 2, 3, 5, 8)      # ARX / noise orders searched
 NUMERATOR_LENGTHS = (1, 2)       # 2: dead time between samples
 Z95 = 1.959963984540054
 CHI2_1_95 = 3.841458820694124    # 95 % quantile of chi-square(1): profile-likelihood interval
-SIGNIFICANT_Z = 2.0              # a gain with |K| / sd below this is not distinguishable from 0
 SIGN_FLIP_Z = 5.0                # "overwhelming evidence" for a gain against the controller's action
 DEFAULT_MAX_DEAD_TIME_S = 600.0
 # Candidates whose search criterion is this far above the best (n log(V / V_best)) are not
@@ -67,7 +67,13 @@ class ChannelSummary:
     dead_time_ci95: tuple[float, float]
     delay_samples: int
     numerator_length: int
-    significant: bool                   # |gain| / gain_sd >= SIGNIFICANT_Z
+    significant: bool                   # |gain| / gain_sd >= significance_z(dead times searched)
+
+    @property
+    def uncertain(self) -> bool:
+        """Usable but loosely determined: sd(K) above 25 % of |K| or sd(tau) above 50 % of tau."""
+        return bool(self.gain_sd > 0.25 * abs(self.gain)
+                    or (self.time_constant_s > 0 and not self.time_constant_sd <= 0.5 * self.time_constant_s))
 
     @property
     def dead_time_sd(self) -> float:
@@ -78,7 +84,10 @@ class ChannelSummary:
         return (f"{self.output} <- {self.input}: gain {self.gain:.4g} +- {self.gain_sd:.2g}, "
                 f"time constant {self.time_constant_s:.4g} +- {self.time_constant_sd:.2g} s, "
                 f"dead time {self.dead_time_s:.4g} s (95 % {self.dead_time_ci95[0]:.4g}-"
-                f"{self.dead_time_ci95[1]:.4g} s)" + ("" if self.significant else ", NOT significant: left out"))
+                f"{self.dead_time_ci95[1]:.4g} s)"
+                + ("" if self.significant else ", NOT significant: left out")
+                + (", UNCERTAIN: excite the loop (e.g. setpoint steps) for a firmer model"
+                   if self.significant and self.uncertain else ""))
 
 
 @dataclass
@@ -104,8 +113,8 @@ class IdentificationResult:
 
     def to_dict(self) -> dict:
         d = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "model"}
-        d["channels"] = [{**asdict(c), "dead_time_ci95": list(c.dead_time_ci95), "dead_time_sd": c.dead_time_sd}
-                         for c in self.channels]
+        d["channels"] = [{**asdict(c), "dead_time_ci95": list(c.dead_time_ci95), "dead_time_sd": c.dead_time_sd,
+                          "uncertain": c.uncertain} for c in self.channels]
         d["outputs"] = [asdict(o) for o in self.outputs]
         return _finite(d)
 
@@ -173,7 +182,8 @@ def model_from_data(data, inputs, outputs, *, name: str | None = None,
                              "(the controller reacts to the output within the sample)")
         best, profile, count = _search(Y[:, i], U, max(min_delay, 0), max_delay, na_orders,
                                        numerator_lengths, max_delay + max(na_orders))
-        chans = [_summarise(out, inputs[j], best, j, profile, ts) for j in range(len(inputs))]
+        z = significance_z(max_delay - max(min_delay, 0) + 1)
+        chans = [_summarise(out, inputs[j], best, j, profile, ts, z) for j in range(len(inputs))]
         _check_verdict(out, chans, action)
         kept = {c.input: best.tf[j] for j, c in enumerate(chans) if c.significant}
         process[out] = kept
@@ -335,7 +345,13 @@ def _channel_params(c: _Candidate, j: int):
     return c.theta[k:k + nb], np.r_[1.0, c.theta[k + nb:k + nb + 1]]
 
 
-def _summarise(out, inp, c: _Candidate, j: int, profile, ts) -> ChannelSummary:
+def significance_z(dead_times: int) -> float:
+    """|K| / sd(K) a gain needs to count as an effect at 5 %: the best of ``dead_times`` searched
+    delays is the largest of that many chances, hence the Bonferroni level 0.05 / dead_times."""
+    return NormalDist().inv_cdf(1.0 - 0.025 / max(dead_times, 1))
+
+
+def _summarise(out, inp, c: _Candidate, j: int, profile, ts, z_effect) -> ChannelSummary:
     b, f = _channel_params(c, j)
     gain, tau, dead = _foptd(b, f, c.delays[j], ts)
     k = sum(nb + 1 for nb in c.nb[:j])
@@ -351,7 +367,7 @@ def _summarise(out, inp, c: _Candidate, j: int, profile, ts) -> ChannelSummary:
     lo, hi = _profile_interval({s: v for (jj, s), v in profile.items() if jj == j}, c.rows)
     return ChannelSummary(out, inp, float(gain), float(gain_sd), float(tau), float(tau_sd), float(dead),
                           (float(lo * ts), float(hi * ts)), int(c.delays[j]), int(c.nb[j]),
-                          bool(abs(gain) >= SIGNIFICANT_Z * gain_sd))
+                          bool(abs(gain) >= z_effect * gain_sd))
 
 
 def _profile_interval(cost_at: dict, rows: int) -> tuple[float, float]:

@@ -75,7 +75,7 @@ def test_lag_zero_is_refused_under_feedback():
 
 
 def _channel(gain, sd):
-    return ChannelSummary("PV", "OP", gain, sd, 30.0, 5.0, 10.0, (0.0, 20.0), 2, 1, abs(gain) >= 2 * sd)
+    return ChannelSummary("PV", "OP", gain, sd, 30.0, 5.0, 10.0, (0.0, 20.0), 2, 1, True)
 
 
 def test_sign_against_the_controller_needs_overwhelming_evidence():
@@ -128,3 +128,33 @@ def test_short_record_says_too_short_not_missing_values(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "too short: 126 rows (0.35 h); need at least 150" in err
     assert "missing" not in err
+
+
+def test_miso_keeps_the_real_channels_and_leaves_out_an_input_without_effect():
+    """Two outputs, two inputs (step-like test signals, open loop), Z does not depend on A: its
+    channel must be left out (absent = zero in the model file), the others recovered."""
+    import pandas as pd
+    import scipy.signal as ss
+
+    rng = np.random.default_rng(0)
+    n = 900
+    a = np.repeat(rng.standard_normal(n // 15), 15)
+    b = np.repeat(rng.standard_normal(n // 20), 20)
+    y = (ss.lfilter([0, 0, 0.3], [1, -0.7], a) + ss.lfilter([0, 0, 0, 0, -0.2], [1, -0.9], b)
+         + ss.lfilter([1], [1, -0.8], 0.05 * rng.standard_normal(n)))
+    z = ss.lfilter([0, 0.5], [1, -0.5], b) + 0.05 * rng.standard_normal(n)
+    df = pd.DataFrame(dict(time=np.arange(n) * 5.0, A=a, B=b, Y=y, Z=z))
+    r = model_from_data(df, ["A", "B"], ["Y", "Z"], max_dead_time_s=60.0)
+    gains = {(c.output, c.input): c for c in r.channels}
+    assert gains["Y", "A"].gain == pytest.approx(1.0, abs=4 * gains["Y", "A"].gain_sd)
+    assert gains["Y", "B"].gain == pytest.approx(-2.0, abs=4 * gains["Y", "B"].gain_sd)
+    assert gains["Y", "B"].delay_samples == 4 and gains["Z", "B"].delay_samples == 1
+    assert not gains["Z", "A"].significant and r.model.process("Z", "A") is None
+    assert r.model.process("Y", "A") is not None
+
+
+def test_significance_threshold_grows_with_the_dead_times_searched():
+    from mpmpp.model_identification import significance_z
+
+    assert significance_z(1) == pytest.approx(1.959964, abs=1e-6)
+    assert 3.2 < significance_z(61) < 3.4

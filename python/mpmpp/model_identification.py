@@ -138,12 +138,13 @@ class IdentificationResult:
         _core.save_model(self.model, os.fspath(path))
 
 
-def model_from_data(data, inputs, outputs, *, name: str | None = None,
+def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None = None,
                     max_dead_time_s: float = DEFAULT_MAX_DEAD_TIME_S, min_delay: int = 1,
                     na_orders=NA_ORDERS, numerator_lengths=NUMERATOR_LENGTHS) -> IdentificationResult:
     """Identify a model of ``outputs`` from ``inputs`` (column names) in ``data`` (a DataFrame
     with a ``time`` column in seconds, or a data file path). The sample time comes from the time
-    column. ``min_delay`` 0 is refused when the data show feedback. Raises ``NotIdentified``
+    column. ``setpoints``: one setpoint column per output (default ``<output>_sp`` where
+    present), used only to read the controller's action. ``min_delay`` 0 is refused when the data show feedback. Raises ``NotIdentified``
     when the data do not identify the loop, ``ValueError`` on bad input."""
     from .io import load_data
 
@@ -153,7 +154,13 @@ def model_from_data(data, inputs, outputs, *, name: str | None = None,
     both = set(inputs) & set(outputs)
     if both:
         raise ValueError(f"column(s) {sorted(both)} given as both input and output")
-    for col in ["time", *inputs, *outputs]:
+    if setpoints is None:
+        setpoints = [f"{o}_sp" if f"{o}_sp" in data.columns else None for o in outputs]
+    else:
+        setpoints = _names(setpoints, "setpoints")
+        if len(setpoints) != len(outputs):
+            raise ValueError(f"setpoints: give one per output ({len(outputs)}), got {len(setpoints)}")
+    for col in ["time", *inputs, *outputs, *[c for c in setpoints if c]]:
         if col not in data.columns:
             raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
     ts = _sample_time(data["time"].to_numpy(dtype=float))
@@ -172,8 +179,7 @@ def model_from_data(data, inputs, outputs, *, name: str | None = None,
     max_delay = int(min(np.floor(max_dead_time_s / ts) + 1, n // 10))
     if max_delay < 1:
         raise ValueError(f"max_dead_time_s must be >= 0, got {max_dead_time_s}")
-    sp = {o: data[f"{o}_sp"].to_numpy(dtype=float)[a:b] if f"{o}_sp" in data.columns else None
-          for o in outputs}
+    sp = {o: data[c].to_numpy(dtype=float)[a:b] if c else None for o, c in zip(outputs, setpoints)}
     process, noise, summaries, fits = {}, {}, [], []
     for i, out in enumerate(outputs):
         action = _controller_action(U, raw[:, len(inputs) + i], sp[out]) if len(inputs) == 1 else 0

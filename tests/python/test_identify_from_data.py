@@ -158,3 +158,12 @@ def test_significance_threshold_grows_with_the_dead_times_searched():
 
     assert significance_z(1) == pytest.approx(1.959964, abs=1e-6)
     assert 3.2 < significance_z(61) < 3.4
+
+
+def test_cli_reads_the_controller_action_from_a_named_setpoint_column(tmp_path, capsys):
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=6, setpoint_steps=True).rename(columns={"PV_sp": "SP"})
+    data = tmp_path / "loop.csv"
+    io.save_data(data, df)
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "--setpoints", "SP",
+                 "-o", str(tmp_path / "m.json"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["outputs"][0]["feedback"] == "reverse"

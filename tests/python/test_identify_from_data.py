@@ -167,3 +167,11 @@ def test_cli_reads_the_controller_action_from_a_named_setpoint_column(tmp_path, 
     assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "--setpoints", "SP",
                  "-o", str(tmp_path / "m.json"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["outputs"][0]["feedback"] == "reverse"
+
+
+def test_missing_values_fit_the_longest_complete_stretch_and_say_so():
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=8, setpoint_steps=True)
+    df.loc[100:104, "PV"] = np.nan
+    r = model_from_data(df, ["OP"], ["PV"])
+    assert r.rows_used == 751 - 105 and r.skipped_rows == 105
+    assert "105 rows skipped: missing values" in r.summary()

@@ -18,7 +18,9 @@ rather than a held-out fit because a historian export is short (a 2 h export at 
 rows) and halving it for validation doubles the spread of every estimate, and because the
 candidates are nested low orders, where BIC is consistent.
 
-Uncertainty: K and tau by the delta method on the OE covariance; the dead time from the profile
+Uncertainty: K and tau by the delta method on the joint covariance of G's and H's parameters
+(under feedback they are correlated: the OE covariance, H held fixed, understates the spread of
+G); the dead time from the profile
 of the criterion over the searched dead times (likelihood-ratio 95 % interval), since the
 delta method cannot see a discrete search.
 
@@ -213,7 +215,7 @@ class _Candidate:
     nb: list[int]
     tf: list                     # TransferFunction per input
     theta: np.ndarray            # OE parameters [b_1 f_1 b_2 f_2 ...] per channel
-    covariance: np.ndarray
+    covariance: np.ndarray       # of theta first (G's parameters), then possibly a
     rows: int                    # length of the common range
 
 
@@ -262,7 +264,36 @@ def _search(y, U, min_delay, max_delay, na_orders, numerator_lengths, t0):
     for j in range(m):
         where = (j, _dead_time_samples(best, j))
         profile[where] = min(profile.get(where, np.inf), best.cost)
+    best.covariance = _joint_covariance(y, U, best)
     return best, profile, count
+
+
+def _joint_covariance(y, U, c: _Candidate) -> np.ndarray:
+    """sigma^2 (J'J)^-1 of all parameters [b_1 f_1 ... b_m f_m, a_1..a_na] of the joint fit,
+    eps = A (y - sum_j B_j / F_j q^-d_j u_j) over t >= na. Under feedback the estimates of G
+    and H are correlated, so the OE covariance (A held fixed) would understate G's spread.
+    Sensitivities: d eps / d b_jk = -A q^-k w_j with w_j = q^-d_j u_j / F_j,
+    d eps / d f_j1 = A q^-1 x_j / F_j with x_j = G_j u_j, d eps / d a_i = q^-i v, v = y - sum x_j."""
+    na = len(c.a)
+    A = _core.TransferFunction(np.r_[1.0, c.a], np.ones(1), 0)
+    x = [np.asarray(g.filter(U[:, j])) for j, g in enumerate(c.tf)]
+    v = y - sum(x)
+    cols = []
+    for j, g in enumerate(c.tf):
+        inv_f = _core.TransferFunction(np.ones(1), np.asarray(g.den), 0)
+        w = np.asarray(_core.TransferFunction(np.ones(1), np.asarray(g.den), g.delay).filter(U[:, j]))
+        aw = np.asarray(A.filter(w))
+        cols += [-_lag(aw, k) for k in range(c.nb[j])]
+        cols.append(_lag(np.asarray(A.filter(inv_f.filter(x[j]))), 1))
+    cols += [_lag(v, i) for i in range(1, na + 1)]
+    J = np.column_stack(cols)[na:]
+    eps = np.asarray(A.filter(v))[na:]
+    sigma2 = eps @ eps / max(len(eps) - J.shape[1], 1)
+    return sigma2 * np.linalg.pinv(J.T @ J)
+
+
+def _lag(x: np.ndarray, k: int) -> np.ndarray:
+    return np.r_[np.zeros(k), x[:len(x) - k]] if k else x
 
 
 def _fit(y, U, na, delays, nb, t0):

@@ -261,3 +261,20 @@ def pem_ar_noise(y, u, na, nb, delay, detrend="constant"):
     x = so.least_squares(residual, np.r_[theta0, a0[1:]], method="lm", xtol=1e-14, ftol=1e-14,
                          gtol=1e-14, max_nfev=5000).x
     return x[:nb], np.r_[1.0, x[nb]], np.r_[1.0, x[nb + 1:]]
+
+
+def pem_ar_noise_covariance(y, u, na, nb, delay, b, f, a, detrend="constant"):
+    """sigma^2 (J'J)^-1 of [b, f_1, a_1..a_na] with J the finite-difference Jacobian of the
+    pem_ar_noise residual (scipy.optimize's approx_fprime-style central differences)."""
+    y = ss.detrend(y, type=detrend)
+    u = ss.detrend(u, type=detrend)
+
+    def residual(x):
+        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], [1.0, x[nb]], u)
+        return ss.lfilter(np.r_[1.0, x[nb + 1:]], [1.0], v)[na:]
+
+    x0 = np.r_[b, f[1:], a[1:]]
+    J = np.column_stack([(residual(x0 + h) - residual(x0 - h)) / (2 * h[i])
+                         for i, h in enumerate(np.diag(1e-6 * np.maximum(np.abs(x0), 1e-3)))])
+    eps = residual(x0)
+    return eps @ eps / (len(eps) - len(x0)) * np.linalg.inv(J.T @ J)

@@ -175,3 +175,17 @@ def test_missing_values_fit_the_longest_complete_stretch_and_say_so():
     r = model_from_data(df, ["OP"], ["PV"])
     assert r.rows_used == 751 - 105 and r.skipped_rows == 105
     assert "105 rows skipped: missing values" in r.summary()
+
+
+def test_joint_covariance_is_the_finite_difference_one():
+    import mpmpp.model_identification as mi
+
+    df = pi_loop.simulate(pi_loop.FLOW, seed=4)
+    y = df["PV"].to_numpy() - df["PV"].mean()
+    U = df[["OP"]].to_numpy() - df["OP"].mean()
+    c = mi._refine(y, U, mi._fit(y, U, 2, [2], [1], 60), 60)
+    cov = mi._joint_covariance(y, U, c)
+    g = c.tf[0]
+    expected = ref.pem_ar_noise_covariance(df["PV"].to_numpy(), df["OP"].to_numpy(), 2, 1, 2,
+                                           np.asarray(g.num), np.asarray(g.den), np.r_[1.0, c.a])
+    assert np.allclose(cov, expected, rtol=1e-4, atol=1e-9 * np.abs(expected).max())

@@ -141,12 +141,13 @@ class IdentificationResult:
 
 
 def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None = None,
-                    max_dead_time_s: float = DEFAULT_MAX_DEAD_TIME_S, min_delay: int = 1,
+                    max_dead_time_s: float | None = None, min_delay: int = 1,
                     na_orders=NA_ORDERS, numerator_lengths=NUMERATOR_LENGTHS) -> IdentificationResult:
     """Identify a model of ``outputs`` from ``inputs`` (column names) in ``data`` (a DataFrame
     with a ``time`` column in seconds, or a data file path). The sample time comes from the time
     column. ``setpoints``: one setpoint column per output (default ``<output>_sp`` where
-    present), used only to read the controller's action. ``min_delay`` 0 is refused when the data show feedback. Raises ``NotIdentified``
+    present), used only to read the controller's action. ``max_dead_time_s``: longest dead
+    time searched (default DEFAULT_MAX_DEAD_TIME_S, at most a tenth of the record). ``min_delay`` 0 is refused when the data show feedback. Raises ``NotIdentified``
     when the data do not identify the loop, ``ValueError`` on bad input."""
     from .io import load_data
 
@@ -178,6 +179,8 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
         if not np.std(U[:, j]) > 1e-9 * max(1.0, float(np.abs(raw[:, j]).max())):
             raise NotIdentified(f"not identified: input {col!r} does not move (no excitation)")
     n = len(dev)
+    if max_dead_time_s is None:
+        max_dead_time_s = DEFAULT_MAX_DEAD_TIME_S
     max_delay = int(min(np.floor(max_dead_time_s / ts) + 1, n // 10))
     if max_delay < 1:
         raise ValueError(f"max_dead_time_s must be >= 0, got {max_dead_time_s}")

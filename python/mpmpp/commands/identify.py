@@ -3,8 +3,6 @@ from __future__ import annotations
 
 
 def add_arguments(parser) -> None:
-    from ..model_identification import DEFAULT_MAX_DEAD_TIME_S
-
     parser.add_argument("data", metavar="DATA", help="operating data (CSV with a time column, FORMATS.md)")
     parser.add_argument("--inputs", required=True, metavar="COL[,COL...]", help="input columns (e.g. the OP)")
     parser.add_argument("--outputs", required=True, metavar="COL[,COL...]", help="output columns (e.g. the PV)")
@@ -13,8 +11,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="MODEL", help="model file to write (JSON)")
     parser.add_argument("--force", action="store_true", help="replace MODEL if it exists")
     parser.add_argument("--name", help="model name (default: from the data file)")
-    parser.add_argument("--max-dead-time", type=float, default=DEFAULT_MAX_DEAD_TIME_S, metavar="SECONDS",
-                        help=f"longest dead time searched (default {DEFAULT_MAX_DEAD_TIME_S:g})")
+    parser.add_argument("--max-dead-time", type=float, metavar="SECONDS",
+                        help="longest dead time searched (default 600, at most a tenth of the record)")
     parser.add_argument("--json", action="store_true", help="print one JSON document on stdout")
 
 

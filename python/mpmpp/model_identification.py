@@ -147,8 +147,10 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     with a ``time`` column in seconds, or a data file path). The sample time comes from the time
     column. ``setpoints``: one setpoint column per output (default ``<output>_sp`` where
     present), used only to read the controller's action. ``max_dead_time_s``: longest dead
-    time searched (default DEFAULT_MAX_DEAD_TIME_S, at most a tenth of the record). ``min_delay`` 0 is refused when the data show feedback. Raises ``NotIdentified``
-    when the data do not identify the loop, ``ValueError`` on bad input."""
+    time searched (default DEFAULT_MAX_DEAD_TIME_S, at most a tenth of the record).
+    ``min_delay`` 0 is refused when the data show feedback from the output to any input.
+    Raises ``NotIdentified`` when the data do not identify the loop, ``ValueError`` on bad
+    input."""
     from .io import load_data
 
     if not hasattr(data, "columns"):
@@ -187,8 +189,10 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     sp = {o: data[c].to_numpy(dtype=float)[a:b] if c else None for o, c in zip(outputs, setpoints)}
     process, noise, summaries, fits = {}, {}, [], []
     for i, out in enumerate(outputs):
-        action = _controller_action(U, raw[:, len(inputs) + i], sp[out]) if len(inputs) == 1 else 0
-        if min_delay < 1 and action != 0:
+        actions = [_controller_action(U[:, j], raw[:, len(inputs) + i], sp[out]) for j in range(len(inputs))]
+        # the sign guard needs the loop's pairing, known only for a single input
+        action = actions[0] if len(inputs) == 1 else 0
+        if min_delay < 1 and any(actions):
             raise ValueError(f"lag 0 cannot be searched for {out!r}: the data show feedback "
                              "(the controller reacts to the output within the sample)")
         best, profile, count = _search(Y[:, i], U, max(min_delay, 0), max_delay, na_orders,
@@ -450,13 +454,12 @@ def _check_verdict(out, chans, action) -> None:
                 f" without overwhelming evidence (|K| / sd < {SIGN_FLIP_Z:g}); the fit follows the feedback path")
 
 
-def _controller_action(U, pv, sp) -> int:
-    """The feedback sign the data show (SISO): +1 when the input moves with the control error
+def _controller_action(u, pv, sp) -> int:
+    """The feedback sign the data show from pv to the input u: +1 when the input moves with the control error
     sp - pv (the controller needs a positive process gain), -1 against it, 0 when no feedback
     shows. From the velocity form of a PI controller, du(t) = kc de(t) + ki e(t) (lag 0
     included: that is where the controller acts), by least squares with a 99.9 % t test on
     the proportional and integral terms together (they share the controller's sign)."""
-    u = U[:, 0]
     e = (np.nanmean(pv) if sp is None else sp) - pv
     if not np.all(np.isfinite(e)):
         e = np.where(np.isfinite(e), e, np.nanmean(e))

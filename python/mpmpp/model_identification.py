@@ -222,8 +222,8 @@ class _Candidate:
     nb: list[int]
     tf: list                     # TransferFunction per input
     theta: np.ndarray            # OE parameters [b_1 f_1 b_2 f_2 ...] per channel
-    covariance: np.ndarray       # of theta first (G's parameters), then possibly a
     rows: int                    # length of the common range
+    covariance: np.ndarray | None = None  # of [theta, a] (``_joint_covariance``), for the chosen one
 
 
 def _search(y, U, min_delay, max_delay, na_orders, numerator_lengths, t0):
@@ -327,7 +327,7 @@ def _candidate(y, U, a, delays, nb, oe_result, t0):
     cost = float(np.mean(e**2))
     n, k = len(e), len(a) + sum(b + 1 for b in nb)
     return _Candidate(n * np.log(cost) + k * np.log(n), cost, a, list(delays), list(nb), tf,
-                      np.asarray(oe_result.theta), np.asarray(oe_result.covariance), n)
+                      np.asarray(oe_result.theta), n)
 
 
 def _refine(y, U, c: _Candidate, t0, max_iterations=200, tolerance=1e-12):

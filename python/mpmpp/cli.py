@@ -23,6 +23,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "detect": ("moving-window MPM and noise-change detection per channel", "mpmpp.commands.detect"),
     "diagnose": ("ranked findings: which physical effect is missing, where, when", "mpmpp.commands.diagnose"),
     "update": ("add/refit the effect(s), write the new model, print error before and after", "mpmpp.commands.update"),
+    "identify": ("a model file from routine closed-loop data: gain, time constant, dead time", "mpmpp.commands.identify"),
     "check": ("validate a model file (and a data file against it) and summarise them", "mpmpp.commands.check"),
 }
 

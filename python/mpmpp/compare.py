@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _core
+from .record_length import MIN_ROWS, require_rows, scaled_rows
 from .signals import Signals, extract, per_segment
 
 Z99 = 2.5758293035489  # two-sided 99 % normal quantile
@@ -133,14 +134,24 @@ class CompareResult:
         return plot_compare(self, Path(out_dir))
 
 
-def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float = 3600.0,
+# Windows for the fit over time: 1 h, or a quarter of a shorter record (a 2 h export gets
+# ~30 min windows, enough of them for the failing-period test), never below WINDOW_FLOOR rows.
+WINDOW_S, WINDOW_PARTS, WINDOW_FLOOR = 3600.0, 4, 50
+
+
+def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float | None = None,
             attribution_lags: int = 50) -> CompareResult:
-    """Compare ``model`` (mpmpp model object) with ``data`` (DataFrame, ``time`` in seconds)."""
+    """Compare ``model`` (mpmpp model object) with ``data`` (DataFrame, ``time`` in seconds).
+    ``window_s``: moving-window length for the fit over time (default: scaled to the record)."""
     if horizon < 1:
         raise ValueError(f"horizon must be >= 1 sample, got {horizon}")
     if max_lag < 1:
         raise ValueError(f"max_lag must be >= 1, got {max_lag}")
-    sig = extract(model, data)
+    require_rows(len(data), float(model.sample_time_s))
+    sig = extract(model, data, min_segment=MIN_ROWS)
+    if window_s is None:
+        window = scaled_rows(len(data), sig.sample_time_s, WINDOW_S, WINDOW_PARTS, WINDOW_FLOOR)
+        window_s = window * sig.sample_time_s
     window = int(round(window_s / sig.sample_time_s))
     if window < 10:
         raise ValueError(f"window_s={window_s} is shorter than 10 samples")

@@ -17,7 +17,7 @@ from . import _core
 IntOrList = Union[int, Sequence[int]]
 
 __all__ = ["arx", "oe", "arx_oe", "arx_oe_windows", "arx_oe_model", "channel_inputs", "channels",
-           "fir_length_to_one_percent"]
+           "fir_length_to_one_percent", "model_from_data"]
 
 fir_length_to_one_percent = _core.fir_length_to_one_percent
 
@@ -209,3 +209,13 @@ def arx_oe_model(model, data, output: str, *, na: int = 9, nb: IntOrList | None 
     if step is None:
         raise ValueError("step is required with window")
     return arx_oe_windows(y, u, window, step, na, nb, delays, **options)
+
+
+def __getattr__(name):
+    # model_from_data (a whole model file from data) lives in model_identification, which
+    # builds on this module: imported on first use.
+    if name in ("model_from_data", "NotIdentified"):
+        from . import model_identification
+
+        return getattr(model_identification, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -244,3 +244,37 @@ def two_step_fir_covariance(y, u, na, nb, delays, fir, arx_theta, fir_theta):
     W[t0 - na:] += (Phi * e[:, None]) @ np.linalg.solve(Phi.T @ Phi, M21.T)
     ZZi = np.linalg.inv(Z.T @ Z)
     return ZZi @ (W.T @ W) @ ZZi * (N - na) / (N - na - Z.shape[1]), M21, Z
+
+
+def pem_ar_noise(y, u, na, nb, delay, detrend="constant"):
+    """Joint prediction-error fit of y = q^-d B/F u + e / A (single input, nf = 1, A of order
+    na): scipy least_squares on eps = A (y - G u) over t >= na, all of b, f_1, a at once, started
+    from this module's ARX-OE. Returns (b, f, a)."""
+    y = ss.detrend(y, type=detrend)
+    u = ss.detrend(u, type=detrend)
+    theta0, a0, _, _ = arx_oe(y, u[:, None], na, [na + 1], [delay], [(nb, 1, delay)], [1], detrend="constant")
+
+    def residual(x):
+        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], [1.0, x[nb]], u)
+        return ss.lfilter(np.r_[1.0, x[nb + 1:]], [1.0], v)[na:]
+
+    x = so.least_squares(residual, np.r_[theta0, a0[1:]], method="lm", xtol=1e-14, ftol=1e-14,
+                         gtol=1e-14, max_nfev=5000).x
+    return x[:nb], np.r_[1.0, x[nb]], np.r_[1.0, x[nb + 1:]]
+
+
+def pem_ar_noise_covariance(y, u, na, nb, delay, b, f, a, detrend="constant"):
+    """sigma^2 (J'J)^-1 of [b, f_1, a_1..a_na] with J the finite-difference Jacobian of the
+    pem_ar_noise residual (scipy.optimize's approx_fprime-style central differences)."""
+    y = ss.detrend(y, type=detrend)
+    u = ss.detrend(u, type=detrend)
+
+    def residual(x):
+        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], [1.0, x[nb]], u)
+        return ss.lfilter(np.r_[1.0, x[nb + 1:]], [1.0], v)[na:]
+
+    x0 = np.r_[b, f[1:], a[1:]]
+    J = np.column_stack([(residual(x0 + h) - residual(x0 - h)) / (2 * h[i])
+                         for i, h in enumerate(np.diag(1e-6 * np.maximum(np.abs(x0), 1e-3)))])
+    eps = residual(x0)
+    return eps @ eps / (len(eps) - len(x0)) * np.linalg.inv(J.T @ J)

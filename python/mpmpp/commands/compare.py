@@ -9,8 +9,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--horizon", type=int, default=10, metavar="K",
                         help="prediction horizon k in samples for the k-step fit (default 10)")
     parser.add_argument("--max-lag", type=int, default=25, help="correlation lags -M..M (default 25)")
-    parser.add_argument("--window", type=float, default=3600.0, metavar="SECONDS",
-                        help="moving-window length for the fit over time (default 3600)")
+    parser.add_argument("--window", type=float, metavar="SECONDS",
+                        help="moving-window length for the fit over time (default 3600, or a quarter "
+                             "of a record shorter than 4 h)")
 
 
 def run(args) -> int:

@@ -1,0 +1,37 @@
+"""``mpmpp identify DATA --inputs OP --outputs PV -o MODEL.json``: a model file from routine data."""
+from __future__ import annotations
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("data", metavar="DATA", help="operating data (CSV with a time column, FORMATS.md)")
+    parser.add_argument("--inputs", required=True, metavar="COL[,COL...]", help="input columns (e.g. the OP)")
+    parser.add_argument("--outputs", required=True, metavar="COL[,COL...]", help="output columns (e.g. the PV)")
+    parser.add_argument("--setpoints", metavar="COL[,COL...]",
+                        help="setpoint column per output (default OUTPUT_sp where present); shows the controller's action")
+    parser.add_argument("-o", "--output", required=True, metavar="MODEL", help="model file to write (JSON)")
+    parser.add_argument("--force", action="store_true", help="replace MODEL if it exists")
+    parser.add_argument("--name", help="model name (default: from the data file)")
+    parser.add_argument("--max-dead-time", type=float, metavar="SECONDS",
+                        help="longest dead time searched (default 600, at most a tenth of the record)")
+    parser.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+
+
+def run(args) -> int:
+    import json
+    import os
+
+    from ..io import load_data
+    from ..model_identification import model_from_data
+
+    if os.path.exists(args.output) and not args.force:
+        raise ValueError(f"{args.output}: exists (add --force to replace it)")
+    data = load_data(args.data)
+    name = args.name or f"identified from {os.path.basename(args.data)}"
+    result = model_from_data(data, args.inputs, args.outputs, setpoints=args.setpoints, name=name, max_dead_time_s=args.max_dead_time)
+    result.save(args.output, overwrite=args.force)
+    if args.json:
+        print(json.dumps({**result.to_dict(), "model": args.output}))
+    else:
+        print(result.summary())
+        print(f"  wrote {args.output}")
+    return 0

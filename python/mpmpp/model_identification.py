@@ -1,0 +1,522 @@
+"""A model file from routine closed-loop data (``mpmpp identify``).
+
+Per output, y = sum_j G_j u_j + H e is fitted by the ARX-OE of ``mpmpp.identify`` (paper
+Section 3): the ARX step's A(q) whitens the disturbance, so the OE fit on A-filtered data is the
+prediction-error fit with H = 1/A, which stays consistent under feedback (the direct method).
+
+Model class of a channel: first order plus dead time, G = q^-d (b0 + b1 q^-1) / (1 - a q^-1),
+the zero-order-hold discretisation of K e^(-theta s) / (tau s + 1) (b1 carries a dead time that
+is not a whole number of samples, as in FORMATS.md's FOPTD form).
+
+Search, per output: the delay d of every channel, its numerator length (1 or 2) and the ARX
+(noise) order na. Lag 0 is never searched when the data show feedback: a PI loop's OP reacts to
+PV within the sample, and a channel at lag 0 would fit that controller path (the inverse
+controller, with the sign of the gain flipped) instead of the process.
+
+Selection: BIC on the one-step prediction errors A (y - G u) over one common sample range. BIC
+rather than a held-out fit because a historian export is short (a 2 h export at 10 s is 751
+rows) and halving it for validation doubles the spread of every estimate, and because the
+candidates are nested low orders, where BIC is consistent.
+
+Uncertainty: K and tau by the delta method on the joint covariance of G's and H's parameters
+(under feedback they are correlated: the OE covariance, H held fixed, understates the spread of
+G); the dead time from the profile
+of the criterion over the searched dead times (likelihood-ratio 95 % interval), since the
+delta method cannot see a discrete search.
+
+Verdicts: an input that does not move, or an output whose every channel has a gain that is not
+distinguishable from zero (Bonferroni over the searched dead times), is "not identified" (``NotIdentified``); a SISO loop whose gain has
+the sign opposite to the controller's action (the feedback path fitted as the process) needs
+|K| / sd(K) >= SIGN_FLIP_Z, else it is not identified either.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import asdict, dataclass, field, fields
+from statistics import NormalDist
+
+import numpy as np
+
+from . import _core
+from .compare import _finite
+from .identify import arx_oe, oe
+from .record_length import require_rows
+
+NA_ORDERS = (1, 2, 3, 5, 8)      # ARX / noise orders searched
+NUMERATOR_LENGTHS = (1, 2)       # 2: dead time between samples
+Z95 = 1.959963984540054
+CHI2_1_95 = 3.841458820694124    # 95 % quantile of chi-square(1): profile-likelihood interval
+SIGN_FLIP_Z = 5.0                # "overwhelming evidence" for a gain against the controller's action
+DEFAULT_MAX_DEAD_TIME_S = 600.0
+# Candidates whose search criterion is this far above the best (n log(V / V_best)) are not
+# refined: refinement lowers V, but not by that much; 5 times the 95 % profile threshold.
+PRUNE = 5 * 3.841458820694124
+
+
+class NotIdentified(ValueError):
+    """The data do not identify the loop (the message says why)."""
+
+
+@dataclass
+class ChannelSummary:
+    output: str
+    input: str
+    gain: float
+    gain_sd: float
+    time_constant_s: float
+    time_constant_sd: float
+    dead_time_s: float
+    dead_time_ci95: tuple[float, float]
+    delay_samples: int
+    numerator_length: int
+    significant: bool                   # |gain| / gain_sd >= significance_z(dead times searched)
+
+    @property
+    def uncertain(self) -> bool:
+        """Usable but loosely determined: sd(K) above 25 % of |K| or sd(tau) above 50 % of tau."""
+        return bool(self.gain_sd > 0.25 * abs(self.gain)
+                    or (self.time_constant_s > 0 and not self.time_constant_sd <= 0.5 * self.time_constant_s))
+
+    @property
+    def dead_time_sd(self) -> float:
+        """The profile interval's half width / 1.96 (its normal-equivalent spread)."""
+        return (self.dead_time_ci95[1] - self.dead_time_ci95[0]) / (2 * Z95)
+
+    def describe(self) -> str:
+        return (f"{self.output} <- {self.input}: gain {self.gain:.4g} +- {self.gain_sd:.2g}, "
+                f"time constant {self.time_constant_s:.4g} +- {self.time_constant_sd:.2g} s, "
+                f"dead time {self.dead_time_s:.4g} s (95 % {self.dead_time_ci95[0]:.4g}-"
+                f"{self.dead_time_ci95[1]:.4g} s)"
+                + ("" if self.significant else ", NOT significant: left out")
+                + (", UNCERTAIN: excite the loop (e.g. setpoint steps) for a firmer model"
+                   if self.significant and self.uncertain else ""))
+
+
+@dataclass
+class OutputFit:
+    output: str
+    noise_order: int                    # na of H = 1/A(q)
+    bic: float
+    fit_one_step: float                 # fit % of the one-step prediction
+    fit_simulation: float               # fit % of the simulation G u (what `compare` calls simulation)
+    candidates: int                     # models compared by BIC
+    feedback: str                       # controller action seen in the data (SISO): direct, reverse, none
+
+
+@dataclass
+class IdentificationResult:
+    model: object = field(repr=False)   # mpmpp Model
+    sample_time_s: float
+    rows_used: int
+    skipped_rows: int
+    channels: list[ChannelSummary]
+    outputs: list[OutputFit]
+    selection: str = "BIC on one-step prediction errors over a common sample range"
+
+    def to_dict(self) -> dict:
+        d = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "model"}
+        d["channels"] = [{**asdict(c), "dead_time_ci95": list(c.dead_time_ci95), "dead_time_sd": c.dead_time_sd,
+                          "uncertain": c.uncertain} for c in self.channels]
+        d["outputs"] = [asdict(o) for o in self.outputs]
+        return _finite(d)
+
+    def summary(self) -> str:
+        lines = [f"identify: {self.rows_used} rows at {self.sample_time_s:g} s"
+                 + (f" ({self.skipped_rows} rows skipped: missing values)" if self.skipped_rows else "")
+                 + f"; orders and dead times by {self.selection}"]
+        for o in self.outputs:
+            lines.append(f"  {o.output}: fit 1-step {o.fit_one_step:.1f} %, simulation {o.fit_simulation:.1f} %;"
+                         f" noise model AR({o.noise_order}); {o.candidates} candidates"
+                         + (f"; controller action {o.feedback}" if o.feedback != "none" else ""))
+            for c in self.channels:
+                if c.output == o.output:
+                    lines.append(f"    {c.describe()}")
+        return "\n".join(lines)
+
+    def save(self, path, overwrite: bool = False) -> None:
+        """Write the model file (atomically; an existing file only with ``overwrite``)."""
+        if os.path.exists(path) and not overwrite:
+            raise ValueError(f"{os.fspath(path)}: exists (pass --force / overwrite=True to replace it)")
+        _core.save_model(self.model, os.fspath(path))
+
+
+def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None = None,
+                    max_dead_time_s: float | None = None, min_delay: int = 1,
+                    na_orders=NA_ORDERS, numerator_lengths=NUMERATOR_LENGTHS) -> IdentificationResult:
+    """Identify a model of ``outputs`` from ``inputs`` (column names) in ``data`` (a DataFrame
+    with a ``time`` column in seconds, or a data file path). The sample time comes from the time
+    column. ``setpoints``: one setpoint column per output (default ``<output>_sp`` where
+    present), used only to read the controller's action. ``max_dead_time_s``: longest dead
+    time searched (default DEFAULT_MAX_DEAD_TIME_S, at most a tenth of the record).
+    ``min_delay`` 0 is refused when the data show feedback from the output to any input.
+    Raises ``NotIdentified`` when the data do not identify the loop, ``ValueError`` on bad
+    input."""
+    from .io import load_data
+
+    if not hasattr(data, "columns"):
+        data = load_data(data)
+    inputs, outputs = _names(inputs, "inputs"), _names(outputs, "outputs")
+    both = set(inputs) & set(outputs)
+    if both:
+        raise ValueError(f"column(s) {sorted(both)} given as both input and output")
+    if setpoints is None:
+        setpoints = [f"{o}_sp" if f"{o}_sp" in data.columns else None for o in outputs]
+    else:
+        setpoints = _names(setpoints, "setpoints")
+        if len(setpoints) != len(outputs):
+            raise ValueError(f"setpoints: give one per output ({len(outputs)}), got {len(setpoints)}")
+    for col in ["time", *inputs, *outputs, *[c for c in setpoints if c]]:
+        if col not in data.columns:
+            raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
+    ts = _sample_time(data["time"].to_numpy(dtype=float))
+    raw = data[inputs + outputs].to_numpy(dtype=float)
+    a, b = _longest_complete_run(raw)
+    require_rows(len(raw), ts)
+    if b - a < len(raw):
+        require_rows(b - a, ts)  # the complete stretch is what is fitted
+    raw = raw[a:b]
+    dev = raw - raw.mean(axis=0)
+    U, Y = dev[:, :len(inputs)], dev[:, len(inputs):]
+    for j, col in enumerate(inputs):
+        if not np.std(U[:, j]) > 1e-9 * max(1.0, float(np.abs(raw[:, j]).max())):
+            raise NotIdentified(f"not identified: input {col!r} does not move (no excitation)")
+    n = len(dev)
+    if max_dead_time_s is None:
+        max_dead_time_s = DEFAULT_MAX_DEAD_TIME_S
+    max_delay = int(min(np.floor(max_dead_time_s / ts) + 1, n // 10))
+    if max_delay < 1:
+        raise ValueError(f"max_dead_time_s must be >= 0, got {max_dead_time_s}")
+    sp = {o: data[c].to_numpy(dtype=float)[a:b] if c else None for o, c in zip(outputs, setpoints)}
+    process, noise, summaries, fits = {}, {}, [], []
+    for i, out in enumerate(outputs):
+        actions = [_controller_action(U[:, j], raw[:, len(inputs) + i], sp[out]) for j in range(len(inputs))]
+        # the sign guard needs the loop's pairing, known only for a single input
+        action = actions[0] if len(inputs) == 1 else 0
+        if min_delay < 1 and any(actions):
+            raise ValueError(f"lag 0 cannot be searched for {out!r}: the data show feedback "
+                             "(the controller reacts to the output within the sample)")
+        best, profile, count = _search(Y[:, i], U, max(min_delay, 0), max_delay, na_orders,
+                                       numerator_lengths, max_delay + max(na_orders))
+        z = significance_z(max_delay - max(min_delay, 0) + 1)
+        chans = [_summarise(out, inputs[j], best, j, profile, ts, z) for j in range(len(inputs))]
+        _check_verdict(out, chans, action)
+        kept = {c.input: best.tf[j] for j, c in enumerate(chans) if c.significant}
+        process[out] = kept
+        noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(np.r_[1.0, best.a]), 0)
+        summaries += chans
+        e = _core.prediction_error(list(best.tf), noise[out], Y[:, i], U)
+        sim = _core.predict_output(list(best.tf), noise[out], Y[:, i], U, 0)
+        fits.append(OutputFit(out, len(best.a), best.bic, float(_core.fit_percent(Y[:, i], Y[:, i] - e)),
+                              float(_core.fit_percent(Y[:, i], sim)), count,
+                              {1: "direct", -1: "reverse", 0: "none"}[action]))
+    model = _core.Model(name or "identified from data", ts, inputs, outputs, process, noise)
+    return IdentificationResult(model, ts, n, len(data) - n, summaries, fits)
+
+
+@dataclass
+class _Candidate:
+    bic: float
+    cost: float                  # mean squared one-step error over the common range
+    a: np.ndarray                # a_1..a_na
+    delays: list[int]
+    nb: list[int]
+    tf: list                     # TransferFunction per input
+    theta: np.ndarray            # OE parameters [b_1 f_1 b_2 f_2 ...] per channel
+    rows: int                    # length of the common range
+    covariance: np.ndarray | None = None  # of [theta, a] (``_joint_covariance``), for the chosen one
+
+
+def _search(y, U, min_delay, max_delay, na_orders, numerator_lengths, t0):
+    """Coordinate search over each channel's (delay, numerator length) by ARX-OE for every na.
+    The best of each na is refined to the joint fit (``_refine``) and the BIC-best na kept; at
+    that na every candidate not clearly worse (PRUNE) is refined too, and the BIC-best refined
+    candidate returned with the profile {(channel, dead time in samples): refined cost, inf for
+    pruned ones} and the number of candidates fitted."""
+    m = U.shape[1]
+    finalists, tried, count = [], {}, 0
+    for na in na_orders:
+        delays, nb = [min_delay] * m, [1] * m
+        current, tried[na] = None, []
+        for _sweep in range(1 if m == 1 else 2):
+            for j in range(m):
+                for d in range(min_delay, max_delay + 1):
+                    for k in numerator_lengths:
+                        trial_d, trial_nb = list(delays), list(nb)
+                        trial_d[j], trial_nb[j] = d, k
+                        c = _fit(y, U, na, trial_d, trial_nb, t0)
+                        count += 1
+                        if c is None:
+                            continue
+                        tried[na].append((j, c))
+                        if current is None or c.bic < current.bic:
+                            current = c
+                if current is not None:
+                    delays, nb = list(current.delays), list(current.nb)
+        if current is not None:
+            finalists.append(_refine(y, U, current, t0))
+    if not finalists:
+        raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
+    best = min(finalists, key=lambda c: c.bic)
+    profile = {}
+    for j, c in tried[len(best.a)]:
+        if c.rows * np.log(c.cost / best.cost) <= PRUNE:
+            c = _refine(y, U, c, t0)
+            if c.bic < best.bic:
+                best = c
+            cost = c.cost
+        else:
+            cost = np.inf
+        where = (j, _dead_time_samples(c, j))
+        profile[where] = min(profile.get(where, np.inf), cost)
+    for j in range(m):
+        where = (j, _dead_time_samples(best, j))
+        profile[where] = min(profile.get(where, np.inf), best.cost)
+    best.covariance = _joint_covariance(y, U, best)
+    return best, profile, count
+
+
+def _joint_covariance(y, U, c: _Candidate) -> np.ndarray:
+    """sigma^2 (J'J)^-1 of all parameters [b_1 f_1 ... b_m f_m, a_1..a_na] of the joint fit,
+    eps = A (y - sum_j B_j / F_j q^-d_j u_j) over t >= na. Under feedback the estimates of G
+    and H are correlated, so the OE covariance (A held fixed) would understate G's spread.
+    Sensitivities: d eps / d b_jk = -A q^-k w_j with w_j = q^-d_j u_j / F_j,
+    d eps / d f_j1 = A q^-1 x_j / F_j with x_j = G_j u_j, d eps / d a_i = q^-i v, v = y - sum x_j."""
+    na = len(c.a)
+    A = _core.TransferFunction(np.r_[1.0, c.a], np.ones(1), 0)
+    x = [np.asarray(g.filter(U[:, j])) for j, g in enumerate(c.tf)]
+    v = y - sum(x)
+    cols = []
+    for j, g in enumerate(c.tf):
+        inv_f = _core.TransferFunction(np.ones(1), np.asarray(g.den), 0)
+        w = np.asarray(_core.TransferFunction(np.ones(1), np.asarray(g.den), g.delay).filter(U[:, j]))
+        aw = np.asarray(A.filter(w))
+        cols += [-_lag(aw, k) for k in range(c.nb[j])]
+        cols.append(_lag(np.asarray(A.filter(inv_f.filter(x[j]))), 1))
+    cols += [_lag(v, i) for i in range(1, na + 1)]
+    J = np.column_stack(cols)[na:]
+    eps = np.asarray(A.filter(v))[na:]
+    sigma2 = eps @ eps / max(len(eps) - J.shape[1], 1)
+    return sigma2 * np.linalg.pinv(J.T @ J)
+
+
+def _lag(x: np.ndarray, k: int) -> np.ndarray:
+    return np.r_[np.zeros(k), x[:len(x) - k]] if k else x
+
+
+def _fit(y, U, na, delays, nb, t0):
+    """One candidate by ARX-OE, or None when it is not informative or not of first order plus
+    dead time."""
+    try:
+        r = arx_oe(y, U, na, na + 1, delays, structure="oe", oe_nb=nb, oe_nf=1, fir_length=1,
+                   detrend="none")
+    except RuntimeError:
+        return None
+    return _candidate(y, U, np.asarray(r.noise), delays, nb, r.oe, t0)
+
+
+def _candidate(y, U, a, delays, nb, oe_result, t0):
+    tf = []
+    for j, d in enumerate(delays):
+        b, f = np.asarray(oe_result.b[j]), np.asarray(oe_result.f[j])
+        if _foptd(b, f, d, 1.0) is None:
+            return None
+        tf.append(_core.TransferFunction(b, f, d))
+    inverse_noise = _core.TransferFunction(np.r_[1.0, a], np.ones(1), 0)
+    e = y - sum(g.filter(U[:, j]) for j, g in enumerate(tf))
+    e = np.asarray(inverse_noise.filter(e))[t0:]
+    cost = float(np.mean(e**2))
+    n, k = len(e), len(a) + sum(b + 1 for b in nb)
+    return _Candidate(n * np.log(cost) + k * np.log(n), cost, a, list(delays), list(nb), tf,
+                      np.asarray(oe_result.theta), n)
+
+
+def _refine(y, U, c: _Candidate, t0, max_iterations=200, tolerance=1e-12):
+    """The joint prediction-error fit of G and H = 1/A for c's structure, by alternating the two
+    least-squares problems it splits into: A given G (an AR fit of v = y - G u) and G given A
+    (the OE fit on A-filtered data), both over t >= na. Each step lowers sum (A (y - G u))^2,
+    so the ARX step's A, biased when the ARX orders are low, no longer biases G. Stops when a
+    step lowers that sum by less than ``tolerance`` (relative) or fails."""
+    na = len(c.a)
+    best, level = c, np.inf
+    for _ in range(max_iterations):
+        v = y - sum(g.filter(U[:, j]) for j, g in enumerate(best.tf))
+        lagged = np.column_stack([-v[na - i - 1:len(v) - i - 1] for i in range(na)])
+        a = np.linalg.lstsq(lagged, v[na:], rcond=None)[0]
+        A = _core.TransferFunction(np.r_[1.0, a], np.ones(1), 0)
+        yf = np.asarray(A.filter(y))
+        uf = np.column_stack([A.filter(U[:, j]) for j in range(U.shape[1])])
+        try:
+            r = oe(yf, uf, best.delays, structure="oe", nb=best.nb, nf=1, skip=na)
+        except RuntimeError:
+            return best
+        trial = _candidate(y, U, a, best.delays, best.nb, r, t0)
+        if trial is None or not r.cost < level:
+            return best
+        best, done = trial, r.cost > level * (1 - tolerance)
+        level = r.cost
+        if done:
+            break
+    return best
+
+
+def _foptd(b, f, delay, ts):
+    """(K, tau, theta) of G = q^-delay (b0 + b1 q^-1) / (1 + f1 q^-1), the inverse of the ZOH
+    discretisation (FORMATS.md); None when G is not of that form (pole outside (0, 1) is allowed
+    down to 0: tau below the sample resolution; b1 / (b0 + b1) outside [0, 1) is not a dead time)."""
+    a = -f[1]
+    if not (a < 1.0) or b.sum() == 0.0:
+        return None
+    gain = b.sum() / (1.0 - a)
+    tau = -ts / np.log(a) if a > 0 else 0.0
+    share = b[1] / b.sum() if len(b) > 1 else 0.0
+    if not (-1e-9 <= share < 1.0):
+        return None
+    if len(b) > 1 and 0 < a:
+        frac = 1.0 - np.log(a + (1.0 - a) * share) / np.log(a)
+    else:
+        frac = share  # a pure gain: the dead time splits linearly between the two samples
+    return gain, tau, (delay - 1 + frac) * ts
+
+
+def _dead_time_samples(c: _Candidate, j: int) -> float:
+    b, f = _channel_params(c, j)
+    return _foptd(b, f, c.delays[j], 1.0)[2]
+
+
+def _channel_params(c: _Candidate, j: int):
+    k = sum(nb + 1 for nb in c.nb[:j])
+    nb = c.nb[j]
+    return c.theta[k:k + nb], np.r_[1.0, c.theta[k + nb:k + nb + 1]]
+
+
+def significance_z(dead_times: int) -> float:
+    """|K| / sd(K) a gain needs to count as an effect at 5 %: the best of ``dead_times`` searched
+    delays is the largest of that many chances, hence the Bonferroni level 0.05 / dead_times."""
+    return NormalDist().inv_cdf(1.0 - 0.025 / max(dead_times, 1))
+
+
+def _summarise(out, inp, c: _Candidate, j: int, profile, ts, z_effect) -> ChannelSummary:
+    b, f = _channel_params(c, j)
+    gain, tau, dead = _foptd(b, f, c.delays[j], ts)
+    k = sum(nb + 1 for nb in c.nb[:j])
+    idx = slice(k, k + c.nb[j] + 1)
+    cov = c.covariance[idx, idx]
+    p = np.r_[b, f[1]]
+
+    def value(q, which):
+        return _foptd(q[:-1], np.r_[1.0, q[-1]], c.delays[j], ts)[which]
+
+    gain_sd = _delta_sd(lambda q: value(q, 0), p, cov)
+    tau_sd = _delta_sd(lambda q: value(q, 1), p, cov) if tau > 0 else float("nan")
+    lo, hi = _profile_interval({s: v for (jj, s), v in profile.items() if jj == j}, c.rows)
+    return ChannelSummary(out, inp, float(gain), float(gain_sd), float(tau), float(tau_sd), float(dead),
+                          (float(lo * ts), float(hi * ts)), int(c.delays[j]), int(c.nb[j]),
+                          bool(abs(gain) >= z_effect * gain_sd))
+
+
+def _profile_interval(cost_at: dict, rows: int) -> tuple[float, float]:
+    """95 % likelihood-ratio interval of the dead time (samples) from its profile: the dead times
+    with n log(V / V_best) <= chi2_1(95 %), widened to the nearest searched dead time outside
+    on each side (the profile is known only at the searched points; the boundary lies between)."""
+    points = sorted(cost_at)
+    best = min(cost_at.values())
+    inside = [i for i, s in enumerate(points) if rows * np.log(cost_at[s] / best) <= CHI2_1_95]
+    return points[max(inside[0] - 1, 0)], points[min(inside[-1] + 1, len(points) - 1)]
+
+
+def _delta_sd(fn, p, cov) -> float:
+    """sqrt(g' C g) with g the central-difference gradient of fn at p."""
+    g = np.empty(len(p))
+    for i in range(len(p)):
+        h = 1e-6 * max(abs(p[i]), 1e-3)
+        up, down = p.copy(), p.copy()
+        up[i] += h
+        down[i] -= h
+        try:
+            g[i] = (fn(up) - fn(down)) / (2 * h)
+        except TypeError:  # fn left the FOPTD form within h: the spread is not defined
+            return float("nan")
+    return float(np.sqrt(max(g @ cov @ g, 0.0)))
+
+
+def _check_verdict(out, chans, action) -> None:
+    if not any(c.significant for c in chans):
+        worst = chans[0]
+        raise NotIdentified(f"not identified: no input explains {out!r} (gain of {worst.input!r} "
+                            f"{worst.gain:.3g} +- {worst.gain_sd:.2g}: not distinguishable from 0; "
+                            "the data lack excitation, e.g. setpoint steps)")
+    if action and len(chans) == 1:
+        c = chans[0]
+        if np.sign(c.gain) != action and abs(c.gain) < SIGN_FLIP_Z * c.gain_sd:
+            raise NotIdentified(
+                f"not identified: the gain of {out!r} <- {c.input!r} ({c.gain:.3g} +- {c.gain_sd:.2g}) "
+                f"has the sign opposite to the controller's action ({'direct' if action > 0 else 'reverse'}),"
+                f" without overwhelming evidence (|K| / sd < {SIGN_FLIP_Z:g}); the fit follows the feedback path")
+
+
+def _controller_action(u, pv, sp) -> int:
+    """The feedback sign the data show from pv to the input u: +1 when the input moves with the control error
+    sp - pv (the controller needs a positive process gain), -1 against it, 0 when no feedback
+    shows. From the velocity form of a PI controller, du(t) = kc de(t) + ki e(t) (lag 0
+    included: that is where the controller acts), by least squares with a 99.9 % t test on
+    the proportional and integral terms together (they share the controller's sign)."""
+    e = (np.nanmean(pv) if sp is None else sp) - pv
+    if not np.all(np.isfinite(e)):
+        e = np.where(np.isfinite(e), e, np.nanmean(e))
+    du, de = np.diff(u), np.diff(e)
+    X = np.column_stack([de, e[1:] - e[1:].mean(), np.ones(len(du))])
+    coef, *_ = np.linalg.lstsq(X, du, rcond=None)
+    resid = du - X @ coef
+    dof = max(len(du) - 3, 1)
+    cov = np.linalg.pinv(X.T @ X) * (resid @ resid / dof)
+    # the sign-weighted sum kc/sd_kc + ki/sd_ki: both terms vote, the better determined more
+    z = [coef[i] / np.sqrt(cov[i, i]) if cov[i, i] > 0 else 0.0 for i in (0, 1)]
+    total = (z[0] + z[1]) / np.sqrt(2.0)
+    return int(np.sign(total)) if abs(total) > 3.29 else 0
+
+
+def _stable_monic(den: np.ndarray) -> np.ndarray:
+    """den with roots outside the unit circle reflected inside (same spectrum up to scale; the
+    model file needs a stable, inversely stable H = 1 / den) and radius capped at 0.999."""
+    roots = np.roots(den)
+    if len(roots) == 0 or np.all(np.abs(roots) < 0.999):
+        return den
+    roots = np.where(np.abs(roots) > 1.0, 1.0 / np.conj(roots), roots)
+    roots = np.where(np.abs(roots) > 0.999, roots * 0.999 / np.abs(roots), roots)
+    return np.real(np.poly(roots))
+
+
+def _sample_time(time_s: np.ndarray) -> float:
+    """The time column's constant spacing (historian exports round timestamps: 0.1 % slack)."""
+    if len(time_s) < 2 or not np.all(np.isfinite(time_s)):
+        raise ValueError("data: the 'time' column needs at least 2 finite values")
+    steps = np.diff(time_s)
+    ts = float(np.median(steps))
+    bad = np.flatnonzero(np.abs(steps - ts) > 1e-3 * ts)
+    if ts <= 0 or len(bad):
+        row = int(bad[0]) + 1 if len(bad) else 1
+        raise ValueError(f"data: 'time' is not evenly spaced (step {steps[row - 1]:g} s at row {row}, "
+                         f"typical {ts:g} s)")
+    return ts
+
+
+def _longest_complete_run(x: np.ndarray) -> tuple[int, int]:
+    ok = np.all(np.isfinite(x), axis=1)
+    edges = np.flatnonzero(np.diff(np.r_[0, ok.astype(np.int8), 0]))
+    if len(edges) == 0:
+        return 0, 0
+    starts, stops = edges[::2], edges[1::2]
+    k = int(np.argmax(stops - starts))
+    return int(starts[k]), int(stops[k])
+
+
+def _names(names, what) -> list[str]:
+    if isinstance(names, str):
+        names = [n.strip() for n in names.split(",")]
+    names = [str(n) for n in names if str(n)]
+    if not names:
+        raise ValueError(f"{what}: give at least one column name")
+    if len(set(names)) != len(names):
+        raise ValueError(f"{what}: a column is named twice ({', '.join(names)})")
+    return names
+

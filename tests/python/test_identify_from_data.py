@@ -1,0 +1,191 @@
+"""``model_from_data`` / ``mpmpp identify`` on PI loops from the NumPy reference simulator.
+
+Checks against the truth (within the reported uncertainty), against SciPy's joint
+prediction-error fit of the same structure, the verdicts (no excitation, no effect, sign
+against the controller) and the command line on a 751-row, 10 s historian-length record.
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import identification_reference as ref
+import pi_loop
+from mpmpp import io
+from mpmpp.cli import main
+from mpmpp.identify import model_from_data
+from mpmpp.model_identification import (SIGN_FLIP_Z, ChannelSummary, NotIdentified, _check_verdict,
+                                        _profile_interval)
+
+
+@pytest.mark.parametrize("loop", [pi_loop.FLOW, pi_loop.PRESSURE, pi_loop.LEVEL], ids=lambda l: l.name)
+def test_pi_loop_with_setpoint_steps_recovers_the_process(loop):
+    df = pi_loop.simulate(loop, seed=11, setpoint_steps=True)
+    r = model_from_data(df, ["OP"], ["PV"])
+    c, = r.channels
+    assert r.sample_time_s == 10.0 and r.rows_used == 751
+    assert c.delay_samples >= 1                       # lag 0 never searched in closed loop
+    assert np.sign(c.gain) == np.sign(loop.gain)
+    assert abs(c.gain - loop.gain) < 4 * c.gain_sd    # within the reported uncertainty
+    assert c.gain_sd < 0.25 * abs(loop.gain)
+    assert abs(c.time_constant_s - loop.time_constant_s) < 4 * c.time_constant_sd
+    lo, hi = c.dead_time_ci95
+    assert lo - 10.0 <= loop.dead_time_s <= hi + 10.0  # within a sample of the 95 % interval
+    assert r.outputs[0].feedback == ("direct" if loop.gain > 0 else "reverse")
+    # the written model is a valid model file with the disturbance model
+    assert r.model.noise("PV").den[0] == 1.0 and len(r.model.noise("PV").den) >= 2
+
+
+def test_estimate_is_scipy_joint_prediction_error_fit():
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=3, setpoint_steps=True)
+    r = model_from_data(df, "OP", "PV")
+    c = r.channels[0]
+    g = r.model.process("PV", "OP")
+    b, f, a = ref.pem_ar_noise(df["PV"].to_numpy(), df["OP"].to_numpy(), r.outputs[0].noise_order,
+                               c.numerator_length, c.delay_samples)
+    assert np.allclose(g.num, b, rtol=1e-5, atol=1e-7)
+    assert np.allclose(g.den, f, rtol=1e-5, atol=1e-7)
+    assert np.allclose(r.model.noise("PV").den, a, rtol=1e-4, atol=1e-6)
+    assert c.gain == pytest.approx(b.sum() / f.sum(), rel=1e-5)
+    assert c.time_constant_s == pytest.approx(-10.0 / math.log(-f[1]), rel=1e-5)
+
+
+def test_constant_input_is_not_identified():
+    df = pi_loop.simulate(pi_loop.FLOW, seed=1)
+    df["OP"] = 42.0
+    with pytest.raises(NotIdentified, match="'OP' does not move"):
+        model_from_data(df, ["OP"], ["PV"])
+
+
+def test_input_without_effect_is_not_identified():
+    rng = np.random.default_rng(5)
+    df = pi_loop.simulate(pi_loop.FLOW, seed=2)
+    df["OP"] = 50 + np.cumsum(rng.standard_normal(len(df))) * 0.1  # moves, but PV ignores it
+    with pytest.raises(NotIdentified, match="not distinguishable from 0"):
+        model_from_data(df, ["OP"], ["PV"])
+
+
+def test_lag_zero_is_refused_under_feedback():
+    df = pi_loop.simulate(pi_loop.FLOW, seed=1, setpoint_steps=True)
+    with pytest.raises(ValueError, match="lag 0 cannot be searched"):
+        model_from_data(df, ["OP"], ["PV"], min_delay=0)
+
+
+def _channel(gain, sd):
+    return ChannelSummary("PV", "OP", gain, sd, 30.0, 5.0, 10.0, (0.0, 20.0), 2, 1, True)
+
+
+def test_sign_against_the_controller_needs_overwhelming_evidence():
+    _check_verdict("PV", [_channel(1.0, 0.1)], action=1)            # agrees: fine
+    with pytest.raises(NotIdentified, match="opposite to the controller"):
+        _check_verdict("PV", [_channel(-1.0, 0.3)], action=1)        # z = 3.3 < SIGN_FLIP_Z
+    _check_verdict("PV", [_channel(-1.0, 1.0 / (SIGN_FLIP_Z + 1))], action=1)  # overwhelming
+    _check_verdict("PV", [_channel(-1.0, 0.3)], action=0)            # no feedback seen: no prior
+
+
+def test_profile_interval_brackets_the_accepted_dead_times():
+    # n log(V / V_best) with n = 100: 3 and 4 inside (<= 3.84), 2 and 5 bracket, 1 and 6 outside
+    cost = {1.0: 2.0, 2.0: 1.05, 3.0: 1.0, 4.0: 1.03, 5.0: 1.2, 6.0: 3.0}
+    assert _profile_interval(cost, 100) == (2.0, 5.0)
+
+
+def test_cli_identify_then_compare_on_a_historian_length_record(tmp_path, capsys):
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=4, setpoint_steps=True)
+    data, model = tmp_path / "loop.csv", tmp_path / "model.json"
+    io.save_data(data, df)
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "-o", str(model), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["sample_time_s"] == 10.0 and out["channels"][0]["gain"] < 0
+    loaded = io.load_model(model)
+    assert loaded.sample_time_s == 10.0 and loaded.process("PV", "OP") is not None
+    # never silently overwritten
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "-o", str(model)]) == 2
+    assert "exists" in capsys.readouterr().err
+    # the identified model is a normal input for compare on the same 751 rows
+    assert main(["compare", str(model), str(data)]) == 0
+    assert "fit simulation" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--inputs", "VALVE", "--outputs", "PV"], "no column 'VALVE'"),
+    (["--inputs", "OP", "--outputs", "OP"], "both input and output"),
+])
+def test_cli_bad_columns_are_one_line_errors(tmp_path, capsys, args, message):
+    data = tmp_path / "loop.csv"
+    io.save_data(data, pi_loop.simulate(pi_loop.FLOW, seed=1).iloc[:200])
+    assert main(["identify", str(data), *args, "-o", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_short_record_says_too_short_not_missing_values(tmp_path, capsys):
+    data = tmp_path / "short.csv"
+    io.save_data(data, pi_loop.simulate(pi_loop.FLOW, seed=1, rows=126))
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "-o", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert "too short: 126 rows (0.35 h); need at least 150" in err
+    assert "missing" not in err
+
+
+def test_miso_keeps_the_real_channels_and_leaves_out_an_input_without_effect():
+    """Two outputs, two inputs (step-like test signals, open loop), Z does not depend on A: its
+    channel must be left out (absent = zero in the model file), the others recovered."""
+    import pandas as pd
+    import scipy.signal as ss
+
+    rng = np.random.default_rng(0)
+    n = 900
+    a = np.repeat(rng.standard_normal(n // 15), 15)
+    b = np.repeat(rng.standard_normal(n // 20), 20)
+    y = (ss.lfilter([0, 0, 0.3], [1, -0.7], a) + ss.lfilter([0, 0, 0, 0, -0.2], [1, -0.9], b)
+         + ss.lfilter([1], [1, -0.8], 0.05 * rng.standard_normal(n)))
+    z = ss.lfilter([0, 0.5], [1, -0.5], b) + 0.05 * rng.standard_normal(n)
+    df = pd.DataFrame(dict(time=np.arange(n) * 5.0, A=a, B=b, Y=y, Z=z))
+    r = model_from_data(df, ["A", "B"], ["Y", "Z"], max_dead_time_s=60.0)
+    gains = {(c.output, c.input): c for c in r.channels}
+    assert gains["Y", "A"].gain == pytest.approx(1.0, abs=4 * gains["Y", "A"].gain_sd)
+    assert gains["Y", "B"].gain == pytest.approx(-2.0, abs=4 * gains["Y", "B"].gain_sd)
+    assert gains["Y", "B"].delay_samples == 4 and gains["Z", "B"].delay_samples == 1
+    assert not gains["Z", "A"].significant and r.model.process("Z", "A") is None
+    assert r.model.process("Y", "A") is not None
+
+
+def test_significance_threshold_grows_with_the_dead_times_searched():
+    from mpmpp.model_identification import significance_z
+
+    assert significance_z(1) == pytest.approx(1.959964, abs=1e-6)
+    assert 3.2 < significance_z(61) < 3.4
+
+
+def test_cli_reads_the_controller_action_from_a_named_setpoint_column(tmp_path, capsys):
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=6, setpoint_steps=True).rename(columns={"PV_sp": "SP"})
+    data = tmp_path / "loop.csv"
+    io.save_data(data, df)
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "--setpoints", "SP",
+                 "-o", str(tmp_path / "m.json"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["outputs"][0]["feedback"] == "reverse"
+
+
+def test_missing_values_fit_the_longest_complete_stretch_and_say_so():
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=8, setpoint_steps=True)
+    df.loc[100:104, "PV"] = np.nan
+    r = model_from_data(df, ["OP"], ["PV"])
+    assert r.rows_used == 751 - 105 and r.skipped_rows == 105
+    assert "105 rows skipped: missing values" in r.summary()
+
+
+def test_joint_covariance_is_the_finite_difference_one():
+    import mpmpp.model_identification as mi
+
+    df = pi_loop.simulate(pi_loop.FLOW, seed=4)
+    y = df["PV"].to_numpy() - df["PV"].mean()
+    U = df[["OP"]].to_numpy() - df["OP"].mean()
+    c = mi._refine(y, U, mi._fit(y, U, 2, [2], [1], 60), 60)
+    cov = mi._joint_covariance(y, U, c)
+    g = c.tf[0]
+    expected = ref.pem_ar_noise_covariance(df["PV"].to_numpy(), df["OP"].to_numpy(), 2, 1, 2,
+                                           np.asarray(g.num), np.asarray(g.den), np.r_[1.0, c.a])
+    assert np.allclose(cov, expected, rtol=1e-4, atol=1e-9 * np.abs(expected).max())

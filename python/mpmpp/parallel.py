@@ -49,6 +49,13 @@ def run_tasks(fn, tasks: list, scheduler=None, workers=None, progress: bool = Fa
         return [], "nowhere (no tasks)"
     if scheduler is None:
         n = min(workers or os.cpu_count() or 1, len(tasks))
+        if n == 1:  # no pool to start: one process is this one
+            results = []
+            for t in tasks:
+                results.append(fn(*t))
+                if progress:
+                    _progress(len(results), len(tasks), started, unit)
+            return results, "this process"
         # forkserver, not fork: the parent may hold threads (BLAS, a Dask client, the test
         # runner), and a forked child inheriting a held lock deadlocks.
         with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("forkserver")) as pool:

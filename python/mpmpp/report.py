@@ -63,12 +63,13 @@ class _Page:
     def para(self, text: str, cls: Optional[str] = None) -> None:
         self.add(f'<p class="{cls}">{html.escape(text)}</p>' if cls else f"<p>{html.escape(text)}</p>")
 
-    def table(self, header: list, rows: list) -> None:
+    def table(self, header: Optional[list], rows: list) -> None:
         def cell(v, tag="td"):
             if isinstance(v, (int, float, np.floating)) and not isinstance(v, bool):
                 return f'<{tag} class="num">{html.escape(_number(v))}</{tag}>'
             return f"<{tag}>{html.escape(str(v))}</{tag}>"
-        self.add("<table><tr>" + "".join(cell(h, "th") for h in header) + "</tr>"
+        head = "<tr>" + "".join(cell(h, "th") for h in header) + "</tr>" if header else ""
+        self.add("<table>" + head
                  + "".join("<tr>" + "".join(cell(v) for v in r) + "</tr>" for r in rows) + "</table>")
 
     def figure(self, png: bytes, alt: str) -> None:
@@ -103,7 +104,7 @@ def _data_section(page: _Page, model, data, origin, data_path: str) -> None:
             ["data file", data_path], ["samples", len(data)], ["sample time", format_duration(ts)],
             ["from", format_moment(time_s[0], origin)], ["to", format_moment(time_s[-1], origin)],
             ["span", format_duration(len(data) * ts)]]
-    page.table(["", ""], rows)
+    page.table(None, rows)
     missing = data.attrs.get("missing", {})
     page.heading(3, "Columns")
     page.table(["column", "role", "missing values"],

@@ -69,7 +69,8 @@ def plot_profiles(model, data, path, events=None, title=None, origin=None):
         fig.suptitle(title, fontsize=10)
     if events:
         fig.text(0.01, 0.005, _events_caption(events, origin, float(time_s[0])), fontsize=7, va="bottom")
-    fig.tight_layout(rect=(0, 0.03 + 0.012 * len(events or []), 1, 1))
+    caption_lines = _events_caption(events, origin, float(time_s[0])).count("\n") + 1 if events else 0
+    fig.tight_layout(rect=(0, (0.2 + 0.16 * caption_lines) / fig.get_figheight(), 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -110,7 +111,8 @@ def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), ev
                   label="recent windows unlike training" if row == 0 else None)
         ax_i.axhline(100 * result.threshold, color="tab:red", linestyle="--", linewidth=1,
                      label=f"alarm threshold ({100 * result.threshold:g} %)" if row == 0 else None)
-        ax_i.set_ylim(-5, 112)
+        ax_i.set_ylim(-5, 125)  # headroom for the alarm labels
+        ax_i.set_yticks([0, 25, 50, 75, 100])
         ax_i.set_title(f"{name}: recent windows unlike training", fontsize=8, loc="left")
         ax_i.set_ylabel("% of last windows", fontsize=8)
         mark_alarms(ax_i, result.alarm_starts(k), convert, origin=origin, start_s=start)
@@ -127,6 +129,7 @@ def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), ev
     fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=8, frameon=False)
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout(rect=(0, 0.06 if len(labels) <= 4 else 0.09, 1, 1))
+    legend_rows = -(-len(labels) // 4)
+    fig.tight_layout(rect=(0, (0.1 + 0.22 * legend_rows) / fig.get_figheight(), 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)

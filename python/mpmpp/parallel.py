@@ -58,7 +58,11 @@ def run_tasks(fn, tasks: list, scheduler=None, workers=None, progress: bool = Fa
             return results, "this process"
         # forkserver, not fork: the parent may hold threads (BLAS, a Dask client, the test
         # runner), and a forked child inheriting a held lock deadlocks.
-        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("forkserver")) as pool:
+        context = multiprocessing.get_context("forkserver")
+        # Workers fork from a server that imported fn's module once, instead of each
+        # importing it (numpy, pandas, the core) anew.
+        context.set_forkserver_preload([fn.__module__])
+        with ProcessPoolExecutor(max_workers=n, mp_context=context) as pool:
             futures = [pool.submit(fn, *t) for t in tasks]
             return _gather(as_completed(futures), len(tasks), started, progress, unit), f"{n} local processes"
     try:

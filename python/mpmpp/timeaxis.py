@@ -78,6 +78,12 @@ def plot_axis(time_s: Sequence[float], origin=None, start_s: Optional[float] = N
     minutes for records under 5 h. ``converter`` maps further seconds onto the same axis."""
     t = np.asarray(time_s, dtype=float)
     if origin is not None:
+        import matplotlib.dates as mdates
+        import matplotlib.units as munits
+
+        # Concise date ticks ('06:00', 'Mar 01') instead of full timestamps that overlap.
+        munits.registry[np.datetime64] = mdates.ConciseDateConverter()
+
         def convert(s):
             ms = np.round(np.asarray(s, dtype=float) * 1000).astype(np.int64)
             return origin + ms.astype("timedelta64[ms]")

@@ -77,3 +77,23 @@ def test_the_browser_checks_catch_a_broken_page(tmp_path):
     assert 'data-figures="broken 1"' in dom
     covered, spread = ink(tmp_path / "bad.png")
     assert not (covered > 0.05 and spread > 20)
+
+
+def test_figures_draw_on_the_data_s_own_clock(tmp_path):
+    """Detection figures and the alarm timeline with timestamps (an origin) and without."""
+    import numpy as np
+
+    import mpmpp
+    from mpmpp.detect_plots import plot_detection
+    from mpmpp.report_plots import plot_alarm_timeline
+
+    detector = mpmpp.Detector.load(os.path.join(STREAM, "detector.json"))
+    result = detector.monitor(mpmpp.load_data(DATA, detector.model))
+    assert result.alarms
+    for origin in (None, np.datetime64("2024-03-31T00:30:00", "ms")):
+        path = tmp_path / f"detection_{origin is None}.png"
+        plot_detection(result, path, origin=origin)
+        assert ink(path)[1] > 20
+        timeline = tmp_path / f"timeline_{origin is None}.png"
+        timeline.write_bytes(plot_alarm_timeline(result, origin))
+        assert ink(timeline)[1] > 20

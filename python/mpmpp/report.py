@@ -172,6 +172,8 @@ def _diagnose_section(page: _Page, model, data, origin, train_end_s) -> Optional
         for out in ([f.output] if f.output else list(model.outputs)):
             onsets.setdefault(out, []).append((f.onset_s, f.id))
     for ob, oa in zip(before.outputs, after.outputs):
+        if ob.output not in onsets:  # no finding on it: the update leaves its prediction as it was
+            continue
         page.figure(plot_before_after(ob.output, ob.time_s, ob.measured, ob.predicted, oa.predicted, ob.horizon,
                                       onsets.get(ob.output, []), origin), f"{ob.output} before and after")
     return updated

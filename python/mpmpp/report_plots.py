@@ -98,6 +98,7 @@ def plot_error_fall(errors) -> bytes:
         if before[k] > 0 and np.isfinite(after[k]):
             ax.annotate(f"{100 * (after[k] / before[k] - 1):+.0f} %", xy=(x[k] + 0.2, after[k]), xytext=(0, 3),
                         textcoords="offset points", ha="center", fontsize=8)
+    ax.set_ylim(0, 1.15 * np.nanmax(np.r_[before, after, 0.0]) or 1.0)  # room for the labels
     ax.set_xticks(x, names)
     ax.set_ylabel("prediction error (RMS)")
     ax.set_title("Prediction error on held-out data,\nbefore and after the update", loc="left", fontsize=10)

@@ -82,8 +82,12 @@ def test_fleet_folder_from_the_cli_with_checkpoints_and_a_broken_loop(fleet, tmp
     assert [r.loop for r in rows][0] == "broken" and rows[0].status == "error"
     assert "dry_weight" in rows[0].message  # names the missing column
     assert sorted(os.listdir(ckpts)) == ["FIC101.checkpoint.json", "TIC205.checkpoint.json"]
-    # Second run on the same data: everything already monitored.
-    code, out, err = run_cli("monitor", folder, "--workers", 1, "--checkpoints", ckpts, "--json")
+    # Second run on the same data: everything already monitored; the table is not replaced silently.
+    code, _, err = run_cli("monitor", folder, "--workers", 1, "--checkpoints", ckpts, "--csv", table)
+    assert code == 2 and "--force" in err
+    code, out, err = run_cli("monitor", folder, "--workers", 1, "--checkpoints", ckpts, "--json", "--csv", table,
+                             "--force")
+    assert code == 0, err
     again = {r["loop"]: r for r in json.loads(out)["loops"]}
     assert again["FIC101"]["samples"] == 0 and again["TIC205"]["windows"] == 0
 

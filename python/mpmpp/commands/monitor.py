@@ -3,6 +3,7 @@ through a detector saved by ``detect --save-detector``, one loop or a fleet of t
 from __future__ import annotations
 
 import json
+import os
 
 
 def add_arguments(parser) -> None:
@@ -19,6 +20,7 @@ def add_arguments(parser) -> None:
                         help="fleet: Dask scheduler address (tcp://host:8786); default: local processes")
     parser.add_argument("--workers", type=int, metavar="K", help="fleet: local processes (default: all cores)")
     parser.add_argument("--csv", metavar="FILE", help="fleet: also write the summary table as CSV")
+    parser.add_argument("--force", action="store_true", help="fleet: replace the --csv file if it exists")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
 
 
@@ -40,6 +42,8 @@ def _fleet(args) -> int:
         raise ValueError("--checkpoint: for one loop; a fleet keeps its checkpoints with --checkpoints DIR")
     if args.workers is not None and args.workers < 1:
         raise ValueError("--workers: must be >= 1")
+    if args.csv and os.path.exists(args.csv) and not args.force:
+        raise ValueError(f"{args.csv}: exists; choose another name or pass --force to replace it")
     fleet = monitor_fleet(args.targets[0], args.checkpoints, args.scheduler, args.workers, progress=not args.json)
     if args.csv:
         fleet_csv(fleet, args.csv)

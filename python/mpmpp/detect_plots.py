@@ -9,7 +9,7 @@ import textwrap
 
 import numpy as np
 
-from .detect import DetectionResult, channel_label
+from .detect import DetectionResult
 from .timeaxis import format_duration, format_moment, mark_alarms, plot_axis, shade_training
 
 __all__ = ["plot_profiles", "plot_detection"]

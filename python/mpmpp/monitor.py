@@ -139,6 +139,7 @@ def monitor_loop(name: str, detector: str, data: str, checkpoint: Optional[str] 
     active = [channel_label(c) for c, on in zip(r.channels, r.active) if on]
     first = r.alarms[0] if r.alarms else None
     return {"loop": name, "status": "ALARM" if active else "ok", "active": active,
-            "alarms": len(r.alarms), "first_alarm": None if first is None else f"{channel_label(first)} {first['time']}",
+            "alarms": len(r.alarms),
+            "first_alarm": None if first is None else f"{channel_label(first)} {first['time']}",
             "windows": r.windows, "skipped": len(r.skipped_windows), "samples": r.new_samples,
             "last_sample": r.to_dict()["last_sample"], "message": ""}

@@ -108,7 +108,8 @@ def _data_section(page: _Page, model, data, origin, data_path: str) -> None:
     missing = data.attrs.get("missing", {})
     page.heading(3, "Columns")
     page.table(["column", "role", "missing values"],
-               [[c, "input" if c in model.inputs else "output" if c in model.outputs else "other", int(missing.get(c, 0))]
+               [[c, "input" if c in model.inputs else "output" if c in model.outputs else "other",
+                 int(missing.get(c, 0))]
                 for c in data.columns if c != "time"])
     repairs = data.attrs.get("repairs") or []
     page.heading(3, "Repairs made while reading")

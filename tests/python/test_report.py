@@ -97,3 +97,20 @@ def test_figures_draw_on_the_data_s_own_clock(tmp_path):
         timeline = tmp_path / f"timeline_{origin is None}.png"
         timeline.write_bytes(plot_alarm_timeline(result, origin))
         assert ink(timeline)[1] > 20
+
+
+def test_moving_rms_against_a_plain_loop():
+    import numpy as np
+
+    from mpmpp.report_plots import moving_rms
+
+    rng = np.random.default_rng(3)
+    e = rng.standard_normal(200)
+    e[[5, 50, 51, 52]] = np.nan
+    n = 9
+    expected = []
+    for k in range(len(e)):
+        window = e[max(0, k - n // 2): k + n // 2 + 1]
+        present = window[np.isfinite(window)]
+        expected.append(np.sqrt(np.mean(present ** 2)) if len(present) >= n / 2 else np.nan)
+    np.testing.assert_allclose(moving_rms(e, n), expected, rtol=1e-12)

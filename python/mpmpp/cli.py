@@ -24,6 +24,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "diagnose": ("ranked findings: which physical effect is missing, where, when", "mpmpp.commands.diagnose"),
     "update": ("add/refit the effect(s), write the new model, print error before and after", "mpmpp.commands.update"),
     "identify": ("a model file from routine closed-loop data: gain, time constant, dead time", "mpmpp.commands.identify"),
+    "monitor": ("new data through a saved detector: one loop (resumable) or a fleet of loops", "mpmpp.commands.monitor"),
+    "report": ("one self-contained HTML page: data, compare, diagnose, update, detect", "mpmpp.commands.report"),
     "check": ("validate a model file (and a data file against it) and summarise them", "mpmpp.commands.check"),
 }
 

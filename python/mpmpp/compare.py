@@ -127,11 +127,12 @@ class CompareResult:
         lines.append(f"  note: {self.note}")
         return "\n".join(lines)
 
-    def plot(self, out_dir) -> list[Path]:
-        """Write the PNG figures into ``out_dir``; returns their paths."""
+    def plot(self, out_dir, origin=None) -> list[Path]:
+        """Write the PNG figures into ``out_dir``; returns their paths. ``origin``: the data's
+        first timestamp (``mpmpp.timeaxis.origin_of(data)``) for time axes in its own clock."""
         from .compare_plots import plot_compare
 
-        return plot_compare(self, Path(out_dir))
+        return plot_compare(self, Path(out_dir), origin)
 
 
 # Windows for the fit over time: 1 h, or a quarter of a shorter record (a 2 h export gets

@@ -1,10 +1,16 @@
-"""Figures like the paper's Figs 3-8: profiles with event lines; SVM scores and indicator per
-channel with the threshold."""
+"""Figures of a detection for engineers (the paper's Figs 3-8 in plain words): signal profiles
+with the known events, and per channel how unlike the training period each window looks and
+how many recent windows did, with the alarm threshold, the training period shaded and the
+alarms marked with their times. Time axes are the data's own clock when it has timestamps
+(``origin``), else hours (or minutes) since the first sample."""
 from __future__ import annotations
+
+import textwrap
 
 import numpy as np
 
-from .detect import DetectionResult, channel_label
+from .detect import DetectionResult
+from .timeaxis import format_duration, format_moment, mark_alarms, plot_axis, shade_training
 
 __all__ = ["plot_profiles", "plot_detection"]
 
@@ -18,64 +24,112 @@ def _pyplot():
     return plt
 
 
-def _events(ax, events):
-    for t, _label in events or []:
-        ax.axvline(t / 3600, color="r", linestyle="-.", linewidth=1)
+def _channel_title(channel: dict) -> str:
+    if channel["kind"] == "noise":
+        return f"{channel['output']}: disturbance (noise model)"
+    return f"{channel['output']} \u2190 {channel['input']} (process model)"
 
 
-def plot_profiles(model, data, path, events=None, title=None):
-    """Outputs and inputs after removing their means, time in hours (Figs 3, 5, 6);
-    events: [(seconds since the first sample, label)] drawn as red dash-dotted lines."""
+def _event_lines(ax, events, convert, numbered: bool = False):
+    for k, (t, _label) in enumerate(events or [], start=1):
+        x = convert(t)
+        ax.axvline(x, color="tab:purple", linestyle="-.", linewidth=1,
+                   label="known change" if k == 1 else None)
+        if numbered:
+            ax.annotate(str(k), xy=(x, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -2),
+                        textcoords="offset points", fontsize=8, color="tab:purple", va="top")
+
+
+def _events_caption(events, origin, t0) -> str:
+    """'1: noise model of y changed at 9 h 35 min; 2: ...' wrapped to the figure's width."""
+    when = (lambda s: format_moment(s, origin)) if origin is not None else (lambda s: format_duration(s - t0))
+    text = "; ".join(f"{k}: {label} at {when(s)}" for k, (s, label) in enumerate(events, start=1))
+    return "\n".join(textwrap.wrap("Known changes: " + text, 120))
+
+
+def plot_profiles(model, data, path, events=None, title=None, origin=None):
+    """Outputs (controlled variables) and inputs (manipulated variables) about their means
+    against time (Figs 3, 5, 6); events: [(seconds in the data's time, label)] drawn as
+    numbered dash-dotted lines and listed under the figure."""
     plt = _pyplot()
     names = list(model.outputs) + list(model.inputs)
-    t = (data["time"].to_numpy(float) - float(data["time"].iloc[0])) / 3600
-    fig, axes = plt.subplots(len(names), 1, figsize=(8, 1.8 * len(names)), sharex=True, squeeze=False)
+    time_s = data["time"].to_numpy(float)
+    t, xlabel, convert = plot_axis(time_s, origin)
+    fig, axes = plt.subplots(len(names), 1, figsize=(9, 1.7 * len(names) + 1.0), sharex=True, squeeze=False)
     for ax, name in zip(axes[:, 0], names):
         x = data[name].to_numpy(float)
-        ax.plot(t, x - np.nanmean(x), linewidth=0.6)
-        ax.set_ylabel(("CV " if name in model.outputs else "MV ") + name, fontsize=8)
-        _events(ax, events)
-    axes[-1, 0].set_xlabel("time (h)")
+        ax.plot(t, x - np.nanmean(x), linewidth=0.5, color="tab:blue")
+        role = "controlled variable (output)" if name in model.outputs else "manipulated variable (input)"
+        ax.set_title(f"{name}: {role}, minus its mean {np.nanmean(x):.4g}", fontsize=8, loc="left")
+        ax.set_ylabel(name, fontsize=8)
+        ax.grid(alpha=0.3)
+        _event_lines(ax, events, convert, numbered=ax is axes[0, 0])
+    axes[-1, 0].set_xlabel(xlabel)
     if title:
-        axes[0, 0].set_title(title)
+        fig.suptitle(title, fontsize=10)
     if events:
-        axes[0, 0].text(0.01, 0.95, "; ".join(f"{lbl} at {s / 3600:g} h" for s, lbl in events),
-                        transform=axes[0, 0].transAxes, fontsize=7, va="top")
-    fig.tight_layout()
+        fig.text(0.01, 0.005, _events_caption(events, origin, float(time_s[0])), fontsize=7, va="bottom")
+    caption_lines = _events_caption(events, origin, float(time_s[0])).count("\n") + 1 if events else 0
+    fig.tight_layout(rect=(0, (0.2 + 0.16 * caption_lines) / fig.get_figheight(), 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), events=None, title=None):
-    """Per channel: the SVM scores (left) and the indicator with the threshold s_T (right),
-    against the window end time (Figs 4, 7, 8); training windows score 0."""
+def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), events=None, title=None, origin=None):
+    """Per channel, against the end time of each moving window: left, how far the window's
+    identified model lies inside (> 0) or outside (< 0) the region learnt in training (the
+    one-class SVM score, eq. 20); right, the share of the recent windows that were outside
+    (the indicator, eq. 23) with the alarm threshold. Training windows score 0."""
     plt = _pyplot()
     picked = [k for k, c in enumerate(result.channels) if c["kind"] in kinds]
-    t0 = float(result.windows["start_s"].iloc[0]) if len(result.windows) else 0.0
-    t = (result.windows["end_s"].to_numpy(float) - t0) / 3600
-    fig, axes = plt.subplots(len(picked), 2, figsize=(10, 1.9 * len(picked) + 0.4), sharex=True, squeeze=False)
+    if not picked:
+        raise ValueError(f"plot_detection: no channel of kind {', '.join(kinds)}")
+    windows = result.windows
+    start = float(windows["start_s"].iloc[0]) if len(windows) else 0.0
+    t, xlabel, convert = plot_axis(windows["end_s"].to_numpy(float), origin, start_s=start)
+    train_end = start + result.train_end_s
+    fig, axes = plt.subplots(len(picked), 2, figsize=(11, 2.1 * len(picked) + 0.9), sharex=True, squeeze=False)
     for row, k in enumerate(picked):
-        name = channel_label(result.channels[k])
         ax_s, ax_i = axes[row]
+        name = _channel_title(result.channels[k])
         s = result.scores[:, k]
-        ax_s.plot(t, s, ".", markersize=2.5, color="tab:blue")
-        ax_s.axhline(0, color="k", linewidth=0.5)
-        # Channel names go in the panel titles: as y labels the long MIMO ones overlap.
-        ax_s.set_title(f"{name}: SVM score h", fontsize=8, loc="left")
-        ax_s.set_ylabel("score", fontsize=8)
-        ax_i.plot(t, result.indicator[:, k], color="tab:green", linewidth=1)
-        ax_i.axhline(result.threshold, color="r", linestyle="-.", linewidth=1)
-        ax_i.set_ylim(-0.05, 1.05)
-        ax_i.set_title(f"{name}: indicator s (eq. 23), threshold s_T", fontsize=8, loc="left")
-        ax_i.set_ylabel("s", fontsize=8)
-        for start in result.alarm_starts(k):
-            ax_i.axvline((start - t0) / 3600, color="k", linestyle=":", linewidth=1)
-        _events(ax_s, events)
-        _events(ax_i, events)
+        for ax in (ax_s, ax_i):
+            shade_training(ax, start, train_end, convert, label=row == 0)
+            ax.grid(alpha=0.3)
+        # Training windows score 0 by construction: not drawn.
+        monitored = ~windows["training"].to_numpy(bool)
+        outside = monitored & (s < 0)
+        inside = monitored & ~(s < 0)
+        ax_s.plot(t[inside], s[inside], ".", markersize=2.5, color="tab:blue",
+                  label="window like training" if row == 0 else None)
+        ax_s.plot(t[outside], s[outside], ".", markersize=3, color="tab:orange",
+                  label="window unlike training" if row == 0 else None)
+        ax_s.axhline(0, color="k", linewidth=0.6)
+        ax_s.set_title(f"{name}: similarity to training", fontsize=8, loc="left")
+        ax_s.set_ylabel("score (< 0: unlike)", fontsize=8)
+        ax_i.plot(t, 100 * result.indicator[:, k], color="tab:green", linewidth=1.2,
+                  label="recent windows unlike training" if row == 0 else None)
+        ax_i.axhline(100 * result.threshold, color="tab:red", linestyle="--", linewidth=1,
+                     label=f"alarm threshold ({100 * result.threshold:g} %)" if row == 0 else None)
+        ax_i.set_ylim(-5, 125)  # headroom for the alarm labels
+        ax_i.set_yticks([0, 25, 50, 75, 100])
+        ax_i.set_title(f"{name}: recent windows unlike training", fontsize=8, loc="left")
+        ax_i.set_ylabel("% of last windows", fontsize=8)
+        mark_alarms(ax_i, result.alarm_starts(k), convert, origin=origin, start_s=start)
+        _event_lines(ax_s, events, convert)
+        _event_lines(ax_i, events, convert)
     for ax in axes[-1]:
-        ax.set_xlabel("window end (h)")
+        ax.set_xlabel(f"window end, {xlabel}")
+    handles, labels = [], []
+    for ax in axes.ravel():
+        for h, lbl in zip(*ax.get_legend_handles_labels()):
+            if lbl not in labels:
+                handles.append(h)
+                labels.append(lbl)
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 4), fontsize=8, frameon=False)
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
+    legend_rows = -(-len(labels) // 4)
+    fig.tight_layout(rect=(0, (0.1 + 0.22 * legend_rows) / fig.get_figheight(), 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -19,17 +19,15 @@ where it ran.
 from __future__ import annotations
 
 import json
-import multiprocessing
 import os
-import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import scenarios
 from ._core import Model
+from .parallel import run_tasks
 from .simulate import simulate
 from .baselines import BASELINES, baseline_alarms, baseline_indices
 from .detect import _arrays, channel_label, detect, make_config
@@ -115,27 +113,6 @@ def run_seed(spec, seed: int, config_json: str | None = None) -> dict:
     }
 
 
-def _progress(done: int, total: int, started: float) -> None:
-    if not sys.stderr.isatty() and done not in (total,) and done % max(1, total // 10):
-        return
-    width = 30
-    filled = int(width * done / total)
-    rate = (time.perf_counter() - started) / max(done, 1)
-    eta = rate * (total - done)
-    print(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total} runs, ~{eta:.0f} s left",
-          end="" if done < total else "\n", file=sys.stderr, flush=True)
-
-
-def _gather(completed, total: int, started: float, progress: bool) -> list:
-    """Results of finished futures (local or Dask), in completion order, with a progress bar."""
-    runs = []
-    for future in completed:
-        runs.append(future.result())
-        if progress:
-            _progress(len(runs), total, started)
-    return runs
-
-
 def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: bool = True) -> dict:
     """Runs every seed (a count N means seeds 0..N-1) and summarises (see ``summarise``).
 
@@ -149,25 +126,8 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
     config_json = cfg.to_json()
     payload = scenario  # a plain dict: travels to any worker
     started = time.perf_counter()
-    if scheduler is None:
-        n = workers or os.cpu_count() or 1
-        # forkserver, not fork: the parent may hold threads (BLAS, a Dask client, the test
-        # runner), and a forked child inheriting a held lock deadlocks.
-        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("forkserver")) as pool:
-            futures = [pool.submit(run_seed, payload, s, config_json) for s in seeds]
-            runs = _gather(as_completed(futures), len(seeds), started, progress)
-        where = f"{n} local processes"
-    else:
-        from dask.distributed import Client, as_completed as dask_completed
-
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
-        try:
-            futures = client.map(run_seed, [payload] * len(seeds), seeds, [config_json] * len(seeds), pure=False)
-            runs = _gather(dask_completed(futures), len(seeds), started, progress)
-            where = f"Dask cluster {client.scheduler.address}"
-        finally:
-            if client is not scheduler:
-                client.close()
+    runs, where = run_tasks(run_seed, [(payload, s, config_json) for s in seeds], scheduler, workers,
+                            progress, unit="runs")
     wall = time.perf_counter() - started
     runs.sort(key=lambda r: r["seed"])
     summary = summarise(runs, truth_onsets(scenario), nominal_model(scenario))

@@ -47,9 +47,9 @@ def run(args) -> int:
     _step(f"writing figures to {out}", started)
     plot_profiles(model, data, os.path.join(out, "profiles.png"), events, title=scenario["name"])
     plot_detection(result, os.path.join(out, "process_detection.png"), kinds=("process",), events=events,
-                   title="MPM detection: SVM scores and indicator per process channel")
+                   title="Model-plant mismatch, per process channel")
     plot_detection(result, os.path.join(out, "noise_detection.png"), kinds=("noise",), events=events,
-                   title="Noise-change detection: SVM scores and indicator per output")
+                   title="Disturbance changes, per output")
     save_data(os.path.join(out, "data.csv"), data)
     with open(os.path.join(out, "detect.json"), "w", encoding="utf-8") as f:
         json.dump(result.to_dict(), f, indent=1)

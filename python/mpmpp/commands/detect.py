@@ -31,11 +31,12 @@ def run(args) -> int:
         detector.save(args.save_detector)
     if args.out:
         from ..detect_plots import plot_detection
+        from ..timeaxis import origin_of
 
         os.makedirs(args.out, exist_ok=True)
         with open(os.path.join(args.out, "detect.json"), "w", encoding="utf-8") as f:
             json.dump(result.to_dict(), f, indent=1)
-        plot_detection(result, os.path.join(args.out, "detection.png"))
+        plot_detection(result, os.path.join(args.out, "detection.png"), origin=origin_of(data))
     if args.json:
         print(json.dumps(result.to_dict()))
     else:

@@ -34,7 +34,7 @@ from .simulate import simulate
 from .baselines import BASELINES, baseline_alarms, baseline_indices
 from .detect import _arrays, channel_label, detect, make_config
 
-__all__ = ["run_seed", "evaluate", "summarise", "format_table", "load_scenario"]
+__all__ = ["run_seed", "run_parallel", "evaluate", "summarise", "format_table", "load_scenario"]
 
 
 def load_scenario(spec):
@@ -136,6 +136,30 @@ def _gather(completed, total: int, started: float, progress: bool) -> list:
     return runs
 
 
+def run_parallel(fn, args: list[tuple], scheduler=None, workers=None, progress: bool = True):
+    """fn(*a) for every tuple in args, in parallel: all local cores by default (processes),
+    or a Dask cluster (``scheduler``: an address or a ``dask.distributed.Client``).
+    Returns (results in completion order, where they ran). fn must be importable by name."""
+    started = time.perf_counter()
+    if scheduler is None:
+        n = workers or os.cpu_count() or 1
+        # forkserver, not fork: the parent may hold threads (BLAS, a Dask client, the test
+        # runner), and a forked child inheriting a held lock deadlocks.
+        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("forkserver")) as pool:
+            futures = [pool.submit(fn, *a) for a in args]
+            return _gather(as_completed(futures), len(args), started, progress), f"{n} local processes"
+    from dask.distributed import Client, as_completed as dask_completed
+
+    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    try:
+        futures = client.map(fn, *zip(*args), pure=False)
+        return (_gather(dask_completed(futures), len(args), started, progress),
+                f"Dask cluster {client.scheduler.address}")
+    finally:
+        if client is not scheduler:
+            client.close()
+
+
 def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: bool = True) -> dict:
     """Runs every seed (a count N means seeds 0..N-1) and summarises (see ``summarise``).
 
@@ -147,27 +171,9 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
     scenario = load_scenario(spec)
     cfg = make_config(config, nominal_model(scenario))
     config_json = cfg.to_json()
-    payload = scenario  # a plain dict: travels to any worker
     started = time.perf_counter()
-    if scheduler is None:
-        n = workers or os.cpu_count() or 1
-        # forkserver, not fork: the parent may hold threads (BLAS, a Dask client, the test
-        # runner), and a forked child inheriting a held lock deadlocks.
-        with ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("forkserver")) as pool:
-            futures = [pool.submit(run_seed, payload, s, config_json) for s in seeds]
-            runs = _gather(as_completed(futures), len(seeds), started, progress)
-        where = f"{n} local processes"
-    else:
-        from dask.distributed import Client, as_completed as dask_completed
-
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
-        try:
-            futures = client.map(run_seed, [payload] * len(seeds), seeds, [config_json] * len(seeds), pure=False)
-            runs = _gather(dask_completed(futures), len(seeds), started, progress)
-            where = f"Dask cluster {client.scheduler.address}"
-        finally:
-            if client is not scheduler:
-                client.close()
+    # The scenario travels as a plain dict: picklable to any worker.
+    runs, where = run_parallel(run_seed, [(scenario, s, config_json) for s in seeds], scheduler, workers, progress)
     wall = time.perf_counter() - started
     runs.sort(key=lambda r: r["seed"])
     summary = summarise(runs, truth_onsets(scenario), nominal_model(scenario))

@@ -212,11 +212,15 @@ def _times(rng, ts, record, count):
 
 
 def _setpoint_steps(rng, ts, record, outs, y0, events):
-    """Setpoint steps of 2-5 noise sd, about every 1-3 h (user-style excitation)."""
+    """Setpoint steps of 2-5 noise sd, 0.5-2 h apart (operators' and grade changes): the
+    external excitation that makes a short-delay loop under a low-order linear controller
+    identifiable at all."""
     for o in outs:
-        for t in _times(rng, ts, record, max(1, int(record / (2 * HOUR)))):
-            events.append({"time_s": t, "type": "setpoint", "output": o,
+        t = rng.uniform(0.1, 1.0) * HOUR
+        while t < record - ts:
+            events.append({"time_s": ts * math.floor(t / ts), "type": "setpoint", "output": o,
                            "value": y0[o] + float(rng.uniform(2, 5) * rng.choice([-1, 1]))})
+            t += rng.uniform(0.5, 2.0) * HOUR
 
 
 def _step_ramp(rng, ts, record, outs, events):
@@ -318,14 +322,14 @@ _EFFECTS_MIMO = _EFFECTS_SISO + ("missing_coupling",)
 
 FAMILIES = [
     Family("mpc_siso", TUNING, "project MPC, SISO, discrete model with noise model",
-           "mpc", 1, _EFFECTS_SISO, sample_times_s=(5.0, 10.0)),
+           "mpc", 1, _EFFECTS_SISO, setpoint_steps=True, sample_times_s=(5.0, 10.0)),
     Family("mpc_siso_controls", TUNING, "project MPC, SISO: no change, noise change, drift",
-           "mpc", 1, CONTROL_EFFECTS, sample_times_s=(5.0, 10.0)),
+           "mpc", 1, CONTROL_EFFECTS, setpoint_steps=True, sample_times_s=(5.0, 10.0)),
     Family("mpc_2x2", TUNING, "project MPC, 2x2, discrete model with or without noise model",
-           "mpc", 2, _EFFECTS_MIMO, time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0),
+           "mpc", 2, _EFFECTS_MIMO, time_constant_samples=(2.0, 20.0), setpoint_steps=True, sample_times_s=(5.0, 10.0),
            model_forms=("discrete+noise", "discrete")),
     Family("mpc_2x2_controls", TUNING, "project MPC, 2x2: no change, noise change, drift",
-           "mpc", 2, CONTROL_EFFECTS, time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0),
+           "mpc", 2, CONTROL_EFFECTS, time_constant_samples=(2.0, 20.0), setpoint_steps=True, sample_times_s=(5.0, 10.0),
            model_forms=("discrete+noise", "discrete")),
     Family("pi_siso", TUNING, "single PI loop with setpoint steps and output saturation, FOPTD model "
            "without noise model", "pi", 1, _EFFECTS_SISO + ("none",), sample_times_s=(5.0, 10.0),

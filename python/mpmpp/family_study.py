@@ -51,8 +51,9 @@ def score(alarms: dict, expect: dict) -> dict:
     return out
 
 
-def run_family_seed(name: str, seed: int, record_s: float | None = None) -> dict:
-    """Simulate one draw of family `name` and score every preset of its size on it."""
+def run_family_seed(name: str, seed: int, record_s: float | None = None, configs: dict | None = None) -> dict:
+    """Simulate one draw of family `name` and score every preset of its size on it, or every
+    detector config of `configs` ({label: preset name, config dict or file})."""
     family = fam.family(name)
     spec, expect = family.draw(seed, record_s)
     model = nominal_model(spec)
@@ -61,8 +62,9 @@ def run_family_seed(name: str, seed: int, record_s: float | None = None) -> dict
     result = {"family": name, "split": family.split, "seed": int(seed), "expect": expect,
               "samples": len(data), "sample_time_s": spec["sample_time_s"], "presets": {},
               "seconds": {"simulate": time.perf_counter() - t0}}
-    for preset in presets_for(family.size):
-        config = make_config(preset, model)
+    configs = configs or {p: p for p in presets_for(family.size)}
+    for preset, given in configs.items():
+        config = make_config(given, model)
         t1 = time.perf_counter()
         try:
             det = detect(model, data, config.train_duration_s, config)
@@ -77,26 +79,27 @@ def run_family_seed(name: str, seed: int, record_s: float | None = None) -> dict
 
 
 def run_study(names=None, seeds=range(4), record_s=None, scheduler=None, workers=None,
-              progress: bool = True) -> dict:
-    """Every (family, seed) run in parallel (``evaluate.run_parallel``); rows per family and preset."""
+              progress: bool = True, configs: dict | None = None) -> dict:
+    """Every (family, seed) run in parallel (``evaluate.run_parallel``); rows per family and
+    preset (or per label of `configs`, see run_family_seed)."""
     names = [f.name for f in fam.FAMILIES] if names is None else list(names)
     for n in names:
         fam.family(n)  # unknown names fail before any work starts
     seeds = list(seeds)
     started = time.perf_counter()
-    runs, where = run_parallel(run_family_seed, [(n, s, record_s) for n in names for s in seeds],
+    runs, where = run_parallel(run_family_seed, [(n, s, record_s, configs) for n in names for s in seeds],
                                scheduler, workers, progress)
     runs.sort(key=lambda r: (names.index(r["family"]), r["seed"]))
-    return {"rows": summarise(runs, names), "runs": runs, "seeds": seeds, "where": where,
+    return {"rows": summarise(runs, names, configs), "runs": runs, "seeds": seeds, "where": where,
             "wall_seconds": time.perf_counter() - started}
 
 
-def summarise(runs: list, names: list) -> list:
+def summarise(runs: list, names: list, configs: dict | None = None) -> list:
     rows = []
     for name in names:
         f = fam.family(name)
         mine = [r for r in runs if r["family"] == name]
-        for preset in presets_for(f.size):
+        for preset in configs or presets_for(f.size):
             scored = [r["presets"][preset] for r in mine]
             changes = [s for s in scored if s["detected"] is not None]
             delays = np.array([s["delay_s"] for s in changes if s["delay_s"] is not None], float)

@@ -52,14 +52,17 @@ class Family:
     outliers: bool = False
     details: dict = field(default_factory=dict)
 
-    def draw(self, seed: int, record_s: float | None = None) -> tuple[dict, dict]:
+    def draw(self, seed: int, record_s: float | None = None, effect: str | None = None) -> tuple[dict, dict]:
         """(scenario document, expectation) for `seed`; the scenario's noise seed derives from
-        it too. record_s shortens the record (and moves the onset into it) for quick checks.
+        it too. record_s shortens the record (and moves the onset into it) for quick checks;
+        effect forces one of the family's effects instead of drawing it.
         Expectation: kind "mpm" (an MPM alarm on one of `channels` at or after `onset_s` is a
         detection), "none" (a control: any MPM alarm is false) or "any" (an unmodelled input:
         an MPM or noise alarm on `output` counts); `effect` and `size` name what changed."""
+        if effect is not None and effect not in self.effects:
+            raise ValueError(f"effect: {effect!r} is not an effect of family {self.name} ({', '.join(self.effects)})")
         rng = np.random.default_rng([zlib.crc32(self.name.encode()), int(seed)])
-        return _draw(self, rng, int(seed), record_s)
+        return _draw(self, rng, int(seed), record_s, effect)
 
     def scenario(self, seed: int, record_s: float | None = None) -> dict:
         return self.draw(seed, record_s)[0]
@@ -137,7 +140,7 @@ def _pid_tuning(k, tau, d, ts, rng, derivative):
     return loop
 
 
-def _draw(fam: Family, rng, seed: int, record_s: float | None) -> dict:
+def _draw(fam: Family, rng, seed: int, record_s: float | None, forced_effect: str | None):
     ts = float(rng.choice(fam.sample_times_s))
     n = fam.size
     outs, ins = [f"y{i + 1}" for i in range(n)], [f"u{j + 1}" for j in range(n)]
@@ -172,6 +175,7 @@ def _draw(fam: Family, rng, seed: int, record_s: float | None) -> dict:
     onset = max(rng.uniform(0.55, 0.7) * record, LATEST_TRAINING_S + HOUR if record_s is None else 0.5 * record)
     onset = ts * math.floor(onset / ts)
     effect = str(rng.choice(fam.effects))
+    effect = forced_effect or effect  # drawn either way: forcing leaves every other draw unchanged
     expect = _effect(effect, rng, spec, chans, diag_gain, onset, ts)
     expect["effect"] = effect
     events.sort(key=lambda e: e["time_s"])

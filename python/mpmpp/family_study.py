@@ -51,11 +51,13 @@ def score(alarms: dict, expect: dict) -> dict:
     return out
 
 
-def run_family_seed(name: str, seed: int, record_s: float | None = None, configs: dict | None = None) -> dict:
+def run_family_seed(name: str, seed: int, record_s: float | None = None, configs: dict | None = None,
+                    effect: str | None = None) -> dict:
     """Simulate one draw of family `name` and score every preset of its size on it, or every
-    detector config of `configs` ({label: preset name, config dict or file})."""
+    detector config of `configs` ({label: preset name, config dict or file}). effect forces
+    one of the family's effects (Family.draw)."""
     family = fam.family(name)
-    spec, expect = family.draw(seed, record_s)
+    spec, expect = family.draw(seed, record_s, effect)
     model = nominal_model(spec)
     t0 = time.perf_counter()
     data = simulate(spec)

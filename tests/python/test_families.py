@@ -102,3 +102,26 @@ def test_score():
     anything = {"kind": "any", "onset_s": 100.0, "channels": [["y1", "u1"]], "output": "y1"}
     assert score({"H[y1]": [130.0]}, anything)["detected"]
     assert not math.isnan(score({}, anything)["detected"])
+
+
+def test_forced_effect():
+    fam = families.family("pi_siso")
+    spec, expect = fam.draw(5, effect="none")
+    assert expect["effect"] == "none" and expect["kind"] == "none"
+    with pytest.raises(ValueError, match="'output_drift' is not an effect of family pi_siso"):
+        fam.draw(5, effect="output_drift")
+
+
+def test_cli_simulate_family_writes_data_and_a_model_file(tmp_path, capsys):
+    from mpmpp.cli import main
+    from mpmpp.io import load_data, load_model
+
+    data, model = tmp_path / "d.csv", tmp_path / "m.json"
+    assert main(["simulate", "--family", "pi_siso", "--seed", "3", "-o", str(data), "--write-model", str(model)]) == 0
+    m = load_model(model)
+    spec = families.family("pi_siso").scenario(3)
+    assert "gain" in spec["process"]["y1"]["u1"]  # the FOPTD form, as a user would write it
+    assert len(load_data(data, m)) == parse_scenario(spec).num_samples
+    assert main(["evaluate", "--families", "no_such_family"]) == 2
+    assert "unknown family 'no_such_family'" in capsys.readouterr().err
+    assert main(["simulate", "--family", "pi_siso", "--paper", "siso", "-o", str(data)]) == 2

@@ -171,8 +171,10 @@ def _draw(fam: Family, rng, seed: int, record_s: float | None, forced_effect: st
     if fam.outliers:
         spec["truth"]["outliers"] = {"probability": float(rng.uniform(2e-4, 2e-3)),
                                      "size": {o: float(rng.uniform(5, 10)) for o in outs}}
-    # The onset: after the longest training (with room for its last window), at 55-70 % of the record.
-    onset = max(rng.uniform(0.55, 0.7) * record, LATEST_TRAINING_S + HOUR if record_s is None else 0.5 * record)
+    # The onset: at 55-70 % of the record, and after the longest training (with room for its
+    # last window) where the record is long enough for that.
+    earliest = LATEST_TRAINING_S + HOUR if record_s is None else 0.5 * record
+    onset = max(rng.uniform(0.55, 0.7) * record, min(earliest, 0.5 * record))
     onset = ts * math.floor(onset / ts)
     effect = str(rng.choice(fam.effects))
     effect = forced_effect or effect  # drawn either way: forcing leaves every other draw unchanged
@@ -358,6 +360,9 @@ FAMILIES = [
            time_constant_samples=(10.0, 100.0), dead_time_samples=(2, 20),
            noise_colours=("ar2", "arma22", "highpass"), model_forms=("discrete+noise", "foptd"),
            record_hours=(14.0, 16.0), step_ramp_disturbances=True, outliers=True),
+    Family("pi_siso_short", HELD_OUT, "single PI loop, records of 2-8 h (shorter than the presets' "
+           "training plus a window: detect refuses the shortest)", "pi", 1, ("gain", "time_constant", "none"),
+           sample_times_s=(1.0, 2.0, 5.0), model_forms=("foptd",), record_hours=(2.0, 8.0), setpoint_steps=True),
 ]
 
 

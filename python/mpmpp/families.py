@@ -172,9 +172,9 @@ def _draw(fam: Family, rng, seed: int, record_s: float | None, forced_effect: st
         spec["truth"]["outliers"] = {"probability": float(rng.uniform(2e-4, 2e-3)),
                                      "size": {o: float(rng.uniform(5, 10)) for o in outs}}
     # The onset: at 55-70 % of the record, and after the longest training (with room for its
-    # last window) where the record is long enough for that.
+    # last window) where the record leaves 4 h after that to detect the change.
     earliest = LATEST_TRAINING_S + HOUR if record_s is None else 0.5 * record
-    onset = max(rng.uniform(0.55, 0.7) * record, min(earliest, 0.5 * record))
+    onset = max(rng.uniform(0.55, 0.7) * record, earliest if record - earliest >= 4 * HOUR else 0.5 * record)
     onset = ts * math.floor(onset / ts)
     effect = str(rng.choice(fam.effects))
     effect = forced_effect or effect  # drawn either way: forcing leaves every other draw unchanged

@@ -115,12 +115,30 @@ def summarise(runs: list, names: list, configs: dict | None = None) -> list:
     return rows
 
 
+def by_effect(runs: list) -> list:
+    """Runs pooled per split, preset kind (recommended: siso/mimo; paper: paper_*) and effect
+    (actuator nonlinearities by kind): detected and false-MPM-alarm counts."""
+    cells = {}
+    for r in runs:
+        e = r["expect"]
+        effect = e["effect"] + (f":{e['nonlinearity']}" if "nonlinearity" in e else "")
+        for preset, v in r["presets"].items():
+            kind = "paper" if preset.startswith("paper_") else preset if preset not in ("siso", "mimo") else "recommended"
+            c = cells.setdefault((r["split"], kind, effect), {"runs": 0, "detected": 0, "false_mpm": 0})
+            c["runs"] += 1
+            c["detected"] += bool(v["detected"])
+            c["false_mpm"] += v["false_mpm"]
+    order = sorted(cells, key=lambda k: (k[0] != fam.TUNING, k[1] != "recommended", k[2]))
+    return [{"split": k[0], "presets": k[1], "effect": k[2], **cells[k]} for k in order]
+
+
 def _rate(k, n):
     return "-" if n == 0 else f"{k}/{n} ({100 * k / n:.0f}%)"
 
 
 def format_table(study: dict) -> str:
-    """Markdown table: tuning families first, then held-out, per preset."""
+    """Markdown tables: per family and preset (tuning families first, then held-out), then per
+    effect pooled over the families of each split."""
     seeds = study["seeds"]
     lines = [f"scenario families, seeds {min(seeds)}-{max(seeds)}: {study['wall_seconds']:.0f} s wall on "
              f"{study['where']}", "",
@@ -134,4 +152,9 @@ def format_table(study: dict) -> str:
                          f"{_rate(r['false_mpm'], r['runs'])} | {_rate(r['mislocated'], r['changes'])} | "
                          f"{_rate(r['refused'], r['runs'])} | "
                          f"{h(r['delay_median_s'])} | {h(r['delay_p90_s'])} |")
+    lines += ["", "| split | presets | effect | detected | false MPM alarm |", "| --- | --- | --- | --- | --- |"]
+    for c in by_effect(study["runs"]):
+        changed = c["effect"].split(":")[0] not in fam.CONTROL_EFFECTS
+        lines.append(f"| {c['split']} | {c['presets']} | {c['effect']} | "
+                     f"{_rate(c['detected'], c['runs']) if changed else '-'} | {_rate(c['false_mpm'], c['runs'])} |")
     return "\n".join(lines)

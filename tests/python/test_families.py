@@ -125,3 +125,17 @@ def test_cli_simulate_family_writes_data_and_a_model_file(tmp_path, capsys):
     assert main(["evaluate", "--families", "no_such_family"]) == 2
     assert "unknown family 'no_such_family'" in capsys.readouterr().err
     assert main(["simulate", "--family", "pi_siso", "--paper", "siso", "-o", str(data)]) == 2
+
+
+def test_by_effect_pools_runs_per_split_preset_kind_and_effect():
+    from mpmpp.family_study import by_effect
+
+    run = lambda split, effect, siso, paper: {  # noqa: E731
+        "split": split, "expect": {"effect": effect},
+        "presets": {"siso": {"detected": siso, "false_mpm": False}, "paper_siso": {"detected": None, "false_mpm": paper}}}
+    cells = by_effect([run("tuning", "gain", True, True), run("tuning", "gain", False, False),
+                       run("held_out", "none", None, True)])
+    assert cells[0] == {"split": "tuning", "presets": "recommended", "effect": "gain", "runs": 2, "detected": 1,
+                        "false_mpm": 0}
+    assert {"split": "held_out", "presets": "paper", "effect": "none", "runs": 1, "detected": 0,
+            "false_mpm": 1} in cells

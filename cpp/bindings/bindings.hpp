@@ -13,6 +13,8 @@ void bind_residual_analysis(pybind11::module_& m);
 void bind_change_scan(pybind11::module_& m);
 void bind_one_class_svm(pybind11::module_& m);
 void bind_mpc(pybind11::module_& m);
+void bind_actuator(pybind11::module_& m);
+void bind_pid_controller(pybind11::module_& m);
 void bind_closed_loop(pybind11::module_& m);
 void bind_detector(pybind11::module_& m);
 void bind_streaming_detector(pybind11::module_& m);

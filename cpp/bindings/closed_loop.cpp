@@ -10,13 +10,6 @@ namespace py = pybind11;
 namespace mpmpp::bindings {
 
 void bind_closed_loop(py::module_& m) {
-  py::class_<ActuatorNonlinearity>(m, "ActuatorNonlinearity")
-      .def(py::init<>())
-      .def_readwrite("deadband", &ActuatorNonlinearity::deadband)
-      .def_readwrite("backlash", &ActuatorNonlinearity::backlash)
-      .def_readwrite("min", &ActuatorNonlinearity::min)
-      .def_readwrite("max", &ActuatorNonlinearity::max);
-
   py::class_<ExtraVariable>(m, "ExtraVariable")
       .def(py::init<>())
       .def_readwrite("name", &ExtraVariable::name)
@@ -31,7 +24,9 @@ void bind_closed_loop(py::module_& m) {
       .def_readwrite("sigma", &Plant::sigma)
       .def_readwrite("extra", &Plant::extra)
       .def_readwrite("extra_process", &Plant::extra_process)
-      .def_readwrite("actuators", &Plant::actuators);
+      .def_readwrite("actuators", &Plant::actuators)
+      .def_readwrite("outlier_probability", &Plant::outlier_probability)
+      .def_readwrite("outlier_size", &Plant::outlier_size);
 
   py::enum_<EventKind>(m, "EventKind")
       .value("process", EventKind::Process)
@@ -58,6 +53,7 @@ void bind_closed_loop(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("model", &ClosedLoopConfig::model, "the nominal model the MPC uses")
       .def_readwrite("tuning", &ClosedLoopConfig::tuning)
+      .def_readwrite("pid_loops", &ClosedLoopConfig::pid_loops, "non-empty: multi-loop PID instead of the MPC")
       .def_readwrite("plant", &ClosedLoopConfig::plant)
       .def_readwrite("u_operating", &ClosedLoopConfig::u_operating)
       .def_readwrite("y_operating", &ClosedLoopConfig::y_operating)

@@ -13,6 +13,8 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_change_scan(m);
   mpmpp::bindings::bind_one_class_svm(m);
   mpmpp::bindings::bind_mpc(m);
+  mpmpp::bindings::bind_actuator(m);
+  mpmpp::bindings::bind_pid_controller(m);
   mpmpp::bindings::bind_closed_loop(m);
   mpmpp::bindings::bind_detector(m);
   mpmpp::bindings::bind_streaming_detector(m);

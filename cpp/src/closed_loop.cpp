@@ -38,33 +38,6 @@ class GaussianSource {
   bool has_spare_ = false;
 };
 
-class Actuator {
- public:
-  void set(const ActuatorNonlinearity& nl) { nl_ = nl; }
-  void start(double u0) { stuck_ = play_ = u0; }
-  // Command -> position: deadband, then backlash, then saturation.
-  double move(double command) {
-    if (std::abs(command - stuck_) > nl_.deadband) stuck_ = command;
-    const double half = 0.5 * nl_.backlash;
-    if (stuck_ > play_ + half) play_ = stuck_ - half;
-    else if (stuck_ < play_ - half) play_ = stuck_ + half;
-    return std::clamp(play_, nl_.min, nl_.max);
-  }
-
- private:
-  ActuatorNonlinearity nl_;
-  double stuck_ = 0.0;  // after the deadband
-  double play_ = 0.0;   // after the backlash
-};
-
-void check_actuator(const ActuatorNonlinearity& a, const std::string& at) {
-  if (!(a.deadband >= 0.0) || !std::isfinite(a.deadband))
-    throw InputError(at + " deadband must be a finite value >= 0");
-  if (!(a.backlash >= 0.0) || !std::isfinite(a.backlash))
-    throw InputError(at + " backlash must be a finite value >= 0");
-  if (!(a.min <= a.max)) throw InputError(at + " saturation min must be <= max");
-}
-
 void check_noise(const TransferFunction& h, const std::string& at) {
   if (!h.is_stable()) throw InputError(at + " noise model must be stable");
 }
@@ -146,7 +119,19 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
     if (ev.kind == EventKind::Actuator) check_actuator(ev.actuator, "event actuator");
   }
 
-  Mpc mpc(model, cfg.tuning, u0, cfg.qp_settings);
+  if (!(plant.outlier_probability >= 0.0 && plant.outlier_probability <= 1.0))
+    throw InputError("truth outlier probability must lie in [0, 1]");
+  if (plant.outlier_probability > 0.0 && (plant.outlier_size.size() != ny || !plant.outlier_size.allFinite()))
+    throw InputError("truth outlier sizes must be finite, one per output");
+
+  const bool pid_control = !cfg.pid_loops.empty();
+  if (pid_control && cfg.record_qps) throw InputError("record_qps needs the MPC (no QPs under PID control)");
+  for (const Event& ev : events)
+    if (pid_control && ev.kind == EventKind::MvTarget) throw InputError("mv_target events need the MPC");
+  std::optional<Mpc> mpc;
+  std::optional<PidController> pid;
+  if (pid_control) pid.emplace(cfg.pid_loops, ny, model.sample_time_s, u0, y0);
+  else mpc.emplace(model, cfg.tuning, u0, cfg.qp_settings);
 
   // Truth filters, all advanced one sample: y(t) is formed from inputs up to t-1.
   auto channel = [](const std::optional<TransferFunction>& g, const std::string& what) {
@@ -180,14 +165,15 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
   res.extra.resize(n, nx);
   Eigen::MatrixXd ua_dev(n, nu), x_dev(n, nx), innovation(n, ny);  // histories for replays
   if (cfg.record_qps) {
-    res.qp_P = mpc.qp_P();
-    res.qp_A = mpc.qp_A();
+    res.qp_P = mpc->qp_P();
+    res.qp_A = mpc->qp_A();
     res.qp_q.resize(n, res.qp_P.rows());
     res.qp_l.resize(n, res.qp_A.rows());
     res.qp_u.resize(n, res.qp_A.rows());
   }
-  Eigen::VectorXd cv_target = cfg.tuning.cv_target, y(ny);
+  Eigen::VectorXd cv_target = pid_control ? y0 : cfg.tuning.cv_target, y(ny);
   GaussianSource gauss(cfg.seed);
+  std::mt19937_64 outlier_bits(cfg.seed ^ 0x9e3779b97f4a7c15ULL);
   size_t next_event = 0;
 
   for (int t = 0; t < n; ++t) {
@@ -224,9 +210,10 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
         case EventKind::Actuator: actuators[j].set(ev.actuator); break;
         case EventKind::CvTarget:
           cv_target[i] = ev.value;
-          mpc.set_cv_target(i, ev.value);
+          if (pid) pid->set_setpoint(i, ev.value);
+          else mpc->set_cv_target(i, ev.value);
           break;
-        case EventKind::MvTarget: mpc.set_mv_target(j, ev.value); break;
+        case EventKind::MvTarget: mpc->set_mv_target(j, ev.value); break;
       }
     }
     // Draw order per sample is fixed: the outputs' innovations, then the extra variables'.
@@ -245,11 +232,17 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
           if (auto& g = gx[i * nx + k]) yi += g->step(t == 0 ? 0.0 : x_dev(t - 1, k));
       y[i] = yi;
     }
-    const Eigen::VectorXd& u = mpc.step(y);
+    if (plant.outlier_probability > 0.0)
+      for (int i = 0; i < ny; ++i) {
+        const std::uint64_t bits = outlier_bits();
+        if (static_cast<double>(bits >> 11) * 0x1.0p-53 < plant.outlier_probability)
+          y[i] += (bits & 1u) ? plant.outlier_size[i] : -plant.outlier_size[i];
+      }
+    const Eigen::VectorXd& u = pid ? pid->step(y) : mpc->step(y);
     if (cfg.record_qps) {
-      res.qp_q.row(t) = mpc.qp_q().transpose();
-      res.qp_l.row(t) = mpc.qp_l().transpose();
-      res.qp_u.row(t) = mpc.qp_u().transpose();
+      res.qp_q.row(t) = mpc->qp_q().transpose();
+      res.qp_l.row(t) = mpc->qp_l().transpose();
+      res.qp_u.row(t) = mpc->qp_u().transpose();
     }
     res.y.row(t) = y.transpose();
     res.u.row(t) = u.transpose();
@@ -259,7 +252,7 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
       ua_dev(t, j) = res.u_actual(t, j) - u0[j];
     }
   }
-  res.failed_solves = mpc.failed_solves();
+  res.failed_solves = mpc ? mpc->failed_solves() : 0;
   return res;
 }
 

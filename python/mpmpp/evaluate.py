@@ -124,9 +124,9 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
     scenario = load_scenario(spec)
     cfg = make_config(config, nominal_model(scenario))
     config_json = cfg.to_json()
-    payload = scenario  # a plain dict: travels to any worker
     started = time.perf_counter()
-    runs, where = run_tasks(run_seed, [(payload, s, config_json) for s in seeds], scheduler, workers,
+    # The scenario travels as a plain dict: picklable to any worker.
+    runs, where = run_tasks(run_seed, [(scenario, s, config_json) for s in seeds], scheduler, workers,
                             progress, unit="runs")
     wall = time.perf_counter() - started
     runs.sort(key=lambda r: r["seed"])

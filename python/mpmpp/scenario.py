@@ -20,10 +20,13 @@ from . import _core
 MODEL_KEYS = {"name", "sample_time_s", "inputs", "outputs", "process", "noise"}
 MAX_SAMPLES = 100_000_000  # ~16 years at 5 s
 TOP_KEYS = MODEL_KEYS | {"truth", "controller", "duration_s", "seed", "events", "notes"}
-TRUTH_KEYS = {"process", "noise", "sigma", "extra", "actuators"}
+TRUTH_KEYS = {"process", "noise", "sigma", "extra", "actuators", "outliers"}
+OUTLIER_KEYS = {"probability", "size"}
 EXTRA_KEYS = {"operating_point", "sigma", "noise", "affects"}
-ACTUATOR_KEYS = {"deadband", "backlash", "min", "max"}
-CONTROLLER_KEYS = {"prediction_horizon", "control_horizon", "cv", "mv", "disturbance"}
+ACTUATOR_KEYS = {"stiction_s", "stiction_j", "deadband", "backlash", "min", "max"}
+CONTROLLER_KEYS = {"kind", "prediction_horizon", "control_horizon", "cv", "mv", "disturbance"}
+PID_KEYS = {"kind", "cv", "mv", "loops"}
+PID_LOOP_KEYS = {"cv", "mv", "gain", "integral_time_s", "derivative_time_s", "derivative_filter", "min", "max"}
 CV_KEYS = {"target", "target_weight", "minmax_weight", "min", "max", "max_move", "scale"}
 MV_KEYS = {"target", "target_weight", "move_weight", "deviation_weight", "minmax_weight",
            "min", "max", "max_move", "soft_min", "soft_max", "scale"}
@@ -133,6 +136,9 @@ class Scenario:
     extra_process: list
     actuators: list
     tuning: Any
+    pid_loops: list
+    outlier_probability: float
+    outlier_size: list
     num_samples: int
     seed: int
     events: list = field(default_factory=list)
@@ -164,7 +170,10 @@ class Scenario:
         plant.extra = self.extra
         plant.extra_process = self.extra_process
         plant.actuators = self.actuators
+        plant.outlier_probability = self.outlier_probability
+        plant.outlier_size = np.asarray(self.outlier_size, float)
         cfg.plant = plant
+        cfg.pid_loops = self.pid_loops
         cfg.num_samples = self.num_samples
         cfg.seed = self.seed if seed is None else _int(seed, "seed")
         cfg.events = self.events
@@ -174,6 +183,10 @@ class Scenario:
 
 def _actuator(spec, where) -> _core.ActuatorNonlinearity:
     a = _core.ActuatorNonlinearity()
+    a.stiction_s = _num(spec.get("stiction_s", 0.0), f"{where}.stiction_s", minimum=0)
+    a.stiction_j = _num(spec.get("stiction_j", 0.0), f"{where}.stiction_j", minimum=0)
+    if a.stiction_j > a.stiction_s:
+        _fail(f"{where}.stiction_j", "must be <= stiction_s")
     a.deadband = _num(spec.get("deadband", 0.0), f"{where}.deadband", minimum=0)
     a.backlash = _num(spec.get("backlash", 0.0), f"{where}.backlash", minimum=0)
     a.min = _limit(spec.get("min"), f"{where}.min", -INF)
@@ -246,6 +259,55 @@ def _tuning(spec, outputs, inputs) -> Any:
     t.mv_min, t.mv_max, t.mv_max_move = (np.array(mv[k]) for k in ("min", "max", "max_move"))
     t.mv_soft_min, t.mv_soft_max = np.array(mv["soft_min"]), np.array(mv["soft_max"])
     return t
+
+
+def _pid(spec, outputs, inputs) -> tuple[Any, list]:
+    """Controller section of kind "pid" -> (MpcTuning holding only the start point, loops).
+    cv.<name>.target is the initial setpoint, mv.<name>.target the initial input (inputs
+    without a loop stay there)."""
+    c = _obj(spec, "controller", PID_KEYS, {"cv", "mv", "loops"})
+    cvs = _obj(c["cv"], "controller.cv", set(outputs), set(outputs))
+    mvs = _obj(c["mv"], "controller.mv", set(inputs), set(inputs))
+    t = _core.MpcTuning()
+    t.cv_target = np.array([_num(_obj(cvs[o], f"controller.cv.{o}", {"target"}, {"target"})["target"],
+                                 f"controller.cv.{o}.target") for o in outputs])
+    t.mv_target = np.array([_num(_obj(mvs[i], f"controller.mv.{i}", {"target"}, {"target"})["target"],
+                                 f"controller.mv.{i}.target") for i in inputs])
+    if not isinstance(c["loops"], list) or not c["loops"]:
+        _fail("controller.loops", "must be a non-empty list")
+    loops, seen = [], set()
+    for k, spec_k in enumerate(c["loops"]):
+        w = f"controller.loops[{k}]"
+        s = _obj(spec_k, w, PID_LOOP_KEYS, {"cv", "mv", "gain", "integral_time_s"})
+        loop = _core.PidLoop()
+        loop.output = _name(s["cv"], f"{w}.cv", outputs, "output")
+        loop.input = _name(s["mv"], f"{w}.mv", inputs, "input")
+        for key, index in (("cv", loop.output), ("mv", loop.input)):
+            if (key, index) in seen:
+                _fail(f"{w}.{key}", "is already in another loop")
+            seen.add((key, index))
+        loop.gain = _num(s["gain"], f"{w}.gain")
+        if loop.gain == 0:
+            _fail(f"{w}.gain", "must be non-zero (its sign is the controller action)")
+        ti = s["integral_time_s"]
+        loop.integral_time_s = INF if ti is None else _num(ti, f"{w}.integral_time_s", positive=True)
+        loop.derivative_time_s = _num(s.get("derivative_time_s", 0.0), f"{w}.derivative_time_s", minimum=0)
+        loop.derivative_filter = _num(s.get("derivative_filter", 10.0), f"{w}.derivative_filter", positive=True)
+        loop.min = _limit(s.get("min"), f"{w}.min", -INF)
+        loop.max = _limit(s.get("max"), f"{w}.max", INF)
+        if not loop.min <= t.mv_target[loop.input] <= loop.max:
+            _fail(f"{w}.min", f"[min, max] must contain the initial input controller.mv.{s['mv']}.target")
+        loops.append(loop)
+    return t, loops
+
+
+def _outliers(spec, outputs) -> tuple[float, list[float]]:
+    o = _obj(spec, "truth.outliers", OUTLIER_KEYS, OUTLIER_KEYS)
+    p = _num(o["probability"], "truth.outliers.probability", minimum=0)
+    if p > 1:
+        _fail("truth.outliers.probability", "must be <= 1")
+    sizes = _obj(o["size"], "truth.outliers.size", set(outputs), set(outputs))
+    return p, [_num(sizes[n], f"truth.outliers.size.{n}", minimum=0) for n in outputs]
 
 
 def _scale_poles(g: _core.TransferFunction, factor: float, where: str) -> _core.TransferFunction:
@@ -323,6 +385,8 @@ def _events(items, sc: Scenario) -> list:
             e.kind = _core.EventKind.cv_target
             e.value = _num(ev.get("value"), f"{w}.value")
         elif kind == "mv_target":
+            if sc.pid_loops:
+                _fail(f"{w}.type", "mv_target events need the MPC (controller.kind 'mpc')")
             e.kind = _core.EventKind.mv_target
             e.value = _num(ev.get("value"), f"{w}.value")
         else:  # extra_channel
@@ -369,7 +433,14 @@ def parse_scenario(spec: dict) -> Scenario:
         acts = _obj(truth["actuators"], "truth.actuators", set(inputs))
         actuators = [_actuator(_obj(acts.get(n, {}), f"truth.actuators.{n}", ACTUATOR_KEYS),
                                f"truth.actuators.{n}") for n in inputs]
-    tuning = _tuning(spec["controller"], outputs, inputs)
+    controller = spec["controller"]
+    kind = controller.get("kind", "mpc") if isinstance(controller, dict) else "mpc"
+    if kind not in ("mpc", "pid"):
+        _fail("controller.kind", f"must be 'mpc' or 'pid', got {kind!r}")
+    tuning, pid_loops = _pid(controller, outputs, inputs) if kind == "pid" else (
+        _tuning(controller, outputs, inputs), [])
+    outlier_probability, outlier_size = (_outliers(truth["outliers"], outputs) if "outliers" in truth
+                                         else (0.0, [0.0] * len(outputs)))
     duration = _num(spec["duration_s"], "duration_s", positive=True)
     num_samples = int(math.floor(duration / ts + 1e-9))
     if num_samples < 1:
@@ -379,7 +450,9 @@ def parse_scenario(spec: dict) -> Scenario:
         _fail("duration_s", f"gives {num_samples} samples, more than {MAX_SAMPLES}")
     sc = Scenario(spec=spec, model=model, truth=truth_model, sigma=sigma,
                   extra_names=extra_names, extra=extra, extra_process=extra_process,
-                  actuators=actuators, tuning=tuning, num_samples=num_samples,
+                  actuators=actuators, tuning=tuning, pid_loops=pid_loops,
+                  outlier_probability=outlier_probability, outlier_size=outlier_size,
+                  num_samples=num_samples,
                   seed=_int(spec.get("seed", 0), "seed"))
     sc.events = _events(spec.get("events", []), sc)
     return sc

@@ -155,3 +155,55 @@ TEST(ClosedLoop, BadInputThrowsInputError) {
 }
 
 }  // namespace
+
+namespace {
+
+// The paper's SISO loop under a PI controller (SIMC-like: K 0.25, Ti 50 s) with one event.
+mpmpp::ClosedLoopConfig pi_siso(int samples, mpmpp::EventKind kind, int sample, double value) {
+  auto c = siso(samples, 0.05);
+  mpmpp::PidLoop l;
+  l.gain = 0.25;
+  l.integral_time_s = 50.0;
+  l.min = 120.0;
+  l.max = 140.0;
+  c.pid_loops = {l};
+  mpmpp::Event ev;
+  ev.sample = sample;
+  ev.kind = kind;
+  ev.output = ev.input = 0;
+  ev.value = value;
+  c.events = {ev};
+  return c;
+}
+
+}  // namespace
+
+TEST(ClosedLoop, PidLoopsReplaceTheMpcAndFollowTheirLaw) {
+  const auto c = pi_siso(3000, mpmpp::EventKind::CvTarget, 1000, 24.5);
+  const auto res = mpmpp::simulate_closed_loop(c);
+  // The recorded commands are the PI law applied to the recorded measurements and setpoints.
+  const Eigen::MatrixXd u = mpmpp::pid_outputs(c.pid_loops, 5.0, vec({131.0}), res.y, res.setpoint);
+  EXPECT_LT((u - res.u).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_LE(res.u.maxCoeff(), 140.0);
+  EXPECT_GE(res.u.minCoeff(), 120.0);
+  EXPECT_NEAR(res.y.bottomRows(500).mean(), 24.5, 0.05);  // integral action: no offset
+  EXPECT_EQ(res.failed_solves, 0);
+}
+
+TEST(ClosedLoop, MvTargetEventsNeedTheMpc) {
+  const auto c = pi_siso(100, mpmpp::EventKind::MvTarget, 10, 1.0);
+  EXPECT_THROW(mpmpp::simulate_closed_loop(c), mpmpp::InputError);
+}
+
+TEST(ClosedLoop, OutliersComeFromTheirOwnStream) {
+  auto clean = siso(2000, 0.05);
+  auto spiked = clean;
+  spiked.plant.outlier_probability = 0.01;
+  spiked.plant.outlier_size = vec({1.0});
+  const auto a = mpmpp::simulate_closed_loop(clean), b = mpmpp::simulate_closed_loop(spiked);
+  // Identical until the first outlier, which is exactly +-1 away; the noise is unchanged.
+  int first = 0;
+  while (first < 2000 && a.y(first, 0) == b.y(first, 0)) ++first;
+  ASSERT_LT(first, 2000);
+  EXPECT_NEAR(std::abs(b.y(first, 0) - a.y(first, 0)), 1.0, 1e-12);
+}

@@ -2,7 +2,7 @@
 // Closed-loop simulation: true plant = MIMO Box-Jenkins
 //   y_i(t) = y0_i + sum_j G0_ij (ua_j - u0_j)(t) + sum_k X_ik (x_k - x0_k)(t) + H0_i (sigma_i e_i)(t) + drift_i(t)
 // (e white Gaussian, unit variance, from a seeded generator), controlled by the MPC on the
-// nominal model. ua is the actuators' actual position: the commanded MV after the optional
+// nominal model or, when pid_loops is given, by decentralised PID loops (pid_controller.hpp). ua is the actuators' actual position: the commanded MV after the optional
 // actuator nonlinearity. x_k are measured extra variables (x_k = x0_k + Hx_k (sigma_k e)),
 // entering outputs through channels X_ik the model lacks. Every filter keeps incremental state,
 // so a run costs O(samples * channels * order) plus one QP per sample.
@@ -20,25 +20,14 @@
 
 #include <Eigen/Dense>
 
+#include "mpmpp/actuator.hpp"
 #include "mpmpp/model.hpp"
 #include "mpmpp/mpc.hpp"
+#include "mpmpp/pid_controller.hpp"
 #include "mpmpp/qp.hpp"
 #include "mpmpp/transfer_function.hpp"
 
 namespace mpmpp {
-
-// Actuator between the MV command and the plant (applied in this order):
-// deadband: the position stays put until the command differs from it by more than
-//   `deadband`, then jumps to the command (stiction-like stick-slip);
-// backlash: play of width `backlash`; the position follows the command only when pushed,
-//   lagging it by half the width;
-// saturation: the position is clipped to [min, max].
-struct ActuatorNonlinearity {
-  double deadband = 0.0;
-  double backlash = 0.0;
-  double min = -std::numeric_limits<double>::infinity();
-  double max = std::numeric_limits<double>::infinity();
-};
 
 // A measured variable outside the model: x = operating_point + noise (sigma e).
 struct ExtraVariable {
@@ -55,6 +44,11 @@ struct Plant {
   std::vector<ExtraVariable> extra;                                           // measured, not in the model
   std::vector<std::vector<std::optional<TransferFunction>>> extra_process;  // [output][extra]; empty = none
   std::vector<ActuatorNonlinearity> actuators;                                // [input]; empty = linear
+  // Measurement outliers (a historian's spikes; the controller sees them too): at each sample
+  // and output, with probability outlier_probability, y is off by +-outlier_size[output].
+  // Drawn from their own seeded stream, so they leave the noise sequence unchanged.
+  double outlier_probability = 0.0;
+  Eigen::VectorXd outlier_size;                                               // [output]
 };
 
 enum class EventKind {
@@ -65,7 +59,7 @@ enum class EventKind {
   Drift,         // output: add the step `value` and set the slope to `rate` (units/sample)
   Actuator,      // input's actuator nonlinearity becomes `actuator`
   CvTarget,      // output's CV target (setpoint) becomes `value`
-  MvTarget,      // input's MV target becomes `value`
+  MvTarget,      // input's MV target becomes `value` (MPC only)
 };
 
 struct Event {
@@ -81,7 +75,8 @@ struct Event {
 
 struct ClosedLoopConfig {
   Model model;    // nominal: what the MPC uses
-  MpcTuning tuning;
+  MpcTuning tuning;               // the MPC's; with pid_loops only cv_target / mv_target (start point)
+  std::vector<PidLoop> pid_loops;  // non-empty: multi-loop PID control instead of the MPC
   Plant plant;    // truth
   Eigen::VectorXd u_operating;  // u0 (start inputs); default: tuning.mv_target
   Eigen::VectorXd y_operating;  // y0; default: tuning.cv_target

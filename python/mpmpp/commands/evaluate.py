@@ -1,12 +1,16 @@
 """``mpmpp evaluate SCENARIO --seeds N``: Monte Carlo detection/false-alarm rates and delays,
-the detector against the variance and residual baselines on the same runs."""
+the detector against the variance and residual baselines on the same runs.
+``mpmpp evaluate --families [NAME,...] --seeds N``: the same per scenario family and preset,
+tuning families next to held-out ones (docs/families.md)."""
 from __future__ import annotations
 
 import json
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("scenario", help="paper_siso | paper_mimo (the paper's examples) | a scenario JSON file")
+    parser.add_argument("scenario", nargs="?", help="paper_siso | paper_mimo (the paper's examples) | a scenario JSON file")
+    parser.add_argument("--families", nargs="?", const="all", metavar="NAME,...",
+                        help="evaluate scenario families instead (all, or a comma-separated list; docs/families.md)")
     parser.add_argument("--seeds", type=int, default=20, metavar="N", help="number of runs (default 20)")
     parser.add_argument("--first-seed", type=int, default=0, metavar="S",
                         help="seeds S..S+N-1 (default 0; e.g. 100 for runs held out from a choice made on 0..99)")
@@ -27,6 +31,17 @@ def run(args) -> int:
     if args.workers is not None and args.workers < 1:
         raise ValueError("--workers: must be >= 1")
     seeds = range(args.first_seed, args.first_seed + args.seeds)
+    if (args.scenario is None) == (args.families is None):
+        raise ValueError("give either SCENARIO or --families")
+    if args.families is not None:
+        from ..family_study import format_table as family_table, run_study
+
+        if args.config:
+            raise ValueError("--config: with --families every preset of the family's size runs")
+        names = None if args.families == "all" else [n.strip() for n in args.families.split(",")]
+        study = run_study(names, seeds, scheduler=args.scheduler, workers=args.workers, progress=not args.json)
+        print(json.dumps(study) if args.json else family_table(study))
+        return 0
     summary = evaluate(args.scenario, seeds, config=args.config, scheduler=args.scheduler,
                        workers=args.workers, progress=not args.json)
     if args.json:

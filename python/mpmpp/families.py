@@ -1,0 +1,373 @@
+"""Scenario families: seeded generators of closed-loop scenarios far wider than the paper's
+two examples, split into TUNING and HELD-OUT sets (docs/families.md).
+
+A :class:`Family` fixes the *kind* of situation (controller, plant size and ranges, noise
+colours, model-file form, record length, sample times, the effects it schedules); its
+``scenario(seed)`` draws one concrete scenario document (docs/scenario.md) from the seed, so a
+family and a seed name a run exactly. With every scenario comes its expectation: what a detector
+should say about it (``mpm`` with the channels where an MPM alarm is a detection and the onset,
+or ``none`` for the controls: no change, a noise change, a drift), returned next to it by
+``draw(seed)``. ``FAMILIES`` lists them; ``family(name)`` looks one up.
+
+Ranges are stated in samples where the detector's difficulty depends on samples (time
+constants, dead times) and in seconds where the user's world fixes them (records, onsets).
+"""
+from __future__ import annotations
+
+import math
+import zlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .scenario import parse_transfer_function
+
+HOUR = 3600.0
+TUNING, HELD_OUT = "tuning", "held_out"
+# Training must end before any change: the longest training of the presets is 8 h (mimo).
+LATEST_TRAINING_S = 8 * HOUR
+MPM_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "input_nonlinearity")
+CONTROL_EFFECTS = ("none", "noise_change", "output_drift")
+
+
+@dataclass(frozen=True)
+class Family:
+    """One scenario family; every field is a choice the seed draws within."""
+
+    name: str
+    split: str                          # TUNING or HELD_OUT
+    summary: str
+    controller: str                     # "mpc" | "mpc_move_limits" | "pi" | "pid"
+    size: int                           # 1..3 outputs = inputs
+    effects: tuple                      # drawn uniformly per seed (MPM_EFFECTS, CONTROL_EFFECTS,
+                                        # "unmodeled_input")
+    sample_times_s: tuple = (5.0,)
+    time_constant_samples: tuple = (3.0, 30.0)   # a decade
+    dead_time_samples: tuple = (1, 10)           # a decade
+    noise_colours: tuple = ("white", "ar1", "arma11")
+    model_forms: tuple = ("discrete+noise",)     # "discrete+noise" | "discrete" | "foptd"
+    record_hours: tuple = (16.0, 20.0)
+    setpoint_steps: bool = False
+    step_ramp_disturbances: bool = False
+    outliers: bool = False
+    details: dict = field(default_factory=dict)
+
+    def draw(self, seed: int, record_s: float | None = None, effect: str | None = None) -> tuple[dict, dict]:
+        """(scenario document, expectation) for `seed`; the scenario's noise seed derives from
+        it too. record_s shortens the record (and moves the onset into it) for quick checks;
+        effect forces one of the family's effects instead of drawing it.
+        Expectation: kind "mpm" (an MPM alarm on one of `channels` at or after `onset_s` is a
+        detection), "none" (a control: any MPM alarm is false) or "any" (an unmodelled input:
+        an MPM or noise alarm on `output` counts); `effect` and `size` name what changed."""
+        if effect is not None and effect not in self.effects:
+            raise ValueError(f"effect: {effect!r} is not an effect of family {self.name} ({', '.join(self.effects)})")
+        rng = np.random.default_rng([zlib.crc32(self.name.encode()), int(seed)])
+        return _draw(self, rng, int(seed), record_s, effect)
+
+    def scenario(self, seed: int, record_s: float | None = None) -> dict:
+        return self.draw(seed, record_s)[0]
+
+
+# ---- drawing -------------------------------------------------------------------------------
+
+def _log_uniform(rng, lo, hi):
+    return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+
+
+def _channel(gain, tau_samples, delay, ts):
+    """Discrete FOPTD: K (1 - a) q^-d / (1 - a q^-1), a = exp(-1/tau); y responds at k + d."""
+    a = math.exp(-1.0 / tau_samples)
+    return {"num": [gain * (1 - a)], "den": [1.0, -a], "delay": int(delay)}
+
+
+def _foptd(gain, tau_samples, delay, ts):
+    """The same channel in continuous form: a zero-order hold adds the one sample, so a dead
+    time of (d - 1) Ts makes y respond at k + d, like the discrete form."""
+    return {"gain": gain, "time_constant_s": tau_samples * ts, "dead_time_s": (delay - 1) * ts}
+
+
+def _noise(rng, colour):
+    """A monic, stable, inversely stable ARMA noise model of the given colour."""
+    if colour == "white":
+        return {"num": [1.0], "den": [1.0]}
+    if colour == "ar1":  # low-pass, slow
+        return {"num": [1.0], "den": [1.0, -rng.uniform(0.5, 0.9)]}
+    if colour == "arma11":  # the paper's kind: pole and zero of either sign
+        p, z = rng.uniform(0.3, 0.7) * rng.choice([-1, 1]), rng.uniform(0.1, 0.5) * rng.choice([-1, 1])
+        return {"num": [1.0, z], "den": [1.0, p]}
+    if colour == "ar2":  # oscillatory: complex pole pair
+        r, w = rng.uniform(0.6, 0.9), rng.uniform(0.3, 1.2)
+        return {"num": [1.0], "den": [1.0, -2 * r * math.cos(w), r * r]}
+    if colour == "arma22":
+        p = rng.uniform(0.2, 0.85, 2) * rng.choice([-1, 1], 2)
+        z = rng.uniform(0.1, 0.6, 2) * rng.choice([-1, 1], 2)
+        return {"num": list(np.real(np.poly(z))), "den": list(np.real(np.poly(p)))}
+    if colour == "highpass":  # blue: a zero near 1
+        return {"num": [1.0, -rng.uniform(0.5, 0.9)], "den": [1.0, rng.uniform(-0.3, 0.3)]}
+    raise ValueError(f"unknown noise colour {colour!r}")
+
+
+def _plant(fam, rng, ts):
+    """Gains, time constants (samples), delays per channel; diagonal channels always, the
+    others with probability 0.6 and a third of the diagonal's gain at most, so multi-loop
+    control along the diagonal stays stable. y1 <- u_n is always absent: a coupling a
+    missing_coupling effect can add."""
+    n = fam.size
+    lo_t, hi_t = fam.time_constant_samples
+    lo_d, hi_d = fam.dead_time_samples
+    chans = {}
+    for i in range(n):
+        k_ii = _log_uniform(rng, 0.5, 5.0) * rng.choice([-1.0, 1.0])
+        for j in range(n):
+            if i != j and (rng.uniform() > 0.6 or (i, j) == (0, n - 1)):
+                continue
+            k = k_ii if i == j else abs(k_ii) * rng.uniform(0.1, 0.33) / max(n - 1, 1) * rng.choice([-1.0, 1.0])
+            tau = _log_uniform(rng, lo_t, hi_t)
+            d = int(round(_log_uniform(rng, lo_d, hi_d)))
+            chans[(i, j)] = (k, tau, max(d, 1))
+    return chans
+
+
+def _pid_tuning(k, tau, d, ts, rng, derivative):
+    """SIMC rules (Skogestad 2003) for a FOPTD channel, tau_c = lambda * theta, lambda in [1, 3]:
+    Kc = tau / (K (tau_c + theta)), Ti = min(tau, 4 (tau_c + theta)); PID adds Td = theta / 3."""
+    theta = d * ts
+    tau_s = tau * ts
+    tau_c = rng.uniform(1.0, 3.0) * theta
+    loop = {"gain": tau_s / (k * (tau_c + theta)), "integral_time_s": min(tau_s, 4 * (tau_c + theta))}
+    if derivative:
+        loop["derivative_time_s"] = theta / 3.0
+    return loop
+
+
+def _draw(fam: Family, rng, seed: int, record_s: float | None, forced_effect: str | None):
+    ts = float(rng.choice(fam.sample_times_s))
+    n = fam.size
+    outs, ins = [f"y{i + 1}" for i in range(n)], [f"u{j + 1}" for j in range(n)]
+    chans = _plant(fam, rng, ts)
+    form = str(rng.choice(fam.model_forms))
+    make = _foptd if form == "foptd" else _channel
+    process = {o: {} for o in outs}
+    for (i, j), (k, tau, d) in chans.items():
+        process[outs[i]][ins[j]] = make(k, tau, d, ts)
+    noise = {o: _noise(rng, str(rng.choice(fam.noise_colours))) for o in outs}
+    sigma = {o: 1.0 for o in outs}
+    y0 = {o: float(np.round(rng.uniform(10, 100), 1)) for o in outs}
+    u0 = {u: float(np.round(rng.uniform(20, 80), 1)) for u in ins}
+    record = record_s or HOUR * rng.uniform(*fam.record_hours)
+    record = ts * math.floor(record / ts)
+    spec = {"name": f"{fam.name} seed {seed}", "sample_time_s": ts, "inputs": ins, "outputs": outs,
+            "process": process, "truth": {"sigma": sigma, "noise": noise},
+            "duration_s": record, "seed": int(rng.integers(2**31)), "events": []}
+    if form == "discrete+noise":
+        spec["noise"] = noise
+    diag_gain = [chans[(i, i)][0] for i in range(n)]
+    spec["controller"] = _controller(fam, rng, ts, chans, outs, ins, y0, u0)
+    events = spec["events"]
+    if fam.setpoint_steps:
+        _setpoint_steps(rng, ts, record, outs, y0, events)
+    if fam.step_ramp_disturbances:
+        _step_ramp(rng, ts, record, outs, events)
+    if fam.outliers:
+        spec["truth"]["outliers"] = {"probability": float(rng.uniform(2e-4, 2e-3)),
+                                     "size": {o: float(rng.uniform(5, 10)) for o in outs}}
+    # The onset: at 55-70 % of the record, and after the longest training (with room for its
+    # last window) where the record leaves 4 h after that to detect the change.
+    earliest = LATEST_TRAINING_S + HOUR if record_s is None else 0.5 * record
+    onset = max(rng.uniform(0.55, 0.7) * record, earliest if record - earliest >= 4 * HOUR else 0.5 * record)
+    onset = ts * math.floor(onset / ts)
+    effect = str(rng.choice(fam.effects))
+    effect = forced_effect or effect  # drawn either way: forcing leaves every other draw unchanged
+    expect = _effect(effect, rng, spec, chans, diag_gain, onset, ts)
+    expect["effect"] = effect
+    events.sort(key=lambda e: e["time_s"])
+    spec["notes"] = f"family {fam.name} ({fam.split}), seed {seed}, model form {form}"
+    return spec, expect
+
+
+def _controller(fam, rng, ts, chans, outs, ins, y0, u0):
+    n = fam.size
+    if fam.controller in ("pi", "pid"):
+        loops = []
+        for i in range(n):
+            k, tau, d = chans[(i, i)]
+            loop = {"cv": outs[i], "mv": ins[i], **_pid_tuning(k, tau, d, ts, rng, fam.controller == "pid")}
+            if n > 1:  # multi-loop: detune against the interaction
+                loop["gain"] *= 0.7
+            # Output saturation a few noise-compensating moves from the start: binds now and then.
+            span = rng.uniform(4.0, 10.0) / abs(k)
+            loop["min"], loop["max"] = u0[ins[i]] - span, u0[ins[i]] + span
+            loops.append(loop)
+        return {"kind": "pid", "cv": {o: {"target": y0[o]} for o in outs},
+                "mv": {u: {"target": u0[u]} for u in ins}, "loops": loops}
+    hp = int(min(60, max(10, math.ceil(3 * max(c[1] for c in chans.values())))))
+    mv = {}
+    for j, u in enumerate(ins):
+        k = chans[(j, j)][0]
+        entry = {"target": u0[u], "move_weight": _log_uniform(rng, 0.3, 3.0) * k * k,
+                 "min": u0[u] - 200 / abs(k), "max": u0[u] + 200 / abs(k)}
+        if fam.controller == "mpc_move_limits":
+            entry["max_move"] = rng.uniform(0.1, 0.3) / abs(k)  # binds on most noise-driven moves
+        mv[u] = entry
+    return {"prediction_horizon": hp, "control_horizon": int(rng.integers(1, 4)),
+            "cv": {o: {"target": y0[o]} for o in outs}, "mv": mv}
+
+
+def _times(rng, ts, record, count):
+    return sorted({ts * math.floor(rng.uniform(0.02, 0.98) * record / ts) for _ in range(count)})
+
+
+def _setpoint_steps(rng, ts, record, outs, y0, events):
+    """Setpoint steps of 2-5 noise sd, 0.5-2 h apart (operators' and grade changes): the
+    external excitation that makes a short-delay loop under a low-order linear controller
+    identifiable at all."""
+    for o in outs:
+        t = rng.uniform(0.1, 1.0) * HOUR
+        while t < record - ts:
+            events.append({"time_s": ts * math.floor(t / ts), "type": "setpoint", "output": o,
+                           "value": y0[o] + float(rng.uniform(2, 5) * rng.choice([-1, 1]))})
+            t += rng.uniform(0.5, 2.0) * HOUR
+
+
+def _step_ramp(rng, ts, record, outs, events):
+    """Unmeasured step and ramp disturbances (a few noise sd) on random outputs; each ramp
+    stops after 10-60 min."""
+    for t in _times(rng, ts, record, 2):
+        o = str(rng.choice(outs))
+        if rng.uniform() < 0.5:
+            events.append({"time_s": t, "type": "drift", "output": o, "offset": float(rng.uniform(-3, 3))})
+        else:
+            stop = min(t + ts * math.floor(rng.uniform(600, 3600) / ts), record - ts)
+            events.append({"time_s": t, "type": "drift", "output": o, "rate_per_s": float(rng.uniform(-3, 3) / 1800)})
+            events.append({"time_s": stop, "type": "drift", "output": o, "rate_per_s": 0.0})
+
+
+def _effect(effect, rng, spec, chans, diag_gain, onset, ts) -> dict:
+    """Schedules the family's effect at `onset`; returns the expectation for scoring."""
+    outs, ins, events = spec["outputs"], spec["inputs"], spec["events"]
+    modelled = [(outs[i], ins[j]) for (i, j) in chans]
+    if effect == "none":
+        return {"kind": "none", "onset_s": None, "channels": []}
+    if effect == "noise_change":
+        o = str(rng.choice(outs))
+        if rng.uniform() < 0.5:
+            events.append({"time_s": onset, "type": "noise", "output": o, "model": _noise(rng, "arma11")})
+        else:
+            events.append({"time_s": onset, "type": "sigma", "output": o, "value": float(rng.choice([0.5, 2.0]))})
+        return {"kind": "none", "onset_s": onset, "channels": [], "output": o}
+    if effect == "output_drift":
+        o = str(rng.choice(outs))
+        events.append({"time_s": onset, "type": "drift", "output": o, "offset": float(rng.uniform(-2, 2)),
+                       "rate_per_s": float(rng.uniform(1, 4) * rng.choice([-1, 1]) / HOUR)})
+        return {"kind": "none", "onset_s": onset, "channels": [], "output": o}
+    if effect in ("gain", "time_constant", "delay"):
+        (o, u) = modelled[int(rng.integers(len(modelled)))]
+        i, j = outs.index(o), ins.index(u)
+        ev = {"time_s": onset, "type": effect, "output": o, "input": u}
+        if effect == "gain":
+            size = float(rng.choice([0.5, 0.625, 1.6, 2.0]))
+            ev["factor"] = size
+        elif effect == "time_constant":
+            size = float(rng.choice([0.33, 0.5, 2.0, 3.0]))
+            ev["factor"] = size
+        else:
+            d = parse_transfer_function(spec["process"][o][u], "process", ts).delay
+            size = int(max(1, round(d * float(rng.choice([0.5, 1.5, 2.0])))))
+            size = size if size != d else d + 2
+            ev["delay"] = size
+        events.append(ev)
+        return {"kind": "mpm", "onset_s": onset, "channels": [[o, u]], "size": size}
+    if effect == "missing_coupling":
+        absent = [(i, j) for i in range(len(outs)) for j in range(len(ins)) if (i, j) not in chans]
+        i, j = absent[int(rng.integers(len(absent)))]
+        k = abs(diag_gain[i]) * rng.uniform(0.3, 0.6) * rng.choice([-1, 1])
+        tau, d = chans[(i, i)][1], chans[(i, i)][2]
+        events.append({"time_s": onset, "type": "process", "output": outs[i], "input": ins[j],
+                       "model": _channel(k, tau, d, ts)})
+        return {"kind": "mpm", "onset_s": onset, "size": float(k),
+                "channels": [[outs[i], u] for (o2, u) in modelled if o2 == outs[i]]}
+    if effect == "input_nonlinearity":
+        j = int(rng.integers(len(ins)))
+        u = ins[j]
+        move = 1.0 / abs(diag_gain[j])  # the input move that offsets one noise sd
+        kind = str(rng.choice(["stiction", "backlash", "deadband", "saturation"]))
+        size = float(rng.choice([0.5, 1.0, 2.0]))
+        ev = {"time_s": onset, "type": "actuator", "input": u}
+        if kind == "stiction":
+            ev["stiction_s"] = size * move
+            ev["stiction_j"] = float(rng.uniform(0.2, 0.8)) * size * move
+        elif kind in ("backlash", "deadband"):
+            ev[kind] = size * move
+        else:
+            u0 = spec["controller"]["mv"][u]["target"]
+            ev["min"], ev["max"] = u0 - size * move, u0 + size * move
+        events.append(ev)
+        return {"kind": "mpm", "onset_s": onset, "nonlinearity": kind, "size": size,
+                "channels": [[o, u2] for (o, u2) in modelled if u2 == u]}
+    if effect == "unmodeled_input":
+        # A measured variable the model lacks starts to act on one output.
+        o = str(rng.choice(outs))
+        i = outs.index(o)
+        spec["truth"]["extra"] = {"x1": {"operating_point": 5.0, "sigma": 1.0,
+                                         "noise": {"num": [1.0], "den": [1.0, -rng.uniform(0.8, 0.97)]}}}
+        tau, d = chans[(i, i)][1], chans[(i, i)][2]
+        events.append({"time_s": onset, "type": "extra_channel", "output": o, "extra": "x1",
+                       "model": _channel(float(rng.uniform(0.5, 1.5) * rng.choice([-1, 1])), tau, d, ts)})
+        return {"kind": "any", "onset_s": onset, "output": o,
+                "channels": [[o, u] for (o2, u) in modelled if o2 == o]}
+    raise ValueError(f"unknown effect {effect!r}")
+
+
+# ---- the families --------------------------------------------------------------------------
+# TUNING: the project's MPC (SISO and 2x2) and single-loop PI, 5-10 s sampling, white /
+# first-order / ARMA(1,1) noise. HELD-OUT: what the tuning never sees: PID with derivative
+# action and multi-loop PI, MPC with binding move limits, 3x3 plants, 1-2 s and 30-60 s
+# sampling, records of days, second-order noise colours, step/ramp disturbances and outliers.
+_EFFECTS_SISO = ("gain", "time_constant", "delay", "input_nonlinearity")
+_EFFECTS_MIMO = _EFFECTS_SISO + ("missing_coupling",)
+
+FAMILIES = [
+    Family("mpc_siso", TUNING, "project MPC, SISO, discrete model with noise model",
+           "mpc", 1, _EFFECTS_SISO, setpoint_steps=True, sample_times_s=(5.0, 10.0)),
+    Family("mpc_siso_controls", TUNING, "project MPC, SISO: no change, noise change, drift",
+           "mpc", 1, CONTROL_EFFECTS, setpoint_steps=True, sample_times_s=(5.0, 10.0)),
+    Family("mpc_2x2", TUNING, "project MPC, 2x2, discrete model with or without noise model",
+           "mpc", 2, _EFFECTS_MIMO, time_constant_samples=(2.0, 20.0), setpoint_steps=True, sample_times_s=(5.0, 10.0),
+           model_forms=("discrete+noise", "discrete")),
+    Family("mpc_2x2_controls", TUNING, "project MPC, 2x2: no change, noise change, drift",
+           "mpc", 2, CONTROL_EFFECTS, time_constant_samples=(2.0, 20.0), setpoint_steps=True, sample_times_s=(5.0, 10.0),
+           model_forms=("discrete+noise", "discrete")),
+    Family("pi_siso", TUNING, "single PI loop with setpoint steps and output saturation, FOPTD model "
+           "without noise model", "pi", 1, _EFFECTS_SISO + ("none",), sample_times_s=(5.0, 10.0),
+           model_forms=("foptd",), setpoint_steps=True),
+    Family("pid_siso_slow", HELD_OUT, "PID (derivative on measurement), 30-60 s sampling, 2-3 day "
+           "records, second-order noise, FOPTD or discrete model without noise model", "pid", 1,
+           _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(30.0, 60.0),
+           noise_colours=("ar2", "arma22"), model_forms=("foptd", "discrete"),
+           record_hours=(48.0, 72.0), setpoint_steps=True),
+    Family("multi_pi_2x2", HELD_OUT, "two PI loops on a 2x2 plant, setpoint steps, saturation, "
+           "step/ramp disturbances", "pi", 2, _EFFECTS_MIMO + ("output_drift",),
+           time_constant_samples=(2.0, 20.0), sample_times_s=(15.0, 30.0), noise_colours=("ar2", "highpass"),
+           model_forms=("foptd", "discrete"), setpoint_steps=True, step_ramp_disturbances=True),
+    Family("mpc_3x3_move_limits", HELD_OUT, "project MPC with binding move limits, 3x3, "
+           "ARMA(2,2) / high-pass noise, outliers", "mpc_move_limits", 3,
+           _EFFECTS_MIMO + ("none", "noise_change"), time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 15.0),
+           noise_colours=("arma22", "highpass"), model_forms=("discrete+noise", "discrete"),
+           outliers=True),
+    Family("mpc_siso_fast", HELD_OUT, "project MPC with binding move limits, SISO, 1-2 s sampling, "
+           "step/ramp disturbances and outliers, unmodelled measured variable", "mpc_move_limits", 1,
+           _EFFECTS_SISO + ("unmodeled_input", "output_drift", "none"), sample_times_s=(1.0, 2.0),
+           time_constant_samples=(10.0, 100.0), dead_time_samples=(2, 20),
+           noise_colours=("ar2", "arma22", "highpass"), model_forms=("discrete+noise", "foptd"),
+           record_hours=(14.0, 16.0), step_ramp_disturbances=True, outliers=True),
+    Family("pi_siso_short", HELD_OUT, "single PI loop, records of 2-8 h (shorter than the presets' "
+           "training plus a window: detect refuses the shortest)", "pi", 1, ("gain", "time_constant", "none"),
+           sample_times_s=(1.0, 2.0, 5.0), model_forms=("foptd",), record_hours=(2.0, 8.0), setpoint_steps=True),
+]
+
+
+def family(name: str) -> Family:
+    for f in FAMILIES:
+        if f.name == name:
+            return f
+    raise ValueError(f"unknown family {name!r} (known: {', '.join(f.name for f in FAMILIES)})")

@@ -1,0 +1,160 @@
+"""Detection on scenario families (``mpmpp evaluate --families``, studies/detection_families.py).
+
+Each run draws one scenario of a family (``mpmpp.families``) from its seed, simulates it once
+and runs ``detect`` with every preset of the run's size on the same data (``siso`` and
+``paper_siso`` for one output, ``mimo`` and ``paper_mimo`` otherwise). Scoring per run and
+preset, from the family's expectation:
+
+* false MPM alarm: an MPM alarm starting before the change; in a control run (no change, a
+  noise change, a drift) any MPM alarm at all;
+* detected (change runs): an MPM alarm on one of the expected channels starting at or after
+  the change (for an unmodelled measured input also a noise alarm on its output);
+* delay: the first such alarm start minus the change time;
+* mislocated: an MPM alarm at or after the change only on channels outside the expected ones;
+* refused: detect raised an error on the data (counted as no alarm: not detected, no false alarm).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import families as fam
+from .detect import channel_label, detect, make_config
+from .evaluate import nominal_model, run_parallel
+from .simulate import simulate
+
+def presets_for(size: int) -> tuple:
+    """The recommended and the paper's preset for a plant of `size` outputs."""
+    return ("siso", "paper_siso") if size == 1 else ("mimo", "paper_mimo")
+
+
+def score(alarms: dict, expect: dict) -> dict:
+    """One run's alarm starts ({label: [seconds from the start]}) against its expectation."""
+    onset = expect["onset_s"]
+    mpm = {k: v for k, v in alarms.items() if k.startswith("G[")}
+    control = expect["kind"] == "none"
+    before = math.inf if control or onset is None else onset
+    false_mpm = any(s < before for v in mpm.values() for s in v)
+    out = {"false_mpm": bool(false_mpm), "detected": None, "delay_s": None, "mislocated": None}
+    if control:
+        return out
+    hits = [f"G[{o} <- {i}]" for o, i in expect["channels"]]
+    if expect["kind"] == "any":
+        hits.append(f"H[{expect['output']}]")
+    after = [s for k in hits for s in alarms.get(k, []) if s >= onset]
+    out["detected"] = bool(after)
+    out["delay_s"] = min(after) - onset if after else None
+    elsewhere = any(s >= onset for k, v in mpm.items() if k not in hits for s in v)
+    out["mislocated"] = bool(elsewhere and not after)
+    return out
+
+
+def run_family_seed(name: str, seed: int, record_s: float | None = None, configs: dict | None = None,
+                    effect: str | None = None) -> dict:
+    """Simulate one draw of family `name` and score every preset of its size on it, or every
+    detector config of `configs` ({label: preset name, config dict or file}). effect forces
+    one of the family's effects (Family.draw)."""
+    family = fam.family(name)
+    spec, expect = family.draw(seed, record_s, effect)
+    model = nominal_model(spec)
+    t0 = time.perf_counter()
+    data = simulate(spec)
+    result = {"family": name, "split": family.split, "seed": int(seed), "expect": expect,
+              "samples": len(data), "sample_time_s": spec["sample_time_s"], "presets": {},
+              "seconds": {"simulate": time.perf_counter() - t0}}
+    configs = configs or {p: p for p in presets_for(family.size)}
+    for preset, given in configs.items():
+        config = make_config(given, model)
+        t1 = time.perf_counter()
+        try:
+            det = detect(model, data, config.train_duration_s, config)
+        except ValueError as exc:  # the detector refuses the data (e.g. no usable training window)
+            result["presets"][preset] = {**score({}, expect), "refused": str(exc), "alarms": {}}
+            continue
+        alarms = {channel_label(c): [float(s) - float(data["time"].iloc[0]) for s in det.alarm_starts(k)]
+                  for k, c in enumerate(det.channels)}
+        result["presets"][preset] = {**score(alarms, expect), "refused": None, "alarms": alarms}
+        result["seconds"][preset] = time.perf_counter() - t1
+    return result
+
+
+def run_study(names=None, seeds=range(4), record_s=None, scheduler=None, workers=None,
+              progress: bool = True, configs: dict | None = None) -> dict:
+    """Every (family, seed) run in parallel (``evaluate.run_parallel``); rows per family and
+    preset (or per label of `configs`, see run_family_seed)."""
+    names = [f.name for f in fam.FAMILIES] if names is None else list(names)
+    for n in names:
+        fam.family(n)  # unknown names fail before any work starts
+    seeds = list(seeds)
+    started = time.perf_counter()
+    runs, where = run_parallel(run_family_seed, [(n, s, record_s, configs) for n in names for s in seeds],
+                               scheduler, workers, progress)
+    runs.sort(key=lambda r: (names.index(r["family"]), r["seed"]))
+    return {"rows": summarise(runs, names, configs), "runs": runs, "seeds": seeds, "where": where,
+            "wall_seconds": time.perf_counter() - started}
+
+
+def summarise(runs: list, names: list, configs: dict | None = None) -> list:
+    rows = []
+    for name in names:
+        f = fam.family(name)
+        mine = [r for r in runs if r["family"] == name]
+        for preset in configs or presets_for(f.size):
+            scored = [r["presets"][preset] for r in mine]
+            changes = [s for s in scored if s["detected"] is not None]
+            delays = np.array([s["delay_s"] for s in changes if s["delay_s"] is not None], float)
+            rows.append({"family": name, "split": f.split, "preset": preset, "runs": len(scored),
+                         "changes": len(changes), "detected": sum(s["detected"] for s in changes),
+                         "false_mpm": sum(s["false_mpm"] for s in scored),
+                         "mislocated": sum(s["mislocated"] for s in changes),
+                         "refused": sum(s["refused"] is not None for s in scored),
+                         "delay_median_s": float(np.median(delays)) if delays.size else None,
+                         "delay_p90_s": float(np.percentile(delays, 90)) if delays.size else None})
+    return rows
+
+
+def by_effect(runs: list) -> list:
+    """Runs pooled per split, preset kind (recommended: siso/mimo; paper: paper_*) and effect
+    (actuator nonlinearities by kind): detected and false-MPM-alarm counts."""
+    cells = {}
+    for r in runs:
+        e = r["expect"]
+        effect = e["effect"] + (f":{e['nonlinearity']}" if "nonlinearity" in e else "")
+        for preset, v in r["presets"].items():
+            kind = "paper" if preset.startswith("paper_") else preset if preset not in ("siso", "mimo") else "recommended"
+            c = cells.setdefault((r["split"], kind, effect), {"runs": 0, "detected": 0, "false_mpm": 0})
+            c["runs"] += 1
+            c["detected"] += bool(v["detected"])
+            c["false_mpm"] += v["false_mpm"]
+    order = sorted(cells, key=lambda k: (k[0] != fam.TUNING, k[1] != "recommended", k[2]))
+    return [{"split": k[0], "presets": k[1], "effect": k[2], **cells[k]} for k in order]
+
+
+def _rate(k, n):
+    return "-" if n == 0 else f"{k}/{n} ({100 * k / n:.0f}%)"
+
+
+def format_table(study: dict) -> str:
+    """Markdown tables: per family and preset (tuning families first, then held-out), then per
+    effect pooled over the families of each split."""
+    seeds = study["seeds"]
+    lines = [f"scenario families, seeds {min(seeds)}-{max(seeds)}: {study['wall_seconds']:.0f} s wall on "
+             f"{study['where']}", "",
+             "| split | family | preset | detected | false MPM alarm | mislocated only | detect refused | "
+             "delay median (h) | delay p90 (h) |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for split in (fam.TUNING, fam.HELD_OUT):
+        for r in (r for r in study["rows"] if r["split"] == split):
+            h = lambda s: "-" if s is None else f"{s / 3600:.2f}"  # noqa: E731
+            lines.append(f"| {split} | {r['family']} | {r['preset']} | {_rate(r['detected'], r['changes'])} | "
+                         f"{_rate(r['false_mpm'], r['runs'])} | {_rate(r['mislocated'], r['changes'])} | "
+                         f"{_rate(r['refused'], r['runs'])} | "
+                         f"{h(r['delay_median_s'])} | {h(r['delay_p90_s'])} |")
+    lines += ["", "| split | presets | effect | detected | false MPM alarm |", "| --- | --- | --- | --- | --- |"]
+    for c in by_effect(study["runs"]):
+        changed = c["effect"].split(":")[0] not in fam.CONTROL_EFFECTS
+        lines.append(f"| {c['split']} | {c['presets']} | {c['effect']} | "
+                     f"{_rate(c['detected'], c['runs']) if changed else '-'} | {_rate(c['false_mpm'], c['runs'])} |")
+    return "\n".join(lines)

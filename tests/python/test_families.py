@@ -1,0 +1,141 @@
+"""Scenario families (mpmpp.families): every family simulates, draws are reproducible, the
+delay convention matches the data contract exactly, and the study's scoring."""
+import copy
+import math
+
+import numpy as np
+import pytest
+
+import mpmpp
+from mpmpp import families
+from mpmpp.evaluate import nominal_model
+from mpmpp.family_study import score
+from mpmpp.scenario import parse_scenario
+
+SHORT_S = 2 * 3600.0
+NAMES = [f.name for f in families.FAMILIES]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_family_simulates(name):
+    fam = families.family(name)
+    for seed in range(2):
+        spec, expect = fam.draw(seed, record_s=SHORT_S)
+        sc = parse_scenario(spec)
+        assert len(sc.outputs) == fam.size and spec["sample_time_s"] in fam.sample_times_s
+        df = mpmpp.simulate(spec)
+        assert len(df) == sc.num_samples and np.isfinite(df.to_numpy()).all()
+        model = nominal_model(spec)
+        assert all(tuple(c) in set(model.channels()) for c in expect["channels"])
+        if expect["kind"] != "none" or expect["effect"] != "none":
+            assert any(ev["time_s"] == expect["onset_s"] for ev in spec["events"])
+
+
+def test_draws_are_reproducible_and_seeds_differ():
+    fam = families.family("mpc_2x2")
+    assert fam.draw(3) == fam.draw(3)
+    assert fam.draw(3)[0] != fam.draw(4)[0]
+
+
+def test_split_and_coverage():
+    """Both splits exist; the held-out set has controllers, sizes, sample times and noise
+    colours the tuning set never uses; every effect of the vocabulary is scheduled somewhere."""
+    tuning = [f for f in families.FAMILIES if f.split == families.TUNING]
+    held = [f for f in families.FAMILIES if f.split == families.HELD_OUT]
+    assert tuning and held
+    seen = lambda fs, attr: {v for f in fs for v in (getattr(f, attr) if isinstance(getattr(f, attr), tuple)
+                                                     else (getattr(f, attr),))}  # noqa: E731
+    for attr in ("controller", "size", "sample_times_s", "noise_colours"):
+        assert seen(held, attr) - seen(tuning, attr), attr
+    effects = seen(families.FAMILIES, "effects")
+    assert set(families.MPM_EFFECTS) | set(families.CONTROL_EFFECTS) | {"unmodeled_input"} <= effects
+    assert {1, 2, 3} <= seen(families.FAMILIES, "size")
+    assert min(seen(families.FAMILIES, "sample_times_s")) == 1.0 and max(seen(families.FAMILIES, "sample_times_s")) == 60.0
+
+
+def first_change(x, start):
+    moved = np.flatnonzero(np.abs(x[start:] - x[start]) > 1e-9 * max(1.0, abs(x[start])))
+    return start + int(moved[0])
+
+
+def contract_delay(channel, ts):
+    """FORMATS.md: a discrete channel's `delay`; a FOPTD channel: its dead time in samples plus
+    the zero-order hold's one sample (the first sample after theta)."""
+    if "delay" in channel:
+        return channel["delay"] + (np.flatnonzero(channel["num"])[0])
+    return int(round(channel["dead_time_s"] / ts)) + 1
+
+
+@pytest.mark.parametrize("name", ["mpc_siso", "pi_siso", "pid_siso_slow", "mpc_siso_fast"])
+def test_delay_convention_matches_the_contract(name):
+    """Noise off, one setpoint step at sample s: the controller moves u at s and y first
+    responds at s + d, d the model file's delay (step at k -> response at k + d)."""
+    for seed in range(3):
+        spec, _ = families.family(name).draw(seed, record_s=SHORT_S)
+        spec = copy.deepcopy(spec)
+        ts = spec["sample_time_s"]
+        spec["truth"]["sigma"] = {o: 0.0 for o in spec["outputs"]}
+        spec["truth"].pop("outliers", None)
+        spec["truth"].pop("extra", None)
+        s = 100
+        target = spec["controller"]["cv"]["y1"]["target"]
+        spec["events"] = [{"time_s": s * ts, "type": "setpoint", "output": "y1", "value": target + 1.0}]
+        df = mpmpp.simulate(spec)
+        channel = spec["process"]["y1"]["u1"]
+        d = contract_delay(channel, ts)
+        assert first_change(df["u1"].to_numpy(), 1) == s
+        assert first_change(df["y1"].to_numpy(), 1) == s + d
+        # the model reader agrees: the loaded channel's impulse response starts at d
+        g = nominal_model(spec).process("y1", "u1")
+        assert g.delay + int(np.flatnonzero(np.abs(g.num) > 0)[0]) == d
+
+
+def test_score():
+    expect = {"kind": "mpm", "onset_s": 100.0, "channels": [["y1", "u1"]]}
+    assert score({"G[y1 <- u1]": [150.0], "H[y1]": []}, expect) == {
+        "false_mpm": False, "detected": True, "delay_s": 50.0, "mislocated": False}
+    assert score({"G[y1 <- u1]": [50.0]}, expect)["false_mpm"]
+    assert score({"G[y1 <- u2]": [120.0], "G[y1 <- u1]": []}, expect)["mislocated"]
+    control = {"kind": "none", "onset_s": 100.0, "channels": []}
+    assert score({"G[y1 <- u1]": [150.0]}, control) == {
+        "false_mpm": True, "detected": None, "delay_s": None, "mislocated": None}
+    anything = {"kind": "any", "onset_s": 100.0, "channels": [["y1", "u1"]], "output": "y1"}
+    assert score({"H[y1]": [130.0]}, anything)["detected"]
+    assert not math.isnan(score({}, anything)["detected"])
+
+
+def test_forced_effect():
+    fam = families.family("pi_siso")
+    spec, expect = fam.draw(5, effect="none")
+    assert expect["effect"] == "none" and expect["kind"] == "none"
+    with pytest.raises(ValueError, match="'output_drift' is not an effect of family pi_siso"):
+        fam.draw(5, effect="output_drift")
+
+
+def test_cli_simulate_family_writes_data_and_a_model_file(tmp_path, capsys):
+    from mpmpp.cli import main
+    from mpmpp.io import load_data, load_model
+
+    data, model = tmp_path / "d.csv", tmp_path / "m.json"
+    assert main(["simulate", "--family", "pi_siso", "--seed", "3", "-o", str(data), "--write-model", str(model)]) == 0
+    m = load_model(model)
+    spec = families.family("pi_siso").scenario(3)
+    assert "gain" in spec["process"]["y1"]["u1"]  # the FOPTD form, as a user would write it
+    assert len(load_data(data, m)) == parse_scenario(spec).num_samples
+    assert main(["evaluate", "--families", "no_such_family"]) == 2
+    assert "unknown family 'no_such_family'" in capsys.readouterr().err
+    assert main(["simulate", "--family", "pi_siso", "--paper", "siso", "-o", str(data)]) == 2
+
+
+def test_by_effect_pools_runs_per_split_preset_kind_and_effect():
+    from mpmpp.family_study import by_effect
+
+    run = lambda split, effect, siso, paper: {  # noqa: E731
+        "split": split, "expect": {"effect": effect},
+        "presets": {"siso": {"detected": siso, "false_mpm": False}, "paper_siso": {"detected": None, "false_mpm": paper}}}
+    cells = by_effect([run("tuning", "gain", True, True), run("tuning", "gain", False, False),
+                       run("held_out", "none", None, True)])
+    assert cells[0] == {"split": "tuning", "presets": "recommended", "effect": "gain", "runs": 2, "detected": 1,
+                        "false_mpm": 0}
+    assert {"split": "held_out", "presets": "paper", "effect": "none", "runs": 1, "detected": 0,
+            "false_mpm": 1} in cells

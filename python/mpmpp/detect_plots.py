@@ -46,13 +46,21 @@ def plot_profiles(model, data, path, events=None, title=None):
     plt.close(fig)
 
 
-def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), events=None, title=None):
+def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), events=None, title=None,
+                   clock=None):
     """Per channel: the SVM scores (left) and the indicator with the threshold s_T (right),
-    against the window end time (Figs 4, 7, 8); training windows score 0."""
+    against the window end time (Figs 4, 7, 8); training windows score 0. With the data's
+    ``clock`` (mpmpp.clock.Clock) the time axis is the data's own (dates for calendar time)."""
     plt = _pyplot()
     picked = [k for k, c in enumerate(result.channels) if c["kind"] in kinds]
     t0 = float(result.windows["start_s"].iloc[0]) if len(result.windows) else 0.0
-    t = (result.windows["end_s"].to_numpy(float) - t0) / 3600
+
+    def axis(times):
+        if clock is not None:
+            return clock.axis(times)
+        return (np.asarray(times, float) - t0) / 3600, "window end (h)"
+
+    t, xlabel = axis(result.windows["end_s"].to_numpy(float))
     fig, axes = plt.subplots(len(picked), 2, figsize=(10, 1.9 * len(picked) + 0.4), sharex=True, squeeze=False)
     for row, k in enumerate(picked):
         name = channel_label(result.channels[k])
@@ -68,12 +76,14 @@ def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), ev
         ax_i.set_ylim(-0.05, 1.05)
         ax_i.set_title(f"{name}: indicator s (eq. 23), threshold s_T", fontsize=8, loc="left")
         ax_i.set_ylabel("s", fontsize=8)
-        for start in result.alarm_starts(k):
-            ax_i.axvline((start - t0) / 3600, color="k", linestyle=":", linewidth=1)
+        for start in axis(result.alarm_starts(k))[0]:
+            ax_i.axvline(start, color="k", linestyle=":", linewidth=1)
         _events(ax_s, events)
         _events(ax_i, events)
     for ax in axes[-1]:
-        ax.set_xlabel("window end (h)")
+        ax.set_xlabel(xlabel if clock is None else f"window end, {xlabel}")
+    if clock is not None and clock.calendar:
+        fig.autofmt_xdate()
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()

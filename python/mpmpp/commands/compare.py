@@ -5,17 +5,19 @@ from ._pair import add_pair_arguments, load_pair, report
 
 
 def add_arguments(parser) -> None:
+    from ..clock import parse_duration
+
     add_pair_arguments(parser)
     parser.add_argument("--horizon", type=int, default=10, metavar="K",
                         help="prediction horizon k in samples for the k-step fit (default 10)")
     parser.add_argument("--max-lag", type=int, default=25, help="correlation lags -M..M (default 25)")
-    parser.add_argument("--window", type=float, default=3600.0, metavar="SECONDS",
-                        help="moving-window length for the fit over time (default 3600)")
+    parser.add_argument("--window", type=lambda text: parse_duration(text, "--window"), default=3600.0,
+                        metavar="DURATION", help="moving-window length for the fit over time (default 1h)")
 
 
 def run(args) -> int:
     from ..compare import compare
 
-    model, data = load_pair(args.model, args.data)
+    model, data, clock = load_pair(args)
     result = compare(model, data, horizon=args.horizon, max_lag=args.max_lag, window_s=args.window)
-    return report(result, args, "compare")
+    return report(result, args, "compare", clock, result.summary(clock.stamp))

@@ -3,7 +3,9 @@ from __future__ import annotations
 
 import json
 
-from ._pair import add_pair_arguments, load_pair
+from ._pair import (add_pair_arguments, add_train_end_argument, load_pair, result_document,
+                    summary_in_data_time, train_end)
+from .diagnose import MONITORING_S
 
 
 def add_arguments(parser) -> None:
@@ -11,21 +13,21 @@ def add_arguments(parser) -> None:
     parser.add_argument("--apply", required=True, metavar="ID[,ID...]",
                         help="finding ids from `mpmpp diagnose` (e.g. F1,F2)")
     parser.add_argument("-o", "--output", required=True, metavar="NEW_MODEL", help="model file to write")
-    parser.add_argument("--train-end", type=float, metavar="SECONDS",
-                        help="as for diagnose (the same findings are re-derived)")
+    add_train_end_argument(parser, help_text="as for diagnose (the same findings are re-derived)")
 
 
 def run(args) -> int:
     from ..update import update
 
-    model, data = load_pair(args.model, args.data)
-    result = update(model, data, args.apply, train_end_s=args.train_end)
+    model, data, clock = load_pair(args)
+    end = train_end(args, clock, MONITORING_S, "update (diagnose)")
+    result = update(model, data, args.apply, train_end_s=end)
     result.save(args.output)
     if args.out:
         result.plot(args.out)
     if args.json:
-        print(json.dumps({**result.to_dict(), "model": args.output}))
+        print(json.dumps({**result_document(result, clock), "model": args.output}))
     else:
-        print(result.summary())
+        print(summary_in_data_time(result, clock))
         print(f"  wrote {args.output}")
     return 0

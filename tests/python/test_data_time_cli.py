@@ -1,0 +1,133 @@
+"""Every command reads --train-end the same way and reports the same times.
+
+One closed-loop record (the gain doubles at 8 h) is written three ways: seconds from 0,
+ISO-8601 timestamps across a daylight-saving change, and Unix epoch seconds. detect,
+diagnose, compare, update and check must give the same results on all three, name the
+same instants, and read --train-end as a duration, seconds or a timestamp alike."""
+import json
+from datetime import datetime, timedelta, timezone
+
+import pytest
+
+from closed_loop_case import TS, simulate
+from closed_loop_case import model as loop_model
+
+import mpmpp
+from mpmpp.cli import main
+
+START = datetime(2026, 3, 28, 21, 0, tzinfo=timezone.utc)   # +01:00 until 2026-03-29 01:00 UTC
+TRAIN_END_H = 6.0
+
+
+def zoned(t_s):
+    t = START + timedelta(seconds=float(t_s))
+    offset = 2 if t >= datetime(2026, 3, 29, 1, tzinfo=timezone.utc) else 1
+    return (t + timedelta(hours=offset)).replace(tzinfo=None).isoformat() + f"+0{offset}:00"
+
+
+def instant(text):
+    return datetime.fromisoformat(text.replace("Z", "+00:00")).astimezone(timezone.utc)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("time")
+    mpmpp.save_model(loop_model(), d / "model.json")
+    df = simulate(n=11520, seed=4, onset=5760, gain=2.0)          # 16 h, the gain doubles at 8 h
+    out = {}
+    for kind, times in [("seconds", df["time"]), ("zoned", [zoned(t) for t in df["time"]]),
+                        ("epoch", START.timestamp() + df["time"])]:
+        path = d / f"{kind}.csv"
+        df.assign(time=times).to_csv(path, index=False)
+        out[kind] = str(path)
+    out["model"] = str(d / "model.json")
+    out["dir"] = d
+    return out
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def run_json(capsys, *argv):
+    code, out, err = run(capsys, *argv, "--json")
+    assert code == 0, err
+    return json.loads(out)
+
+
+TRAIN_END = {"seconds": f"{TRAIN_END_H}h", "zoned": zoned(TRAIN_END_H * 3600), "epoch": str(int(TRAIN_END_H * 3600))}
+
+
+def test_every_command_agrees_on_times(files, capsys):
+    docs = {}
+    for kind in ("seconds", "zoned", "epoch"):
+        args = [files["model"], files[kind]]
+        docs[kind] = {
+            "detect": run_json(capsys, "detect", *args, "--train-end", TRAIN_END[kind]),
+            "diagnose": run_json(capsys, "diagnose", *args, "--train-end", TRAIN_END[kind]),
+            "compare": run_json(capsys, "compare", *args),
+            "check": run_json(capsys, "check", *args),
+        }
+    seconds, zoned_doc, epoch = docs["seconds"], docs["zoned"], docs["epoch"]
+    # The same numbers whatever the time format.
+    for name in ("detect", "diagnose", "compare"):
+        for other in (zoned_doc, epoch):
+            assert strip_stamps(other[name]) == strip_stamps(seconds[name]), name
+    assert seconds["detect"]["alarms"], "the gain change must raise an alarm"
+    assert seconds["diagnose"]["findings"], "the gain change must be found"
+    # Calendar files name the same instants; the seconds file has none to name.
+    for name, key in [("detect", "alarms"), ("diagnose", "findings")]:
+        for a, b, c in zip(seconds[name][key], zoned_doc[name][key], epoch[name][key]):
+            point = "start" if name == "detect" else "onset"
+            assert point not in a
+            assert instant(b[point]) == instant(c[point]) == START + timedelta(seconds=a[f"{point}_s"])
+    assert zoned_doc["check"]["data"]["time"]["start"] == "2026-03-28T22:00:00+01:00"
+    assert instant(epoch["check"]["data"]["time"]["end"]) == instant(zoned_doc["check"]["data"]["time"]["end"])
+    assert zoned_doc["detect"]["time"]["kind"] == "calendar" and seconds["detect"]["time"]["kind"] == "seconds"
+
+
+def strip_stamps(doc):
+    """The document without the time block and the timestamps beside the *_s fields."""
+    if isinstance(doc, list):
+        return [strip_stamps(x) for x in doc]
+    if isinstance(doc, dict):
+        return {k: strip_stamps(v) for k, v in doc.items()
+                if k != "time" and not (f"{k}_s" in doc and isinstance(v, str))}
+    return doc
+
+
+def test_train_end_reads_the_same_in_every_form(files, capsys):
+    args = [files["model"], files["zoned"]]
+    forms = ["6h", "360min", "21600", zoned(21600), "2026-03-29T03:00:00Z"]
+    found = [run_json(capsys, "diagnose", *args, "--train-end", f)["findings"] for f in forms]
+    assert all(f == found[0] for f in found)
+
+
+def test_summaries_name_times_in_the_data_time(files, capsys):
+    code, out, _ = run(capsys, "detect", files["model"], files["zoned"], "--train-end", "6h")
+    assert code == 0
+    doc = run_json(capsys, "detect", files["model"], files["zoned"], "--train-end", "6h")
+    assert "trained on 2026-03-28T22:00:00+01:00 .. 2026-03-29T04:00:00+01:00 (6 h)" in out
+    assert doc["alarms"][0]["start"] in out
+    code, out, _ = run(capsys, "diagnose", files["model"], files["zoned"], "--train-end", "6h")
+    onset = run_json(capsys, "diagnose", files["model"], files["zoned"], "--train-end", "6h")["findings"][0]
+    if onset["onset_s"] > 0:
+        assert onset["onset"] in out
+    code, out, _ = run(capsys, "detect", files["model"], files["seconds"], "--train-end", "6h")
+    assert "trained on 0.00 h .. 6.00 h (6 h)" in out
+
+
+@pytest.mark.parametrize("command", ["detect", "diagnose", "update"])
+def test_train_end_past_or_at_the_end_is_a_clear_error(files, capsys, command):
+    extra = ["--apply", "F1", "-o", str(files["dir"] / "new.json")] if command == "update" else []
+    for when, message in [("20h", "is outside the data: " + files["zoned"] +
+                           " spans 2026-03-28T22:00:00+01:00 .. 2026-03-29T14:00:00+01:00 (16 h)"),
+                          ("2026-03-30T00:00:00Z", "is outside the data"),
+                          ("15.9h", "h of data after it")]:
+        code, out, err = run(capsys, command, files["model"], files["zoned"], "--train-end", when, *extra)
+        assert code == 2 and out == ""
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0], err
+    assert not (files["dir"] / "new.json").exists()

@@ -35,7 +35,7 @@ void bind_data_io(py::module_& m) {
       .def_readonly("time_origin", &DataTable::time_origin)
       .def_readonly("time_kind", &DataTable::time_kind)
       .def_readonly("origin_epoch_s", &DataTable::origin_epoch_s)
-      .def_readonly("origin_offset_s", &DataTable::origin_offset_s)
+      .def_readonly("utc_offsets", &DataTable::utc_offsets)
       .def_readonly("columns", &DataTable::columns)
       .def_readonly("values", &DataTable::values)
       .def_readonly("missing", &DataTable::missing)

@@ -256,6 +256,7 @@ void read_time(const std::vector<std::string>& cells, const std::string& source,
       d.time_kind = TimeKind::EpochSeconds;
       d.origin_epoch_s = t[0];
       d.time_origin = iso_timestamp(t[0], 0, "Z");
+      d.utc_offsets = {{0.0, 0}};
       t.array() -= d.origin_epoch_s;
     }
     d.time_s = std::move(t);
@@ -266,7 +267,7 @@ void read_time(const std::vector<std::string>& cells, const std::string& source,
   d.time_origin = cells[0];
   d.time_kind = first->has_offset ? TimeKind::Timestamp : TimeKind::LocalTimestamp;
   d.origin_epoch_s = static_cast<double>(first->seconds) + first->fraction;
-  d.origin_offset_s = first->offset_s;
+  d.utc_offsets = {{0.0, first->offset_s}};
   for (std::size_t k = 0; k < n; ++k) {
     const auto ts = parse_timestamp(cells[k]);
     if (!ts) throw InputError(where(k) + quoted(cells[k]) + " is not an ISO-8601 timestamp (row 2 is)");
@@ -275,6 +276,7 @@ void read_time(const std::vector<std::string>& cells, const std::string& source,
                                                                         : " has a UTC offset but row 2 has none"));
     // Whole seconds subtracted as integers first, so the result keeps sub-microsecond precision.
     t[static_cast<Eigen::Index>(k)] = static_cast<double>(ts->seconds - first->seconds) + (ts->fraction - first->fraction);
+    if (ts->offset_s != d.utc_offsets.back().second) d.utc_offsets.emplace_back(t[static_cast<Eigen::Index>(k)], ts->offset_s);
   }
   d.time_s = std::move(t);
 }
@@ -578,6 +580,14 @@ DataTable load_data(const std::string& path, const Model& model, const LoadOptio
   return load_data_text(detail::read_text_file(path), path, model, options);
 }
 
+int utc_offset_at(const DataTable& data, double time_s) {
+  if (data.utc_offsets.empty()) return 0;
+  int offset = data.utc_offsets.front().second;  // before the first row: the first row's
+  for (const auto& [from, value] : data.utc_offsets)
+    if (from <= time_s) offset = value;
+  return offset;
+}
+
 std::string format_time(const DataTable& data, double time_s) {
   switch (data.time_kind) {
     case TimeKind::Seconds:
@@ -589,7 +599,8 @@ std::string format_time(const DataTable& data, double time_s) {
     case TimeKind::Timestamp:
       break;
   }
-  return iso_timestamp(data.origin_epoch_s + time_s, data.origin_offset_s, data.origin_offset_s ? nullptr : "Z");
+  const int offset = utc_offset_at(data, time_s);
+  return iso_timestamp(data.origin_epoch_s + time_s, offset, offset ? nullptr : "Z");
 }
 
 std::string data_to_csv(const DataTable& d) {

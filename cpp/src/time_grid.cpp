@@ -149,7 +149,8 @@ DataTable regularize(const DataTable& rows, const GridOptions& options, const st
   const bool calendar = rows.time_kind != TimeKind::Seconds;
   out.time_kind = rows.time_kind;
   out.time_origin = rows.time_origin;
-  out.origin_offset_s = rows.origin_offset_s;
+  out.utc_offsets = rows.utc_offsets;
+  for (auto& change : out.utc_offsets) change.first -= calendar ? first_anchor : 0.0;
   out.origin_epoch_s = rows.origin_epoch_s + (calendar ? first_anchor : 0.0);
   const Eigen::Index n = static_cast<Eigen::Index>(times.size());
   out.time_s.resize(n);

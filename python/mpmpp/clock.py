@@ -41,7 +41,9 @@ class Clock:
     end_s: float              # the last
     sample_time_s: float
     origin_epoch_s: float | None = None   # Unix time of time = 0; None for plain seconds
-    offset_s: int | None = None           # shown UTC offset; None for local time (no zone)
+    # (time, UTC offset in s) from that time on, as the file writes its timestamps; None
+    # for local time without an offset (and for plain seconds).
+    utc_offsets: tuple | None = None
 
     @classmethod
     def of(cls, data, sample_time_s: float) -> "Clock":
@@ -50,9 +52,9 @@ class Clock:
         if len(time) == 0:
             raise ValueError(f"{data.attrs.get('source', 'data')}: no samples")
         attrs = data.attrs
-        origin = attrs.get("origin_epoch_s")
+        offsets = attrs.get("utc_offsets")
         return cls(str(attrs.get("source", "data")), float(time[0]), float(time[-1]), float(sample_time_s),
-                   origin, attrs.get("origin_offset_s"))
+                   attrs.get("origin_epoch_s"), tuple(map(tuple, offsets)) if offsets else None)
 
     @property
     def calendar(self) -> bool:
@@ -87,23 +89,37 @@ class Clock:
             when = datetime.fromisoformat(text.replace("Z", "+00:00"))
         except ValueError:
             raise ValueError(f"{option}: {text!r} is not an ISO-8601 timestamp") from None
-        if when.tzinfo is None:
-            when = when.replace(tzinfo=self._zone())
-        elif self.offset_s is None:
-            raise ValueError(f"{option} {text}: {self.source} has local times without a UTC offset; "
-                             "give the time without one")
-        return (when - _EPOCH).total_seconds() - self.origin_epoch_s
+        if when.tzinfo is not None:
+            if self.utc_offsets is None:
+                raise ValueError(f"{option} {text}: {self.source} has local times without a UTC offset; "
+                                 "give the time without one")
+            return (when - _EPOCH).total_seconds() - self.origin_epoch_s
+        # A wall-clock time: in the offset the file uses at that time (the first that fits).
+        wall = (when.replace(tzinfo=timezone.utc) - _EPOCH).total_seconds() - self.origin_epoch_s
+        for offset in dict.fromkeys(o for _, o in self.utc_offsets or [(0.0, 0)]):
+            if self._offset_at(wall - offset) == offset:
+                return wall - offset
+        return wall - self._offset_at(wall)
 
     # ---- writing -----------------------------------------------------------------------
 
-    def _zone(self) -> timezone:
-        return timezone(timedelta(seconds=self.offset_s or 0))
+    @property
+    def offset_s(self) -> int | None:
+        """The first row's UTC offset (None for local time)."""
+        return None if self.utc_offsets is None else self.utc_offsets[0][1]
+
+    def _offset_at(self, t: float) -> int:
+        offset = self.utc_offsets[0][1] if self.utc_offsets else 0
+        for start, value in self.utc_offsets or ():
+            if start <= t:
+                offset = value
+        return offset
 
     def datetime(self, t: float) -> datetime:
-        """The calendar time of ``t`` in the file's (first) UTC offset; naive for local time."""
+        """The calendar time of ``t`` in the UTC offset the file uses then; naive for local time."""
         when = _EPOCH + timedelta(seconds=self.origin_epoch_s + t)
-        when = when.astimezone(self._zone())
-        return when.replace(tzinfo=None) if self.offset_s is None else when
+        when = when.astimezone(timezone(timedelta(seconds=self._offset_at(t))))
+        return when.replace(tzinfo=None) if self.utc_offsets is None else when
 
     def hours(self, t: float) -> str:
         return f"{(t - self.start_s) / 3600:.2f} h"
@@ -128,7 +144,7 @@ class Clock:
         """The ``time`` block of the JSON outputs."""
         return {"kind": "calendar" if self.calendar else "seconds", "start": self.stamp(self.start_s),
                 "end": self.stamp(self.end_s), "start_s": self.start_s, "end_s": self.end_s,
-                "utc_offset_s": self.offset_s if self.calendar else None}
+                "utc_offsets": [list(c) for c in self.utc_offsets] if self.utc_offsets else None}
 
     def stamp_fields(self, doc):
         """A copy of a result document with a timestamp beside every point in time
@@ -153,6 +169,7 @@ class Clock:
         t = np.asarray(t, dtype=float)
         if not self.calendar:
             return (t - self.start_s) / 3600.0, "time since the first sample (h)"
+        # One offset for the whole axis (the first row's): an axis must not jump back an hour.
         base = np.datetime64(self.datetime(self.start_s).replace(tzinfo=None), "ms")
         x = base + ((t - self.start_s) * 1000.0).round().astype("timedelta64[ms]")
         return x, f"time ({self.zone_name()})"

@@ -52,8 +52,9 @@ def load_data(path: PathLike, model: Optional[Model] = None, *, max_gap_s: Optio
     ``df.attrs``: ``source`` (the path), ``missing`` (count per column), ``time_origin`` (the
     first timestamp as written, None for plain seconds), ``origin_epoch_s`` (Unix time of
     time 0 for calendar time: timestamps or epoch seconds, time then counts seconds from
-    the first sample; None for plain seconds), ``origin_offset_s`` (the first timestamp's UTC
-    offset; None for local timestamps), ``text_columns`` (columns without numbers, not
+    the first sample; None for plain seconds), ``utc_offsets`` (the UTC offsets the timestamps
+    carry, ``[(time, offset_s), ...]`` from each time on: more than one across a daylight-saving
+    change; None for local timestamps and plain seconds), ``text_columns`` (columns without numbers, not
     data), ``segment_starts`` (rows starting a segment after a split) and ``repairs``
     (what was repaired, as a dict; see ``repairs_dict``).
     """
@@ -80,8 +81,8 @@ def load_data(path: PathLike, model: Optional[Model] = None, *, max_gap_s: Optio
         missing=dict(zip(table.columns, table.missing)),
         time_origin=table.time_origin or None,
         origin_epoch_s=table.origin_epoch_s if calendar else None,
-        origin_offset_s=None if table.time_kind == _core.TimeKind.local_timestamp or not calendar
-        else table.origin_offset_s,
+        utc_offsets=[tuple(c) for c in table.utc_offsets]
+        if table.time_kind in (_core.TimeKind.timestamp, _core.TimeKind.epoch_seconds) else None,
         text_columns=list(table.text_columns),
         segment_starts=list(table.segment_starts),
         repairs=repairs_dict(table.repairs),

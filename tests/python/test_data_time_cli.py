@@ -69,18 +69,21 @@ def test_every_command_agrees_on_times(files, capsys):
             "diagnose": run_json(capsys, "diagnose", *args, "--train-end", TRAIN_END[kind]),
             "compare": run_json(capsys, "compare", *args),
             "check": run_json(capsys, "check", *args),
+            "update": run_json(capsys, "update", *args, "--train-end", TRAIN_END[kind], "--apply", "F1",
+                               "-o", files["dir"] / f"updated_{kind}.json"),
         }
     seconds, zoned_doc, epoch = docs["seconds"], docs["zoned"], docs["epoch"]
     # The same numbers whatever the time format.
-    for name in ("detect", "diagnose", "compare"):
+    for name in ("detect", "diagnose", "compare", "update"):
         for other in (zoned_doc, epoch):
-            assert strip_stamps(other[name]) == strip_stamps(seconds[name]), name
+            assert strip_stamps({**other[name], "model": None}) == strip_stamps({**seconds[name], "model": None}), name
     assert seconds["detect"]["alarms"], "the gain change must raise an alarm"
     assert seconds["diagnose"]["findings"], "the gain change must be found"
     # Calendar files name the same instants; the seconds file has none to name.
-    for name, key in [("detect", "alarms"), ("diagnose", "findings")]:
+    for name, key, point in [("detect", "alarms", "start"), ("diagnose", "findings", "onset"),
+                             ("update", "errors", "onset")]:
+        assert seconds[name][key]
         for a, b, c in zip(seconds[name][key], zoned_doc[name][key], epoch[name][key]):
-            point = "start" if name == "detect" else "onset"
             assert point not in a
             assert instant(b[point]) == instant(c[point]) == START + timedelta(seconds=a[f"{point}_s"])
     assert zoned_doc["check"]["data"]["time"]["start"] == "2026-03-28T22:00:00+01:00"
@@ -109,12 +112,11 @@ def test_summaries_name_times_in_the_data_time(files, capsys):
     code, out, _ = run(capsys, "detect", files["model"], files["zoned"], "--train-end", "6h")
     assert code == 0
     doc = run_json(capsys, "detect", files["model"], files["zoned"], "--train-end", "6h")
-    assert "trained on 2026-03-28T22:00:00+01:00 .. 2026-03-29T04:00:00+01:00 (6 h)" in out
+    assert "trained on 2026-03-28T22:00:00+01:00 .. 2026-03-29T05:00:00+02:00 (6 h)" in out
     assert doc["alarms"][0]["start"] in out
     code, out, _ = run(capsys, "diagnose", files["model"], files["zoned"], "--train-end", "6h")
     onset = run_json(capsys, "diagnose", files["model"], files["zoned"], "--train-end", "6h")["findings"][0]
-    if onset["onset_s"] > 0:
-        assert onset["onset"] in out
+    assert onset["onset_s"] > 0 and f"since {onset['onset']}" in out
     code, out, _ = run(capsys, "detect", files["model"], files["seconds"], "--train-end", "6h")
     assert "trained on 0.00 h .. 6.00 h (6 h)" in out
 
@@ -123,7 +125,7 @@ def test_summaries_name_times_in_the_data_time(files, capsys):
 def test_train_end_past_or_at_the_end_is_a_clear_error(files, capsys, command):
     extra = ["--apply", "F1", "-o", str(files["dir"] / "new.json")] if command == "update" else []
     for when, message in [("20h", "is outside the data: " + files["zoned"] +
-                           " spans 2026-03-28T22:00:00+01:00 .. 2026-03-29T14:00:00+01:00 (16 h)"),
+                           " spans 2026-03-28T22:00:00+01:00 .. 2026-03-29T15:00:00+02:00 (16 h)"),
                           ("2026-03-30T00:00:00Z", "is outside the data"),
                           ("15.9h", "h of data after it")]:
         code, out, err = run(capsys, command, files["model"], files["zoned"], "--train-end", when, *extra)
@@ -131,3 +133,34 @@ def test_train_end_past_or_at_the_end_is_a_clear_error(files, capsys, command):
         lines = err.strip().splitlines()
         assert len(lines) == 1 and message in lines[0], err
     assert not (files["dir"] / "new.json").exists()
+
+
+def test_check_lists_every_repair_and_commands_note_them(files, capsys):
+    lines = open(files["zoned"]).read().splitlines()
+    header, rows = lines[0], lines[1:]
+    rows[10] = rows[10].replace(":50+", ":50.003+")                 # 3 ms late
+    rows = rows[:21] + rows[20:100] + rows[103:]      # a repeated row, a 20 s gap
+    text = [header + ",status"] + [r + (",Bad" if k == 50 else ",Good") for k, r in enumerate(rows)]
+    path = files["dir"] / "export.csv"
+    path.write_text("\n".join(text) + "\n")
+    code, out, err = run(capsys, "check", files["model"], path, "--quality-column", "status")
+    assert code == 0, err
+    assert "repaired: 1 timestamp(s) snapped to the sample grid (largest move 0.003 s)" in out
+    assert "repaired: 1 repeated row(s) dropped (same time, same values)" in out
+    assert "repaired: 1 row(s) of bad quality made missing" in out
+    assert "repaired: gap 2026-03-28T22:08:15+01:00 .. 2026-03-28T22:08:35+01:00 (20 s between samples): " \
+           "3 missing row(s) added" in out
+    code, out, err = run(capsys, "compare", files["model"], path)
+    assert code == 0
+    assert err.startswith(f"note: {path}: ") and "text column(s) ignored (no numbers): status" in err
+    code, out, err = run(capsys, "check", files["model"], path, "--max-gap", "10s")
+    assert "record split, a new segment starts" in out and "2 segments" in out
+
+
+def test_too_short_a_record_is_a_clear_error(files, capsys):
+    short = files["dir"] / "short.csv"
+    short.write_text("\n".join(open(files["zoned"]).read().splitlines()[:300]) + "\n")
+    for argv in (["detect", "--train-end", "10min"], ["diagnose"], ["update", "--apply", "F1", "-o", "x.json"]):
+        code, out, err = run(capsys, argv[0], files["model"], short, *argv[1:])
+        assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+        assert "too few" in err or "leaves" in err

@@ -58,10 +58,12 @@ def test_daylight_saving_change_with_offsets_is_one_regular_record(tmp_path):
     np.testing.assert_array_equal(back[["u", "y"]], df[["u", "y"]])
     clock = Clock.of(back, TS)
     assert clock.stamp(0.0) == "2026-03-29T01:30:00+01:00"
-    # One hour later the wall clock shows 03:30 (+02:00); we show the first row's offset.
-    assert clock.stamp(3600.0) == "2026-03-29T02:30:00+01:00"
-    assert clock.when("2026-03-29T03:30:00+02:00") == 3600.0
-    assert clock.when("2026-03-29T02:30:00") == 3600.0   # no offset: the file's first one
+    # One hour later the wall clock shows 03:30 (+02:00), as the file writes it.
+    assert clock.stamp(3600.0) == "2026-03-29T03:30:00+02:00"
+    assert clock.when("2026-03-29T02:30:00+01:00") == clock.when("2026-03-29T01:30:00Z") == 3600.0
+    assert clock.when("2026-03-29T03:30:00") == 3600.0   # wall-clock time: the offset in use then
+    assert clock.when("2026-03-29T01:45:00") == 900.0
+    assert back.attrs["utc_offsets"] == [(0.0, 3600), (1800.0, 7200)]
 
 
 def test_epoch_seconds_are_calendar_time(tmp_path):

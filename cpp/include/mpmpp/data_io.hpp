@@ -12,6 +12,7 @@
 //   data.csv: row 7, column dry_weight: "abc" is not a number
 // Rows are numbered as in a spreadsheet: the header is row 1, the first sample row 2.
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -53,7 +54,9 @@ struct DataTable {
   std::string time_origin;           // the first timestamp as written (ISO-8601 for epoch seconds); empty for plain seconds
   TimeKind time_kind = TimeKind::Seconds;
   double origin_epoch_s = 0;         // Unix time of time_s = 0 (local timestamps: as if UTC)
-  int origin_offset_s = 0;           // UTC offset of the first timestamp, for showing times as the file does
+  // The UTC offsets the timestamps carry: (time_s, offset_s) from that time on, the first
+  // at the first row; more than one when daylight saving time starts or ends in the file.
+  std::vector<std::pair<double, int>> utc_offsets;
   std::vector<std::string> columns;  // every numeric column but `time`, in file order
   Eigen::MatrixXd values;            // samples x columns, NaN where missing
   std::vector<int> missing;          // number of missing values per column
@@ -67,9 +70,11 @@ struct DataTable {
 };
 
 // A time of the table as the file writes it: "3605 s" for plain seconds, else an
-// ISO-8601 timestamp in the first row's UTC offset ("2026-03-01T09:00:05+01:00";
-// no offset for local timestamps, "Z" for epoch seconds).
+// ISO-8601 timestamp in the UTC offset the file uses at that time
+// ("2026-03-01T09:00:05+01:00"; no offset for local timestamps, "Z" for epoch seconds).
 std::string format_time(const DataTable& data, double time_s);
+// The UTC offset in seconds the file's timestamps carry at `time_s` (0 without one).
+int utc_offset_at(const DataTable& data, double time_s);
 
 // Builds a table from parts (e.g. a simulation), counting the NaNs; checks shapes,
 // names (non-empty, unique, not "time"), finite strictly increasing time.

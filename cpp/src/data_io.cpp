@@ -252,6 +252,10 @@ void read_time(const std::vector<std::string>& cells, const std::string& source,
       if (!x) throw InputError(where(k) + quoted(cells[k]) + " is not a number of seconds (row 2 is)");
       t[static_cast<Eigen::Index>(k)] = *x;
     }
+    // Past the year 5000 in seconds: an export in epoch milliseconds or microseconds.
+    if (t[0] >= 1e11)
+      throw InputError(where(0) + quoted(cells[0]) + " is too large for Unix epoch seconds (milliseconds? "
+                       "write seconds or ISO-8601 timestamps)");
     if (t[0] >= kEpochThresholdS) {
       d.time_kind = TimeKind::EpochSeconds;
       d.origin_epoch_s = t[0];

@@ -82,6 +82,8 @@ TEST(TimeGrid, CalendarTimeCountsFromTheFirstSample) {
   EXPECT_EQ(e.time_origin, "2026-03-29T00:59:55Z");
   EXPECT_DOUBLE_EQ(e.time_s[1], 5.0);
   EXPECT_EQ(mpmpp::format_time(e, 5.0), "2026-03-29T01:00:00Z");
+  EXPECT_NE(error_of("time,u,y\n1774745995000,1,1\n").find("row 2, column time: \"1774745995000\" is too large"),
+            std::string::npos);
 }
 
 TEST(TimeGrid, QualityColumnMasksRowsAndLeavesTheData) {

@@ -9,7 +9,7 @@ from datetime import datetime, timedelta, timezone
 
 import pytest
 
-from closed_loop_case import TS, simulate
+from closed_loop_case import simulate
 from closed_loop_case import model as loop_model
 
 import mpmpp

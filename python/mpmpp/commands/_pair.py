@@ -7,16 +7,22 @@ import sys
 DATA_HELP = "operating data (CSV, docs/formats.md; historian exports: docs/files.md)"
 
 
+def duration(option: str):
+    """An argparse type for a duration option (``90min``, ``6h``, ``3600``)."""
+    def parse(text):
+        import argparse
+
+        from ..clock import parse_duration
+
+        try:
+            return parse_duration(text, option)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+    return parse
+
+
 def add_data_arguments(parser) -> None:
     """How a historian export is put on the model's sample grid (docs/files.md "Historian exports")."""
-    from ..clock import parse_duration
-
-    def duration(option):
-        def parse(text):
-            return parse_duration(text, option)
-        parse.__name__ = "duration"  # argparse names the type in its error message
-        return parse
-
     g = parser.add_argument_group("historian data")
     g.add_argument("--max-gap", type=duration("--max-gap"), metavar="DURATION",
                    help="gaps up to this long (time between the samples around them) become missing rows, "

@@ -1,17 +1,15 @@
 """``mpmpp compare MODEL DATA``: fit per output, residual tests, where the model fails."""
 from __future__ import annotations
 
-from ._pair import add_pair_arguments, load_pair, report
+from ._pair import add_pair_arguments, duration, load_pair, report
 
 
 def add_arguments(parser) -> None:
-    from ..clock import parse_duration
-
     add_pair_arguments(parser)
     parser.add_argument("--horizon", type=int, default=10, metavar="K",
                         help="prediction horizon k in samples for the k-step fit (default 10)")
     parser.add_argument("--max-lag", type=int, default=25, help="correlation lags -M..M (default 25)")
-    parser.add_argument("--window", type=lambda text: parse_duration(text, "--window"), default=3600.0,
+    parser.add_argument("--window", type=duration("--window"), default=3600.0,
                         metavar="DURATION", help="moving-window length for the fit over time (default 1h)")
 
 

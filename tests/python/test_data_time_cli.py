@@ -164,3 +164,24 @@ def test_too_short_a_record_is_a_clear_error(files, capsys):
         code, out, err = run(capsys, argv[0], files["model"], short, *argv[1:])
         assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
         assert "too few" in err or "leaves" in err
+
+
+def test_commands_run_across_a_split_record(files, capsys):
+    """A 1 h outage at 10 h (longer than --max-gap): every command works on the two segments."""
+    lines = open(files["zoned"]).read().splitlines()
+    path = files["dir"] / "outage.csv"
+    path.write_text("\n".join(lines[:1 + 7200] + lines[1 + 7920:]) + "\n")
+    args = [files["model"], path]
+    check = run_json(capsys, "check", *args)["data"]
+    assert check["segments"] == 2 and [g["split"] for g in check["repairs"]["gaps"]] == [True]
+    assert check["repairs"]["gaps"][0]["start"] == "2026-03-29T08:59:55+02:00"   # the last sample before
+    detect = run_json(capsys, "detect", *args, "--train-end", "6h")
+    assert detect["skipped_windows"] and detect["alarms"]
+    # No window used spans the break (the missing row at 10 h).
+    assert not [w for w in detect["windows"] if w["start_s"] <= 36000 < w["end_s"]]
+    for command, extra in [("diagnose", []), ("compare", []),
+                           ("update", ["--apply", "F1", "-o", files["dir"] / "outage_model.json"])]:
+        code, out, err = run(capsys, command, *args, *(["--train-end", "6h"] if command != "compare" else []),
+                             *extra)
+        assert code == 0, err
+        assert "split the record" in err

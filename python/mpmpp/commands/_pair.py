@@ -95,11 +95,12 @@ def repair_lines(r: dict, shown_gaps: int = 0) -> list[str]:
         what = "record split, a new segment starts" if g["split"] else f"{g['missing_rows']} missing row(s) added"
         lines.append(f"gap {start} .. {end} ({g['end_s'] - g['start_s']:g} s between samples): {what}")
     rest = r["gaps"][shown_gaps:]
-    if rest:
-        bridged = [g["missing_rows"] for g in rest if not g["split"]]
-        lines.append(f"{len(rest)} {'more ' if shown_gaps else ''}gap(s): {len(bridged)} filled with "
-                     f"{sum(bridged)} missing row(s), {len(rest) - len(bridged)} longer than --max-gap "
-                     "split the record")
+    more = "more " if shown_gaps else ""
+    bridged = [g["missing_rows"] for g in rest if not g["split"]]
+    if bridged:
+        lines.append(f"{len(bridged)} {more}gap(s) filled with {sum(bridged)} missing row(s)")
+    if len(rest) > len(bridged):
+        lines.append(f"{len(rest) - len(bridged)} {more}gap(s) longer than --max-gap split the record")
     if r["text_columns"]:
         lines.append(f"text column(s) ignored (no numbers): {', '.join(r['text_columns'])}")
     return lines

@@ -32,6 +32,16 @@ def parse_duration(text, option: str = "duration") -> float:
     return float(m.group(1)) * _UNITS.get(m.group(2), 1.0)
 
 
+def time_axis(clock, t, origin: float = 0.0, label: str = "time (h)"):
+    """x values and axis label for times ``t`` of the ``time`` column: the data's own time
+    when its ``clock`` is known, else hours since ``origin``."""
+    if clock is not None:
+        return clock.axis(t)
+    import numpy as np
+
+    return (np.asarray(t, dtype=float) - origin) / 3600.0, label
+
+
 @dataclass(frozen=True)
 class Clock:
     """How the times of one data file read: its span, its calendar origin (if any)."""

@@ -128,11 +128,12 @@ class CompareResult:
         lines.append(f"  note: {self.note}")
         return "\n".join(lines)
 
-    def plot(self, out_dir) -> list[Path]:
-        """Write the PNG figures into ``out_dir``; returns their paths."""
+    def plot(self, out_dir, clock=None) -> list[Path]:
+        """Write the PNG figures into ``out_dir`` (time axes in the data's ``clock`` when
+        given); returns their paths."""
         from .compare_plots import plot_compare
 
-        return plot_compare(self, Path(out_dir))
+        return plot_compare(self, Path(out_dir), clock)
 
 
 def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float = 3600.0,

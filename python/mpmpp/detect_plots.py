@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .clock import time_axis
 from .detect import DetectionResult, channel_label
 
 __all__ = ["plot_profiles", "plot_detection"]
@@ -56,9 +57,7 @@ def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), ev
     t0 = float(result.windows["start_s"].iloc[0]) if len(result.windows) else 0.0
 
     def axis(times):
-        if clock is not None:
-            return clock.axis(times)
-        return (np.asarray(times, float) - t0) / 3600, "window end (h)"
+        return time_axis(clock, times, t0, "window end (h)")
 
     t, xlabel = axis(result.windows["end_s"].to_numpy(float))
     fig, axes = plt.subplots(len(picked), 2, figsize=(10, 1.9 * len(picked) + 0.4), sharex=True, squeeze=False)

@@ -156,7 +156,11 @@ class DiagnoseResult:
         paths = []
         for name, e in self.residuals.items():
             fig, ax = plt.subplots(figsize=(11, 3.5))
-            axis = clock.axis if clock is not None else (lambda t: (np.asarray(t) / 3600.0, "time [h]"))
+            from .clock import time_axis
+
+            def axis(t):
+                return time_axis(clock, t, label="time [h]")
+
             t, xlabel = axis(self.time_s)
             ax.plot(t, e, lw=0.4, color="0.4", label="one-step error of the model")
             for f in self.findings:

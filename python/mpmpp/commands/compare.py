@@ -18,4 +18,5 @@ def run(args) -> int:
 
     model, data, clock = load_pair(args)
     result = compare(model, data, horizon=args.horizon, max_lag=args.max_lag, window_s=args.window)
-    return report(result, args, "compare", clock, result.summary(clock.stamp))
+    return report(result, args, "compare", clock, result.summary(clock.stamp),
+                  plot=lambda out: result.plot(out, clock=clock))

@@ -1,6 +1,9 @@
 #include "mpmpp/data_io.hpp"
 
+#include <algorithm>
 #include <charconv>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -9,6 +12,8 @@
 #include <string_view>
 
 #include "mpmpp/error.hpp"
+#include "mpmpp/row_quality.hpp"
+#include "mpmpp/time_grid.hpp"
 #include "text_file.hpp"
 
 namespace mpmpp {
@@ -106,6 +111,7 @@ struct Timestamp {
   std::int64_t seconds;  // whole seconds since 1970-01-01 (UTC if an offset was given)
   double fraction;       // [0, 1)
   bool has_offset;
+  int offset_s;          // the UTC offset written (0 without one)
 };
 
 // Days since 1970-01-01 of a proleptic Gregorian date (the civil-from-days
@@ -117,6 +123,46 @@ std::int64_t days_from_civil(int y, int m, int d) {
   const int doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1;
   const int doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
   return era * 146097 + doe - 719468;
+}
+
+// The inverse: (year, month, day) of a day count since 1970-01-01.
+void civil_from_days(std::int64_t z, int& y, int& m, int& d) {
+  z += 719468;
+  const std::int64_t era = (z >= 0 ? z : z - 146096) / 146097;
+  const int doe = static_cast<int>(z - era * 146097);
+  const int yoe = (doe - doe / 1460 + doe / 36524 - doe / 146096) / 365;
+  const int doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+  const int mp = (5 * doy + 2) / 153;
+  d = doy - (153 * mp + 2) / 5 + 1;
+  m = mp + (mp < 10 ? 3 : -9);
+  y = static_cast<int>(yoe + era * 400) + (m <= 2);
+}
+
+// "YYYY-MM-DDThh:mm:ss[.fff]" of Unix time `t` shifted by `offset_s`, then the offset.
+std::string iso_timestamp(double t, int offset_s, const char* zone) {
+  const double local = t + offset_s;
+  const double whole = std::floor(local);
+  long long ms = std::llround((local - whole) * 1000.0);
+  std::int64_t secs = static_cast<std::int64_t>(whole);
+  if (ms == 1000) {
+    ms = 0;
+    ++secs;
+  }
+  const std::int64_t days = (secs >= 0 ? secs : secs - 86399) / 86400;
+  const int sod = static_cast<int>(secs - days * 86400);
+  int y, m, d;
+  civil_from_days(days, y, m, d);
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d", y, m, d, sod / 3600, sod / 60 % 60, sod % 60);
+  std::string out = buf;
+  if (ms) {
+    std::snprintf(buf, sizeof buf, ".%03lld", ms);
+    out += buf;
+  }
+  if (zone) return out + zone;
+  std::snprintf(buf, sizeof buf, "%c%02d:%02d", offset_s < 0 ? '-' : '+', std::abs(offset_s) / 3600,
+                std::abs(offset_s) / 60 % 60);
+  return out + buf;
 }
 
 int days_in_month(int y, int m) {
@@ -185,14 +231,15 @@ std::optional<Timestamp> parse_timestamp(const std::string& s) {
   }
   if (i != s.size()) return std::nullopt;
   const std::int64_t secs = days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second - offset_s;
-  return Timestamp{secs, fraction, has_offset};
+  return Timestamp{secs, fraction, has_offset, static_cast<int>(offset_s)};
 }
 
 // ---- the time column --------------------------------------------------------------
 
-// Reads the time column: numbers of seconds, or timestamps turned into seconds
-// since the first row; which of the two is decided by the first row.
-Eigen::VectorXd read_time(const std::vector<std::string>& cells, const std::string& source, std::string& origin) {
+// Reads the time column into d.time_s: numbers of seconds, or calendar time (epoch
+// seconds, timestamps) turned into seconds since the first row; which of them is
+// decided by the first row.
+void read_time(const std::vector<std::string>& cells, const std::string& source, DataTable& d) {
   const std::size_t n = cells.size();
   Eigen::VectorXd t(static_cast<Eigen::Index>(n));
   auto where = [&](std::size_t k) { return source + ": " + row_name(k + 2) + ", column time: "; };
@@ -205,11 +252,26 @@ Eigen::VectorXd read_time(const std::vector<std::string>& cells, const std::stri
       if (!x) throw InputError(where(k) + quoted(cells[k]) + " is not a number of seconds (row 2 is)");
       t[static_cast<Eigen::Index>(k)] = *x;
     }
-    return t;
+    // Past the year 5000 in seconds: an export in epoch milliseconds or microseconds.
+    if (t[0] >= 1e11)
+      throw InputError(where(0) + quoted(cells[0]) + " is too large for Unix epoch seconds (milliseconds? "
+                       "write seconds or ISO-8601 timestamps)");
+    if (t[0] >= kEpochThresholdS) {
+      d.time_kind = TimeKind::EpochSeconds;
+      d.origin_epoch_s = t[0];
+      d.time_origin = iso_timestamp(t[0], 0, "Z");
+      d.utc_offsets = {{0.0, 0}};
+      t.array() -= d.origin_epoch_s;
+    }
+    d.time_s = std::move(t);
+    return;
   }
   const auto first = parse_timestamp(cells[0]);
   if (!first) throw InputError(where(0) + quoted(cells[0]) + " is neither seconds nor an ISO-8601 timestamp");
-  origin = cells[0];
+  d.time_origin = cells[0];
+  d.time_kind = first->has_offset ? TimeKind::Timestamp : TimeKind::LocalTimestamp;
+  d.origin_epoch_s = static_cast<double>(first->seconds) + first->fraction;
+  d.utc_offsets = {{0.0, first->offset_s}};
   for (std::size_t k = 0; k < n; ++k) {
     const auto ts = parse_timestamp(cells[k]);
     if (!ts) throw InputError(where(k) + quoted(cells[k]) + " is not an ISO-8601 timestamp (row 2 is)");
@@ -218,8 +280,9 @@ Eigen::VectorXd read_time(const std::vector<std::string>& cells, const std::stri
                                                                         : " has a UTC offset but row 2 has none"));
     // Whole seconds subtracted as integers first, so the result keeps sub-microsecond precision.
     t[static_cast<Eigen::Index>(k)] = static_cast<double>(ts->seconds - first->seconds) + (ts->fraction - first->fraction);
+    if (ts->offset_s != d.utc_offsets.back().second) d.utc_offsets.emplace_back(t[static_cast<Eigen::Index>(k)], ts->offset_s);
   }
-  return t;
+  d.time_s = std::move(t);
 }
 
 void check_increasing(const Eigen::VectorXd& t, const std::string& source) {
@@ -320,8 +383,17 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
   DataTable d;
   for (std::size_t c = 0; c < header.size(); ++c)
     if (c != time_col) d.columns.push_back(header[c]);
-  d.values.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(d.columns.size()));
-  d.missing.assign(d.columns.size(), 0);
+  const std::size_t width = d.columns.size();
+  d.values.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(width));
+  d.missing.assign(width, 0);
+  // A column is text while it holds no number: its cells are kept until a number
+  // turns up (then the first text cell is the error) or the file ends.
+  std::vector<std::size_t> numbers(width, 0), first_text_row(width, 0);
+  std::vector<std::vector<std::string>> text_cells(width);
+  auto not_a_number = [&](std::size_t j, std::size_t row, const std::string& cell) {
+    return InputError(where + row_name(row) + ", column " + detail::printable(d.columns[j]) + ": " + quoted(cell) +
+                      " is not a number");
+  };
   std::vector<std::string> fields;
   for (std::size_t k = 0; k < n; ++k) {
     const std::size_t row = k + 2;
@@ -330,46 +402,112 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
     if (fields.size() != header.size())
       throw InputError(where + row_name(row) + ": " + std::to_string(fields.size()) + " fields, the header has " +
                        std::to_string(header.size()));
-    Eigen::Index j = 0;
+    std::size_t j = 0;
     for (std::size_t c = 0; c < fields.size(); ++c) {
       if (c == time_col) {
         time_cells[k] = fields[c];
         continue;
       }
       double x = std::numeric_limits<double>::quiet_NaN();
-      if (fields[c].empty() || is_nan_word(fields[c])) {
-        ++d.missing[static_cast<std::size_t>(j)];
+      const bool empty = fields[c].empty() || is_nan_word(fields[c]);
+      if (empty) {
+        ++d.missing[j];
       } else if (const auto v = parse_number(fields[c])) {
+        if (first_text_row[j]) throw not_a_number(j, first_text_row[j], text_cells[j][first_text_row[j] - 2]);
+        ++numbers[j];
         x = *v;
-      } else {
-        throw InputError(where + row_name(row) + ", column " + detail::printable(header[c]) + ": " +
-                         quoted(fields[c]) + " is not a number");
+      } else if (numbers[j]) {
+        throw not_a_number(j, row, fields[c]);
+      } else if (!first_text_row[j]) {
+        first_text_row[j] = row;
+        text_cells[j].resize(k);
       }
-      d.values(static_cast<Eigen::Index>(k), j++) = x;
+      if (first_text_row[j]) text_cells[j].push_back(fields[c]);
+      d.values(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j++)) = x;
     }
   }
-  d.time_s = read_time(time_cells, source, d.time_origin);
-  check_increasing(d.time_s, source);
+  read_time(time_cells, source, d);
+  // Text columns leave the numeric table; the first text cell is kept for errors.
+  std::vector<Eigen::Index> numeric;
+  for (std::size_t j = 0; j < width; ++j) {
+    if (!first_text_row[j]) {
+      numeric.push_back(static_cast<Eigen::Index>(j));
+      continue;
+    }
+    d.text_columns.push_back(d.columns[j]);
+    d.text_values.push_back(std::move(text_cells[j]));
+  }
+  if (numeric.size() < width) {
+    std::vector<std::string> columns;
+    std::vector<int> missing;
+    Eigen::MatrixXd values(d.values.rows(), static_cast<Eigen::Index>(numeric.size()));
+    for (std::size_t i = 0; i < numeric.size(); ++i) {
+      columns.push_back(d.columns[static_cast<std::size_t>(numeric[i])]);
+      missing.push_back(d.missing[static_cast<std::size_t>(numeric[i])]);
+      values.col(static_cast<Eigen::Index>(i)) = d.values.col(numeric[i]);
+    }
+    d.columns = std::move(columns);
+    d.missing = std::move(missing);
+    d.values = std::move(values);
+  }
   return d;
 }
 
-void check_against_model(const DataTable& data, const Model& model, const std::string& source) {
+// The first cell of a text column that is not empty, for naming it in an error.
+std::string first_text_cell(const DataTable& d, std::size_t i, std::size_t& row) {
+  row = 2;
+  if (i >= d.text_values.size()) return {};  // a grid table keeps the names only
+  const auto& cells = d.text_values[i];
+  for (std::size_t k = 0; k < cells.size(); ++k)
+    if (!cells[k].empty() && !is_nan_word(cells[k])) {
+      row = k + 2;
+      return cells[k];
+    }
+  return {};
+}
+
+// The model's inputs and outputs are numeric columns (text in them is named as on reading).
+void check_columns(const DataTable& data, const Model& model, const std::string& source) {
   auto require = [&](const std::vector<std::string>& names, const char* kind) {
-    for (const auto& name : names)
-      if (data.column(name) < 0)
-        throw InputError(source + ": column " + quoted(name) + " (model " + kind + ") is missing (columns: time" +
-                         (data.columns.empty() ? "" : ", ") + detail::printable(detail::comma_list(data.columns), 200) + ")");
+    for (const auto& name : names) {
+      if (data.column(name) >= 0) continue;
+      const auto text = std::find(data.text_columns.begin(), data.text_columns.end(), name);
+      if (text != data.text_columns.end()) {
+        std::size_t row = 0;
+        const std::string cell =
+            first_text_cell(data, static_cast<std::size_t>(text - data.text_columns.begin()), row);
+        throw InputError(source + ": " + row_name(row) + ", column " + detail::printable(name) + ": " + quoted(cell) +
+                         " is not a number");
+      }
+      throw InputError(source + ": column " + quoted(name) + " (model " + kind + ") is missing (columns: time" +
+                       (data.columns.empty() ? "" : ", ") + detail::printable(detail::comma_list(data.columns), 200) + ")");
+    }
   };
   require(model.inputs, "input");
   require(model.outputs, "output");
+}
+
+// Within each segment, the time step is the model's sample time.
+void check_spacing(const DataTable& data, const Model& model, const std::string& source) {
   const double ts = model.sample_time_s;
+  auto next_segment = data.segment_starts.begin();
   for (Eigen::Index k = 1; k < data.time_s.size(); ++k) {
+    // A split is a missing row between two segments: the steps around it are free.
+    if (next_segment != data.segment_starts.end() && k + 1 >= *next_segment) {
+      if (k == *next_segment) ++next_segment;
+      continue;
+    }
     const double step = data.time_s[k] - data.time_s[k - 1];
     if (std::abs(step - ts) > kSpacingTolerance * ts)
       throw InputError(source + ": " + row_name(static_cast<std::size_t>(k) + 2) + ", column time: time step " +
                        format_number(step) + " s from the previous row, expected the model's sample_time_s = " +
                        format_number(ts) + " s");
   }
+}
+
+void check_against_model(const DataTable& data, const Model& model, const std::string& source) {
+  check_columns(data, model, source);
+  check_spacing(data, model, source);
 }
 
 // Runs `check` with every InputError it throws made one line.
@@ -384,8 +522,16 @@ auto one_line_errors(Check check) -> decltype(check()) {
 
 }  // namespace
 
-DataTable parse_csv(const std::string& text, const std::string& source) {
+DataTable parse_csv_rows(const std::string& text, const std::string& source) {
   return one_line_errors([&] { return parse_csv_text(text, source); });
+}
+
+DataTable parse_csv(const std::string& text, const std::string& source) {
+  return one_line_errors([&] {
+    DataTable d = parse_csv_text(text, source);
+    check_increasing(d.time_s, source);
+    return d;
+  });
 }
 
 DataTable read_csv(const std::string& path) { return parse_csv(detail::read_text_file(path), path); }
@@ -394,10 +540,71 @@ void validate_data(const DataTable& data, const Model& model, const std::string&
   one_line_errors([&] { check_against_model(data, model, source); });
 }
 
-DataTable load_data(const std::string& path, const Model& model) {
-  DataTable d = read_csv(path);
-  validate_data(d, model, path);
-  return d;
+namespace {
+
+DataTable repaired(DataTable rows, const std::string& source, const Model& model, const LoadOptions& options) {
+  const double ts = model.sample_time_s;
+  if (!options.quality_column.empty()) mask_bad_quality(rows, options.quality_column, options.good_quality, source);
+  rows.repairs.text_columns = rows.text_columns;
+  GridOptions grid{ts, options.max_gap_s < 0 ? 10.0 * ts : options.max_gap_s, options.jitter_fraction};
+  if (!(options.jitter_fraction >= 0 && options.jitter_fraction < 0.5))
+    throw InputError(source + ": the jitter tolerance must be in [0, 0.5) sample times, got " +
+                     format_number(options.jitter_fraction));
+  if (options.resample_s <= 0) return regularize(rows, grid, source);
+  if (std::abs(options.resample_s - ts) > kSpacingTolerance * ts)
+    throw InputError(source + ": --resample " + format_number(options.resample_s) +
+                     " s differs from the model's sample_time_s = " + format_number(ts) + " s");
+  const double raw = median_step(rows);
+  const long long factor = raw > 0 ? std::llround(ts / raw) : 0;
+  if (factor < 1 || std::abs(ts - static_cast<double>(factor) * raw) > options.jitter_fraction * raw)
+    throw InputError(source + ": the file's sample time " + format_number(raw) +
+                     " s (median step) does not divide the model's sample_time_s = " + format_number(ts) + " s");
+  const double raw_ts = ts / static_cast<double>(factor);
+  grid.sample_time_s = raw_ts;
+  grid.max_gap_s = std::max(grid.max_gap_s, raw_ts);
+  DataTable out = block_average(regularize(rows, grid, source), static_cast<int>(factor));
+  out.repairs.raw_sample_time_s = raw_ts;
+  return out;
+}
+
+}  // namespace
+
+DataTable load_data_text(const std::string& text, const std::string& source, const Model& model,
+                         const LoadOptions& options) {
+  return one_line_errors([&] {
+    DataTable rows = parse_csv_text(text, source);
+    check_columns(rows, model, source);
+    DataTable d = repaired(std::move(rows), source, model, options);
+    check_spacing(d, model, source);
+    return d;
+  });
+}
+
+DataTable load_data(const std::string& path, const Model& model, const LoadOptions& options) {
+  return load_data_text(detail::read_text_file(path), path, model, options);
+}
+
+int utc_offset_at(const DataTable& data, double time_s) {
+  if (data.utc_offsets.empty()) return 0;
+  int offset = data.utc_offsets.front().second;  // before the first row: the first row's
+  for (const auto& [from, value] : data.utc_offsets)
+    if (from <= time_s) offset = value;
+  return offset;
+}
+
+std::string format_time(const DataTable& data, double time_s) {
+  switch (data.time_kind) {
+    case TimeKind::Seconds:
+      return format_number(time_s) + " s";
+    case TimeKind::EpochSeconds:
+      return iso_timestamp(data.origin_epoch_s + time_s, 0, "Z");
+    case TimeKind::LocalTimestamp:
+      return iso_timestamp(data.origin_epoch_s + time_s, 0, "");
+    case TimeKind::Timestamp:
+      break;
+  }
+  const int offset = utc_offset_at(data, time_s);
+  return iso_timestamp(data.origin_epoch_s + time_s, offset, offset ? nullptr : "Z");
 }
 
 std::string data_to_csv(const DataTable& d) {

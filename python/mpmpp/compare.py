@@ -102,7 +102,9 @@ class CompareResult:
             d["outputs"].append(_finite(item))
         return d
 
-    def summary(self) -> str:
+    def summary(self, stamp=None) -> str:
+        """``stamp(t)`` writes a time of the data (default: hours of the ``time`` column)."""
+        stamp = stamp or (lambda t: f"{t / 3600:.1f} h")
         lines = [f"compare: model '{self.model}', k = {self.horizon} samples, windows of "
                  f"{self.window_s / 3600:g} h" + (f", {self.skipped_rows} rows skipped (missing values)"
                                                   if self.skipped_rows else "")]
@@ -122,7 +124,7 @@ class CompareResult:
                         "channel the model lacks" if a.kind == "input" else "extra column")
                     lines.append(f"    {a.column} ({what}) explains {100 * a.explained:.1f} % of the error")
             for p in oc.failing:
-                lines.append(f"    fails {p.start_s / 3600:.1f}-{p.end_s / 3600:.1f} h "
+                lines.append(f"    fails {stamp(p.start_s)} .. {stamp(p.end_s)} "
                              f"(one-step error up to {p.worst_rms_ratio:.2f}x the early level)")
         lines.append(f"  note: {self.note}")
         return "\n".join(lines)

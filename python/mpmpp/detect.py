@@ -238,13 +238,15 @@ class DetectionResult:
         return {"train_end_s": float(self.train_end_s), "channels": list(self.channels), "windows": windows,
                 "alarms": alarms, "threshold": float(self.threshold), "skipped_windows": skipped}
 
-    def alarm_table(self) -> str:
-        """Human summary: one line per channel with its alarm start times."""
+    def alarm_table(self, stamp=None) -> str:
+        """Human summary: one line per channel with its alarm start times, written by
+        ``stamp(t)`` (default: hours of the ``time`` column)."""
+        stamp = stamp or (lambda t: f"{t / 3600:.2f} h")
         width = max([len("channel")] + [len(channel_label(c)) for c in self.channels])
-        lines = [f"{'channel':<{width}}  {'kind':<6} alarms (start, h)"]
+        lines = [f"{'channel':<{width}}  {'kind':<6} alarms (start)"]
         for k, c in enumerate(self.channels):
             starts = self.alarm_starts(k)
-            text = ", ".join(f"{s / 3600:.2f}" for s in starts) if starts.size else "none"
+            text = ", ".join(stamp(s) for s in starts) if starts.size else "none"
             lines.append(f"{channel_label(c):<{width}}  {'MPM' if c['kind'] == 'process' else 'noise':<6} {text}")
         n_skipped = int(self.windows["skipped"].sum())
         if n_skipped:

@@ -143,7 +143,9 @@ class DiagnoseResult:
         lines.append(f"  error = {self.metric}")
         return "\n".join(lines)
 
-    def plot(self, out_dir) -> list[Path]:
+    def plot(self, out_dir, clock=None) -> list[Path]:
+        """One figure per output; with the data's ``clock`` (mpmpp.clock.Clock) the time
+        axis is the data's own (dates for calendar time)."""
         import matplotlib
 
         matplotlib.use("Agg")
@@ -154,13 +156,19 @@ class DiagnoseResult:
         paths = []
         for name, e in self.residuals.items():
             fig, ax = plt.subplots(figsize=(11, 3.5))
-            t = self.time_s / 3600.0
+            from .clock import time_axis
+
+            def axis(t):
+                return time_axis(clock, t, label="time [h]")
+
+            t, xlabel = axis(self.time_s)
             ax.plot(t, e, lw=0.4, color="0.4", label="one-step error of the model")
             for f in self.findings:
                 if f.output == name or (f.output is None and f.effect == "input_nonlinearity"):
-                    ax.axvline(f.onset_s / 3600.0, color="r", ls="--")
-                    ax.text(f.onset_s / 3600.0, ax.get_ylim()[1] * 0.9, f" {f.id} {f.effect}", color="r")
-            ax.set_xlabel("time [h]")
+                    onset = axis([f.onset_s])[0][0]
+                    ax.axvline(onset, color="r", ls="--")
+                    ax.text(onset, ax.get_ylim()[1] * 0.9, f" {f.id} {f.effect}", color="r")
+            ax.set_xlabel(xlabel)
             ax.set_ylabel(name)
             ax.set_title(f"{name}: one-step prediction error and findings")
             fig.tight_layout()

@@ -22,7 +22,8 @@ import numpy as np
 
 from . import families as fam
 from .detect import channel_label, detect, make_config
-from .evaluate import nominal_model, run_parallel
+from .evaluate import nominal_model
+from .parallel import run_tasks
 from .simulate import simulate
 
 def presets_for(size: int) -> tuple:
@@ -82,15 +83,15 @@ def run_family_seed(name: str, seed: int, record_s: float | None = None, configs
 
 def run_study(names=None, seeds=range(4), record_s=None, scheduler=None, workers=None,
               progress: bool = True, configs: dict | None = None) -> dict:
-    """Every (family, seed) run in parallel (``evaluate.run_parallel``); rows per family and
+    """Every (family, seed) run in parallel (``parallel.run_tasks``); rows per family and
     preset (or per label of `configs`, see run_family_seed)."""
     names = [f.name for f in fam.FAMILIES] if names is None else list(names)
     for n in names:
         fam.family(n)  # unknown names fail before any work starts
     seeds = list(seeds)
     started = time.perf_counter()
-    runs, where = run_parallel(run_family_seed, [(n, s, record_s, configs) for n in names for s in seeds],
-                               scheduler, workers, progress)
+    runs, where = run_tasks(run_family_seed, [(n, s, record_s, configs) for n in names for s in seeds],
+                            scheduler, workers, progress, unit="runs")
     runs.sort(key=lambda r: (names.index(r["family"]), r["seed"]))
     return {"rows": summarise(runs, names, configs), "runs": runs, "seeds": seeds, "where": where,
             "wall_seconds": time.perf_counter() - started}

@@ -10,7 +10,7 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
-from typing import TYPE_CHECKING, Optional, Union
+from typing import TYPE_CHECKING, Optional, Sequence, Union
 
 import numpy as np
 
@@ -35,27 +35,74 @@ def save_model(model: Model, path: PathLike) -> None:
     _core.save_model(model, os.fspath(path))
 
 
-def load_data(path: PathLike, model: Optional[Model] = None) -> pd.DataFrame:
-    """Read a data file into a DataFrame: a ``time`` column in seconds, then every CSV column.
+def load_data(path: PathLike, model: Optional[Model] = None, *, max_gap_s: Optional[float] = None,
+              resample_s: Optional[float] = None, quality_column: Optional[str] = None,
+              good_quality: Sequence[str] = (), jitter_fraction: float = 0.25) -> pd.DataFrame:
+    """Read a data file into a DataFrame: a ``time`` column in seconds, then every numeric column.
 
-    With a ``model``, its inputs and outputs must be columns and the time step must equal
-    ``model.sample_time_s``. Missing cells are NaN (never interpolated); ``df.attrs`` holds
-    ``missing`` (count per column), ``time_origin`` (the first timestamp for ISO-8601 time,
-    time then counts seconds from it; None for numeric time) and ``source`` (the path).
+    Without a model the rows are taken as written (time strictly increasing). With a
+    ``model``, the rows are put on its sample grid (docs/files.md "Historian exports"):
+    timestamps within ``jitter_fraction`` of a sample time are snapped, exact repeats
+    dropped, gaps up to ``max_gap_s`` (default 10 sample times) filled with missing rows,
+    longer gaps split the record (one missing row marks each split); ``quality_column``
+    masks rows that are not good (``good_quality``: the good codes); ``resample_s`` block-
+    averages faster data to the model's sample time. Its inputs and outputs must be numeric
+    columns. Missing cells are NaN (never interpolated).
+
+    ``df.attrs``: ``source`` (the path), ``missing`` (count per column), ``time_origin`` (the
+    first timestamp as written, None for plain seconds), ``origin_epoch_s`` (Unix time of
+    time 0 for calendar time: timestamps or epoch seconds, time then counts seconds from
+    the first sample; None for plain seconds), ``utc_offsets`` (the UTC offsets the timestamps
+    carry, ``[(time, offset_s), ...]`` from each time on: more than one across a daylight-saving
+    change; None for local timestamps and plain seconds), ``text_columns`` (columns without numbers, not
+    data), ``segment_starts`` (rows starting a segment after a split) and ``repairs``
+    (what was repaired, as a dict; see ``repairs_dict``).
     """
     import pandas as pd  # here, not at the top: `import mpmpp` stays fast for model-only work
 
     path = os.fspath(path)
-    table = _core.read_csv(path) if model is None else _core.load_data(path, model)
+    if model is None:
+        if max_gap_s is not None or resample_s or quality_column:
+            raise ValueError(f"{path}: gaps, resampling and quality need the model's sample time")
+        table = _core.read_csv(path)
+    else:
+        options = _core.LoadOptions(max_gap_s=-1.0 if max_gap_s is None else float(max_gap_s),
+                                    jitter_fraction=float(jitter_fraction), resample_s=float(resample_s or 0.0),
+                                    quality_column=quality_column or "", good_quality=list(good_quality))
+        table = _core.load_data(path, model, options)
     columns = {"time": np.asarray(table.time_s)}
     values = np.asarray(table.values)
     for k, name in enumerate(table.columns):
         columns[name] = values[:, k]
     df = pd.DataFrame(columns)
-    df.attrs["missing"] = dict(zip(table.columns, table.missing))
-    df.attrs["time_origin"] = table.time_origin or None
-    df.attrs["source"] = path
+    calendar = table.time_kind != _core.TimeKind.seconds
+    df.attrs.update(
+        source=path,
+        missing=dict(zip(table.columns, table.missing)),
+        time_origin=table.time_origin or None,
+        origin_epoch_s=table.origin_epoch_s if calendar else None,
+        utc_offsets=[tuple(c) for c in table.utc_offsets]
+        if table.time_kind in (_core.TimeKind.timestamp, _core.TimeKind.epoch_seconds) else None,
+        text_columns=list(table.text_columns),
+        segment_starts=list(table.segment_starts),
+        repairs=repairs_dict(table.repairs),
+    )
     return df
+
+
+def repairs_dict(repairs) -> dict:
+    """The engine's DataRepairs as plain data (for JSON and ``check``)."""
+    return {
+        "jitter_snapped": repairs.jitter_snapped,
+        "max_jitter_s": repairs.max_jitter_s,
+        "duplicates_dropped": repairs.duplicates_dropped,
+        "gaps": [{"start_s": g.start_s, "end_s": g.end_s, "missing_rows": g.missing_rows, "split": g.split}
+                 for g in repairs.gaps],
+        "bad_quality_rows": repairs.bad_quality_rows,
+        "text_columns": list(repairs.text_columns),
+        "resample_factor": repairs.resample_factor,
+        "raw_sample_time_s": repairs.raw_sample_time_s or None,
+    }
 
 
 def save_data(path: PathLike, df: pd.DataFrame) -> None:

@@ -220,13 +220,20 @@ def _detect_section(page: _Page, model, data, origin, train_end_s, config) -> No
             page.figure_file(path, f"{kind} detection")
 
 
-def build_report(model_path, data_path, train_end_s: Optional[float] = None, config=None) -> str:
-    """The report page (HTML text) for a model file and a data file."""
+def build_report(model_path, data_path, train_end_s: Optional[float] = None, config=None,
+                 loaded=None) -> str:
+    """The report page (HTML text) for a model file and a data file; ``loaded``: the pair
+    already read, as (model, data), e.g. with the historian repairs of the command line."""
     from . import load_data, load_model
 
-    model = load_model(model_path)
-    data = load_data(data_path, model)
+    if loaded is None:
+        model = load_model(model_path)
+        data = load_data(data_path, model)
+    else:
+        model, data = loaded
     origin = origin_of(data)
+    # detect counts its training from the first sample; diagnose reads the time column itself.
+    on_time_axis = None if train_end_s is None else float(data["time"].iloc[0]) + train_end_s
     page = _Page()
     created = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     page.add(f"<h1>{html.escape(str(model.name))}: model check</h1>")
@@ -237,7 +244,7 @@ def build_report(model_path, data_path, train_end_s: Optional[float] = None, con
     _section(page, "Compare: does the model predict the data?", "compare", _compare_section, model, data, origin)
     holder = {}
     _section(page, "Diagnose: what changed, where, when", "diagnose",
-             lambda p: holder.update(updated=_diagnose_section(p, model, data, origin, train_end_s)))
+             lambda p: holder.update(updated=_diagnose_section(p, model, data, origin, on_time_axis)))
     _section(page, "Update: how much the findings reduce the error", "update",
              lambda p: _update_section(p, holder.get("updated")) if "updated" in holder else
              p.para("Not available: diagnose did not complete.", "note"))

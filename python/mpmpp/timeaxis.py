@@ -21,8 +21,13 @@ def origin_of(data_or_origin) -> Optional["np.datetime64"]:
     ISO-8601 text / datetime; None when the data's time is plain seconds."""
     import pandas as pd
 
-    origin = getattr(data_or_origin, "attrs", {}).get("time_origin") if hasattr(data_or_origin, "attrs") \
-        else data_or_origin
+    if hasattr(data_or_origin, "attrs"):
+        epoch = data_or_origin.attrs.get("origin_epoch_s")  # calendar time of any kind (ISO or epoch)
+        if epoch is not None:
+            return np.datetime64(int(round(float(epoch) * 1000)), "ms")
+        origin = data_or_origin.attrs.get("time_origin")
+    else:
+        origin = data_or_origin
     if origin is None or (isinstance(origin, str) and not origin.strip()):
         return None
     try:

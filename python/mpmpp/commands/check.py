@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 
+from ._pair import add_data_arguments, load_data_for, repair_lines
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -18,6 +19,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--detail", action="store_true",
                         help="also show each channel as its discrete transfer function in q^-1")
     parser.add_argument("--json", action="store_true", help="print one JSON document instead of the summary")
+    add_data_arguments(parser)
 
 
 def _finite_or_none(x: float):
@@ -46,7 +48,10 @@ def _model_summary(path: str, model) -> dict:
 
 
 def _data_summary(path: str, df, model) -> dict:
+    from ..clock import Clock
+
     time = df["time"].to_numpy()
+    clock = Clock.of(df, model.sample_time_s)
     others = [c for c in df.columns if c != "time" and c not in model.inputs and c not in model.outputs]
     setpoints = [c for c in others if c.endswith("_sp") and c[:-3] in model.outputs]
     return {
@@ -57,16 +62,16 @@ def _data_summary(path: str, df, model) -> dict:
         # Each sample stands for one sample interval, so n samples span n * Ts.
         "duration_s": float(len(df) * model.sample_time_s),
         "time_origin": df.attrs["time_origin"],
+        "time": clock.to_dict(),
+        "span": clock.span(),
+        "segments": len(df.attrs["segment_starts"]) + 1,
+        "repairs": clock.stamp_fields(df.attrs["repairs"]),
         "columns": [c for c in df.columns if c != "time"],
         "missing": {c: int(n) for c, n in df.attrs["missing"].items()},
         "setpoints": setpoints,
         "candidates": [c for c in others if c not in setpoints],
         "rows_with_missing": int(np.isnan(df.drop(columns="time").to_numpy()).any(axis=1).sum()),
     }
-
-
-def _hours(seconds: float) -> str:
-    return f"{seconds / 3600:.3g} h"
 
 
 def _channel_line(ch: dict) -> str:
@@ -93,9 +98,10 @@ def _print_summary(report: dict, detail: bool) -> None:
     d = report.get("data")
     if d is None:
         return
-    origin = f" from {d['time_origin']}" if d["time_origin"] else ""
-    print(f"data {d['path']}: {d['samples']} samples, t = {d['start_s']:g} .. {d['end_s']:g} s{origin} "
-          f"({_hours(d['duration_s'])})")
+    print(f"data {d['path']}: {d['samples']} samples, {d['span']}"
+          + (f", {d['segments']} segments" if d["segments"] > 1 else ""))
+    for line in repair_lines(d["repairs"], shown_gaps=10):
+        print(f"  repaired: {line}")
     if d["setpoints"]:
         print(f"  setpoints: {', '.join(d['setpoints'])}")
     if d["candidates"]:
@@ -110,12 +116,12 @@ def _print_summary(report: dict, detail: bool) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..io import load_data, load_model
+    from ..io import load_model
 
     model = load_model(args.model)
     report = {"model": _model_summary(args.model, model)}
     if args.data is not None:
-        report["data"] = _data_summary(args.data, load_data(args.data, model), model)
+        report["data"] = _data_summary(args.data, load_data_for(model, args), model)
     if args.json:
         print(json.dumps(report, indent=2))
     else:

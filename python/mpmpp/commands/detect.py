@@ -1,46 +1,51 @@
-"""``mpmpp detect MODEL DATA --train-end SECONDS``: moving-window MPM and noise-change detection."""
+"""``mpmpp detect MODEL DATA --train-end WHEN``: moving-window MPM and noise-change detection."""
 from __future__ import annotations
 
 import json
 import os
 
+from ._pair import add_pair_arguments, add_train_end_argument, load_pair, result_document, train_end
+
 
 def add_arguments(parser) -> None:
-    parser.add_argument("model", help="nominal model file (JSON, FORMATS.md)")
-    parser.add_argument("data", help="routine operating data (CSV, FORMATS.md)")
-    parser.add_argument("--train-end", type=float, required=True, metavar="SECONDS",
-                        help="end of the training period, seconds after the first sample; windows ending "
-                             "by then train the detector (the data must be free of mismatch there)")
+    add_pair_arguments(parser, outputs=False)
+    add_train_end_argument(parser, required=True,
+                           help_text="end of the training period: windows ending by then train the detector "
+                                     "(the data must be free of mismatch there)")
     parser.add_argument("--config", metavar="FILE",
                         help="detector config JSON ({\"preset\": \"paper_siso\", \"alpha\": 2, ...}); "
                              "or a preset name (siso, mimo, paper_siso, paper_mimo); default: the recommended preset (siso or mimo) for the model's size")
     parser.add_argument("--out", metavar="DIR", help="write scores/indicator plots (PNG) and detect.json there")
-    parser.add_argument("--json", action="store_true", help="print one JSON document (FORMATS.md detect --json)")
+    parser.add_argument("--json", action="store_true", help="print one JSON document (docs/formats.md detect --json)")
     parser.add_argument("--save-detector", metavar="FILE",
                         help="save the trained detector (versioned JSON) to monitor new data later")
 
 
 def run(args) -> int:
-    from .. import load_data, load_model
-    from ..detect import detect
+    from ..detect import detect, make_config
+    from ..io import atomic_output
 
-    model = load_model(args.model)
-    data = load_data(args.data, model)
-    result, detector = detect(model, data, args.train_end, args.config, return_detector=True)
+    model, data, clock = load_pair(args)
+    config = make_config(args.config, model)
+    window_s = config.window_samples(model.sample_time_s) * model.sample_time_s
+    end = train_end(args, clock, window_s, "monitoring (one detection window)")
+    # The detector counts its training period from the first sample.
+    result, detector = detect(model, data, end - clock.start_s, config, return_detector=True)
     if args.save_detector:
         detector.save(args.save_detector)
+    doc = result_document(result, clock)
     if args.out:
         from ..detect_plots import plot_detection
         from ..timeaxis import origin_of
 
         os.makedirs(args.out, exist_ok=True)
-        with open(os.path.join(args.out, "detect.json"), "w", encoding="utf-8") as f:
-            json.dump(result.to_dict(), f, indent=1)
+        with atomic_output(os.path.join(args.out, "detect.json")) as f:
+            json.dump(doc, f, indent=1)
         plot_detection(result, os.path.join(args.out, "detection.png"), origin=origin_of(data))
     if args.json:
-        print(json.dumps(result.to_dict()))
+        print(json.dumps(doc))
     else:
-        print(f"trained on {args.train_end / 3600:.2f} h, {len(result.windows)} windows, "
+        print(f"trained on {clock.span_between(clock.start_s, end)}, {len(result.windows)} windows, "
               f"threshold s_T = {result.threshold:g}")
-        print(result.alarm_table())
+        print(result.alarm_table(clock.stamp))
     return 0

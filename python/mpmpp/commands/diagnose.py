@@ -1,18 +1,23 @@
-"""``mpmpp diagnose MODEL DATA``: ranked findings (formats.md ``diagnose --json``)."""
+"""``mpmpp diagnose MODEL DATA``: ranked findings (docs/formats.md ``diagnose --json``)."""
 from __future__ import annotations
 
-from ._pair import add_pair_arguments, load_pair, report
+from ._pair import (add_pair_arguments, add_train_end_argument, load_pair, report, summary_in_data_time,
+                    train_end)
+
+# The shortest stretch diagnose fits a change on (its min_segment_s).
+MONITORING_S = 3600.0
 
 
 def add_arguments(parser) -> None:
     add_pair_arguments(parser)
-    parser.add_argument("--train-end", type=float, metavar="SECONDS",
-                        help="data before this time are taken to agree with the model")
+    add_train_end_argument(parser, help_text="data before this time are taken to agree with the model")
 
 
 def run(args) -> int:
     from ..diagnose import diagnose
 
-    model, data = load_pair(args.model, args.data)
-    result = diagnose(model, data, train_end_s=args.train_end)
-    return report(result, args, "diagnose")
+    model, data, clock = load_pair(args)
+    end = train_end(args, clock, MONITORING_S, "diagnose")
+    result = diagnose(model, data, train_end_s=end, min_segment_s=MONITORING_S)
+    return report(result, args, "diagnose", clock, summary_in_data_time(result, clock),
+                  plot=lambda out: result.plot(out, clock=clock))

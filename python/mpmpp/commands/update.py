@@ -4,7 +4,9 @@ from __future__ import annotations
 import json
 import os
 
-from ._pair import add_pair_arguments, load_pair
+from ._pair import (add_pair_arguments, add_train_end_argument, load_pair, result_document,
+                    summary_in_data_time, train_end)
+from .diagnose import MONITORING_S
 
 
 def add_arguments(parser) -> None:
@@ -15,8 +17,7 @@ def add_arguments(parser) -> None:
                         help="model file to write (must not exist yet, unless --force)")
     parser.add_argument("--force", action="store_true",
                         help="replace NEW_MODEL if it exists, even when it is MODEL itself")
-    parser.add_argument("--train-end", type=float, metavar="SECONDS",
-                        help="as for diagnose (the same findings are re-derived)")
+    add_train_end_argument(parser, help_text="as for diagnose (the same findings are re-derived)")
 
 
 def replaces_existing(model_path: str, output_path: str, force: bool) -> bool:
@@ -37,14 +38,15 @@ def run(args) -> int:
     from ..update import update
 
     replaces = replaces_existing(args.model, args.output, args.force)
-    model, data = load_pair(args.model, args.data)
-    result = update(model, data, args.apply, train_end_s=args.train_end)
+    model, data, clock = load_pair(args)
+    end = train_end(args, clock, MONITORING_S, "update (diagnose)")
+    result = update(model, data, args.apply, train_end_s=end)
     result.save(args.output)
     if args.out:
         result.plot(args.out)
     if args.json:
-        print(json.dumps({**result.to_dict(), "model": args.output, "replaced": replaces}))
+        print(json.dumps({**result_document(result, clock), "model": args.output, "replaced": replaces}))
     else:
-        print(result.summary())
+        print(summary_in_data_time(result, clock))
         print(f"  {'replaced' if replaces else 'wrote'} {args.output}")
     return 0

@@ -15,5 +15,7 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_mpc(m);
   mpmpp::bindings::bind_closed_loop(m);
   mpmpp::bindings::bind_detector(m);
+  mpmpp::bindings::bind_detector_training(m);
+  mpmpp::bindings::bind_detector_io(m);
   mpmpp::bindings::bind_streaming_detector(m);
 }

@@ -19,6 +19,7 @@
 #include "mpmpp/error.hpp"
 #include "mpmpp/model_io.hpp"
 #include "mpmpp/streaming_detector.hpp"
+#include "small_loop.hpp"
 
 using namespace mpmpp;
 
@@ -68,21 +69,8 @@ Series columns(const DataTable& d, const Model& m) {
 // A cheap detector for long streams: short windows, low ARX orders, random SVMs (the
 // stream does not care how the SVMs were trained).
 Detector cheap_detector(double train_end_s) {
-  Eigen::VectorXd b(1), a(2), hn(2), hd(2);
-  b << 0.1003;
-  a << 1.0, -0.9048;
-  hn << 1.0, -0.3;
-  hd << 1.0, 0.6;
-  Model m = make_model("siso", 5.0, {"u"}, {"y"}, {{"y", {{"u", TransferFunction(b, a, 3)}}}},
-                       {{"y", TransferFunction(hn, hd)}});
-  DetectorConfig c = DetectorConfig::paper_siso();
-  c.window_s = 600;
-  c.step_s = 300;
-  c.inspection_s = 3000;
-  c.arx_order_a = 3;
-  c.arx_order_b = 3;
-  c.fir_length = 6;
-  c.oe_structure = OeStructure::Fir;
+  const Model m = test_loops::small_siso_model();
+  const DetectorConfig c = test_loops::short_window_config(3000);
   WindowFeatures f(m, c);
   std::mt19937_64 rng(7);
   std::normal_distribution<double> n(0.0, 1.0);

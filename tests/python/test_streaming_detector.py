@@ -97,7 +97,7 @@ def test_committed_test_data_matches_the_current_batch_path():
     with open(os.path.join(COMMITTED, "batch.json"), encoding="utf-8") as f:
         batch = json.load(f)
     assert [{k: v for k, v in a.items() if k != "channel"} for a in result.alarms] == batch["alarms"]
-    assert gen.alarms_csv(batch) == open(os.path.join(COMMITTED, "expected_alarms.csv")).read()
+    assert gen.alarms_csv(result) == open(os.path.join(COMMITTED, "expected_alarms.csv")).read()
 
 
 def test_stream_errors_are_value_errors(generated):

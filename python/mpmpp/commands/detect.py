@@ -33,8 +33,7 @@ def run(args) -> int:
         from ..detect_plots import plot_detection
 
         os.makedirs(args.out, exist_ok=True)
-        with open(os.path.join(args.out, "detect.json"), "w", encoding="utf-8") as f:
-            json.dump(result.to_dict(), f, indent=1)
+        result.save_json(os.path.join(args.out, "detect.json"))
         plot_detection(result, os.path.join(args.out, "detection.png"))
     if args.json:
         print(json.dumps(result.to_dict()))

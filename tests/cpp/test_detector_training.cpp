@@ -24,26 +24,11 @@ DetectorConfig small_config() {
   return c;
 }
 
-struct Samples {
-  Eigen::VectorXd t;
-  Eigen::MatrixXd u, y;
-};
-
-// Random steps in u every 65 s through the model, white noise through the noise model;
-// `gain` scales the process from sample `change` on (a model-plant mismatch).
-Samples plant(const Model& m, Eigen::Index n, std::uint64_t seed, double gain = 1.0, Eigen::Index change = -1) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> noise(0.0, 0.05);
-  std::uniform_real_distribution<double> level(-1.0, 1.0);
-  Samples s{Eigen::VectorXd(n), Eigen::MatrixXd(n, 1), Eigen::MatrixXd(n, 1)};
-  double v = 0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    if (k % 13 == 0) v = level(rng);
-    s.u(k, 0) = v;
-    s.t[k] = 5.0 * static_cast<double>(k);
-  }
-  const Eigen::VectorXd white = Eigen::VectorXd::NullaryExpr(n, [&] { return noise(rng); });
-  s.y.col(0) = m.process[0][0]->filter(s.u.col(0)) + m.noise[0].filter(white);
+// random_step_samples with the process gain multiplied by `gain` from sample `change` on (a
+// model-plant mismatch).
+test_loops::LoopSamples plant(const Model& m, Eigen::Index n, std::uint64_t seed, double gain = 1.0,
+                              Eigen::Index change = -1) {
+  test_loops::LoopSamples s = test_loops::random_step_samples(m, n, seed);
   if (change >= 0) s.y.col(0).tail(n - change) += (gain - 1.0) * m.process[0][0]->filter(s.u.col(0)).tail(n - change);
   return s;
 }
@@ -114,7 +99,7 @@ TEST(DetectorTraining, CrossValidationPicksFromTheGridWithAPermutation) {
 TEST(DetectorTraining, PlantSideTrainingStreamsLikeBatchAndRetrains) {
   const Model m = small_model();
   const DetectorConfig c = small_config();
-  const Samples first = plant(m, 1440, 11);  // 2 h, trained on the first 50 min
+  const test_loops::LoopSamples first = plant(m, 1440, 11);  // 2 h, trained on the first 50 min
   const Detector d = train_detector(m, c, first.t, first.u, first.y, 3000.0);
   EXPECT_EQ(d.to_json(), train_detector(m, c, first.t, first.u, first.y, 3000.0).to_json());  // reproducible
   for (const ChannelScorer& s : d.scorers()) EXPECT_EQ(s.training_windows, 9);
@@ -128,7 +113,7 @@ TEST(DetectorTraining, PlantSideTrainingStreamsLikeBatchAndRetrains) {
       ASSERT_TRUE(same(windows[w].scores[k], batch.scores(static_cast<Eigen::Index>(w), k)));
 
   // The plant retrains on new normal data (a model update, a new operating point) and streams on.
-  const Samples later = plant(m, 1440, 12, 3.0, 900);  // process gain tripled after 75 min
+  const test_loops::LoopSamples later = plant(m, 1440, 12, 3.0, 900);  // process gain tripled after 75 min
   const Detector retrained = train_detector(m, c, later.t, later.u, later.y, 3000.0);
   EXPECT_NE(retrained.to_json(), d.to_json());
   StreamingDetector restream(retrained);
@@ -140,7 +125,7 @@ TEST(DetectorTraining, PlantSideTrainingStreamsLikeBatchAndRetrains) {
 
 TEST(DetectorTraining, TooFewTrainingWindowsIsAnInputErrorNamingTrainEnd) {
   const Model m = small_model();
-  const Samples s = plant(m, 600, 3);
+  const test_loops::LoopSamples s = plant(m, 600, 3);
   try {
     train_detector(m, small_config(), s.t, s.u, s.y, 900.0);
     FAIL() << "expected InputError";

@@ -1,4 +1,4 @@
-"""The C++ streaming detector (issue 9) against the batch Python path on a paper-scenario
+"""The C++ streaming detector against the batch Python path on a paper-scenario
 data set: the stream_csv example program (built C++, no Python inside) and the binding give
 the batch `mpmpp detect --json` alarms and bit-identical scores."""
 import glob
@@ -66,6 +66,29 @@ def test_stream_csv_program_equals_batch_detect(generated, tmp_path):
     assert got.shape == expected.shape
     np.testing.assert_array_equal(got, expected)  # bit for bit, NaN (skipped) in the same places
     assert np.isnan(expected[:, 3]).sum() > 0
+
+
+def test_stream_csv_trains_the_detector_python_trains(generated, tmp_path):
+    """stream_csv --train (C++ alone) writes the detector file `mpmpp detect --save-detector`
+    wrote for the same data and config, and the `detect --json` document of its windows."""
+    exe = _stream_csv_binary()
+    if exe is None:
+        pytest.skip("stream_csv is not built (configure with -DMPMPP_BUILD_TESTS=ON, or set MPMPP_BUILD_DIR)")
+    detector, result = tmp_path / "detector.json", tmp_path / "result.json"
+    run = subprocess.run([exe, "--train", os.path.join(generated, "model.json"), "--train-end", str(gen.TRAIN_END_S),
+                          "--config", "paper_siso", "--save-detector", str(detector), "--json", str(result),
+                          os.path.join(generated, "data.csv")], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert detector.read_text() == open(os.path.join(generated, "detector.json")).read()
+    with open(os.path.join(generated, "batch.json"), encoding="utf-8") as f:
+        batch = json.load(f)
+    with open(result, encoding="utf-8") as f:
+        streamed = json.load(f)
+    for key in ("train_end_s", "channels", "alarms", "threshold", "skipped_windows"):
+        assert streamed[key] == batch[key], key
+    bad = subprocess.run([exe, "--train", os.path.join(generated, "model.json"), os.path.join(generated, "data.csv")],
+                         capture_output=True, text=True, timeout=60)
+    assert bad.returncode == 2 and "--train needs --train-end" in bad.stderr
 
 
 def test_binding_stream_equals_batch_monitor(generated):

@@ -1,4 +1,4 @@
-"""Writes the small committed test data of the streaming detector (issue 9) into a folder
+"""Writes the small committed test data of the streaming detector into a folder
 (default tests/data/stream): a paper-scenario data set, the detector Python trains on it,
 and the batch `mpmpp detect --json` results the C++ streaming path must reproduce.
 
@@ -56,26 +56,18 @@ def batch_detect(model_path: str, data_path: str, out_dir: str) -> dict:
     return json.loads(out.getvalue())
 
 
-def alarms_csv(batch: dict) -> str:
-    """The stream_csv --alarms-csv layout; start times with 3 decimals (multiples of 5 s)."""
-    lines = ["kind,output,input,start_s"]
-    for a in batch["alarms"]:
-        lines.append(f"{a['kind']},{a['output']},{a.get('input', '')},{a['start_s']:.3f}")
-    return "\n".join(lines) + "\n"
+def alarms_csv(result) -> str:
+    """A DetectionResult's alarms in the detector_io alarms CSV (stream_csv --alarms-csv)."""
+    from mpmpp import _core
+
+    return _core.detection_alarms_csv(*result.core)
 
 
 def scores_csv(result) -> str:
-    """Every window of a DetectionResult (skipped ones with empty scores), in the stream_csv
-    --scores-csv layout; repr() numbers read back exactly."""
-    n = len(result.channels)
-    header = ["window", "start_s", "end_s"] + [f"score_{k}" for k in range(n)] + [f"indicator_{k}" for k in range(n)]
-    lines = [",".join(header)]
-    for k, w in enumerate(result.windows.itertuples()):
-        cells = [str(k), repr(float(w.start_s)), repr(float(w.end_s))]
-        cells += ["" if math.isnan(v) else repr(float(v)) for v in result.scores[k]]
-        cells += [repr(float(v)) for v in result.indicator[k]]
-        lines.append(",".join(cells))
-    return "\n".join(lines) + "\n"
+    """Every window of a DetectionResult in the detector_io scores CSV (stream_csv --scores-csv)."""
+    from mpmpp import _core
+
+    return _core.detection_scores_csv(*result.core)
 
 
 def monitor_saved(out_dir: str, data_path: str):
@@ -96,7 +88,7 @@ def main(out_dir: str) -> None:
     result = monitor_saved(out_dir, data_path)
     if [{k: v for k, v in a.items() if k != "channel"} for a in result.alarms] != batch["alarms"]:
         raise SystemExit("the reloaded detector's alarms differ from mpmpp detect's")
-    for name, text in (("expected_alarms.csv", alarms_csv(batch)), ("expected_scores.csv", scores_csv(result))):
+    for name, text in (("expected_alarms.csv", alarms_csv(result)), ("expected_scores.csv", scores_csv(result))):
         with open(os.path.join(out_dir, name), "w", encoding="utf-8") as f:
             f.write(text)
     print(f"{out_dir}: {len(batch['windows'])} windows kept, {len(batch['skipped_windows'])} skipped, "

@@ -2,6 +2,10 @@
 // One binding file per concept; module.cpp calls each in dependency order.
 #include <pybind11/pybind11.h>
 
+#include <cstdint>
+
+#include "mpmpp/one_class_svm.hpp"
+
 namespace mpmpp::bindings {
 void bind_transfer_function(pybind11::module_& m);
 void bind_model_io(pybind11::module_& m);
@@ -17,5 +21,11 @@ void bind_actuator(pybind11::module_& m);
 void bind_pid_controller(pybind11::module_& m);
 void bind_closed_loop(pybind11::module_& m);
 void bind_detector(pybind11::module_& m);
+void bind_detector_training(pybind11::module_& m);
+void bind_detector_io(pybind11::module_& m);
 void bind_streaming_detector(pybind11::module_& m);
+
+// The solver options from the keyword arguments the SVM functions share.
+OneClassSvmOptions svm_options(double nu, double kernel_scale, double tol, double cache_mb, bool shrinking,
+                               std::int64_t max_iter);
 }  // namespace mpmpp::bindings

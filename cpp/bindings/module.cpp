@@ -17,5 +17,7 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_pid_controller(m);
   mpmpp::bindings::bind_closed_loop(m);
   mpmpp::bindings::bind_detector(m);
+  mpmpp::bindings::bind_detector_training(m);
+  mpmpp::bindings::bind_detector_io(m);
   mpmpp::bindings::bind_streaming_detector(m);
 }

@@ -9,6 +9,18 @@ namespace py = pybind11;
 
 namespace mpmpp::bindings {
 
+OneClassSvmOptions svm_options(double nu, double kernel_scale, double tol, double cache_mb, bool shrinking,
+                               std::int64_t max_iter) {
+  OneClassSvmOptions o;
+  o.nu = nu;
+  o.kernel_scale = kernel_scale;
+  o.tol = tol;
+  o.cache_mb = cache_mb;
+  o.shrinking = shrinking;
+  o.max_iter = max_iter;
+  return o;
+}
+
 void bind_one_class_svm(py::module_& m) {
   using Ref = Eigen::Ref<const RowMatrixXd>;
   py::class_<OneClassSvmModel>(m, "OneClassSvmModel",
@@ -31,14 +43,7 @@ void bind_one_class_svm(py::module_& m) {
       "fit_one_class_svm",
       [](const Ref& X, double nu, double kernel_scale, double tol, double cache_mb, bool shrinking,
          std::int64_t max_iter) {
-        OneClassSvmOptions o;
-        o.nu = nu;
-        o.kernel_scale = kernel_scale;
-        o.tol = tol;
-        o.cache_mb = cache_mb;
-        o.shrinking = shrinking;
-        o.max_iter = max_iter;
-        return fit_one_class_svm(X, o);
+        return fit_one_class_svm(X, svm_options(nu, kernel_scale, tol, cache_mb, shrinking, max_iter));
       },
       py::arg("X"), py::arg("nu") = 0.5, py::arg("kernel_scale") = 1.0, py::arg("tol") = 1e-3,
       py::arg("cache_mb") = 200.0, py::arg("shrinking") = true, py::arg("max_iter") = -1,

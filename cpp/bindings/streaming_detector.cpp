@@ -1,4 +1,4 @@
-// Thin bindings of the streaming detector (issue 9): mostly for tests and notebooks; plants
+// Thin bindings of the streaming detector: mostly for tests and notebooks; plants
 // link the C++ library directly.
 #include "mpmpp/streaming_detector.hpp"
 

@@ -9,6 +9,7 @@
 #include "mpmpp/error.hpp"
 #include "mpmpp/mismatch_indicator.hpp"
 #include "mpmpp/model_io.hpp"
+#include "mpmpp/one_class_svm.hpp"
 #include "text_file.hpp"
 
 namespace mpmpp {
@@ -116,9 +117,12 @@ void ChannelScorer::validate(int feature_length, const std::string& where) const
 
 // -------------------------------------------------------------------------------- Detector
 
+std::string channel_label(const std::string& output, const std::string& input) {
+  return input.empty() ? "H[" + output + "]" : "G[" + output + " <- " + input + "]";
+}
+
 std::string channel_label(const Model& model, const MonitoredChannel& c) {
-  if (c.kind == MonitoredChannel::Kind::Noise) return "H[" + model.outputs[c.output] + "]";
-  return "G[" + model.outputs[c.output] + " <- " + model.inputs[c.input] + "]";
+  return channel_label(model.outputs[c.output], c.kind == MonitoredChannel::Kind::Noise ? "" : model.inputs[c.input]);
 }
 
 Detector::Detector(Model nominal, DetectorConfig config, double train_end_s,

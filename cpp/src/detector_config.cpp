@@ -73,17 +73,17 @@ DetectorConfig DetectorConfig::mimo() {
   // training windows; 8 h still ends before the scenario's first change, the noise change at
   // 9.58 h). Seeds 0-11: Table 3 verbatim gives a false MPM alarm in 92% of runs.
   // OE step with FIR structure (Remark 3: no structure assumed) instead of FOPTD: linear, so
-  // ~3x less CPU per demo, fewer false alarms (seeds 0-11 and 100-111 with the earlier
-  // independent draws: none against 8%), and its OE covariance is the features' covariance.
+  // ~3x less CPU per demo, fewer false alarms (seeds 0-11 and 100-111 with independent
+  // draws: none against 8%), and its OE covariance is the features' covariance.
   c.train_duration_s = 8 * 3600.0;
   c.oe_structure = OeStructure::Fir;
   // Estimator resampling (Resampling::Estimator): the training cloud and each window's
   // deviation are weighed by the window estimate's covariance (two-step: the OE step's with
   // the ARX step's A(q) uncertainty carried through) and by that of the training mean, not
-  // only by the spread of ~4 independent training windows. History: sample-covariance draws
-  // (Resampling::Covariance) needed alpha 5 to hold false MPM alarms to 3% (100 seeds), and
-  // then G31's doubling (2-6 window spreads) was never detected; with the OE step's own
-  // covariance and the mean taken as exact, alpha 1.75 gave 93% / 5%.
+  // only by the spread of ~4 independent training windows. Sample-covariance draws
+  // (Resampling::Covariance) need alpha 5 to hold false MPM alarms to 3% (100 seeds), and
+  // then G31's doubling (2-6 window spreads) is never detected; with the OE step's own
+  // covariance and the mean taken as exact, alpha 1.75 gives 93% / 5%.
   // The outlier fraction is fixed at 0.05 (a 95% region of the resampled cloud), not
   // cross-validated: on a synthetic Gaussian cloud the cross-validation picks any value of the
   // grid (0.02 or 0.3 for the same channel with another random draw), which moved G31's

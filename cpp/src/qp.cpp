@@ -494,15 +494,12 @@ QpSolver::QpSolver(const Eigen::Ref<const Eigen::MatrixXd>& P, const Eigen::Ref<
   if (!(settings.dependency_tol >= 0.0)) throw InputError("dependency_tol must be >= 0");
   if (!(settings.infinite_bound > 0.0)) throw InputError("infinite_bound must be > 0");
   Eigen::MatrixXd A_checked = A.rows() == 0 ? Eigen::MatrixXd(0, P.rows()) : Eigen::MatrixXd(A);
-  impl_ = new Impl(P, A_checked, settings);
+  impl_ = std::make_unique<Impl>(P, A_checked, settings);
 }
 
-QpSolver::~QpSolver() { delete impl_; }
-QpSolver::QpSolver(QpSolver&& other) noexcept : impl_(std::exchange(other.impl_, nullptr)) {}
-QpSolver& QpSolver::operator=(QpSolver&& other) noexcept {
-  std::swap(impl_, other.impl_);
-  return *this;
-}
+QpSolver::~QpSolver() = default;
+QpSolver::QpSolver(QpSolver&&) noexcept = default;
+QpSolver& QpSolver::operator=(QpSolver&&) noexcept = default;
 
 const QpResult& QpSolver::solve(const Eigen::Ref<const Eigen::VectorXd>& q,
                                 const Eigen::Ref<const Eigen::VectorXd>& l,

@@ -1,9 +1,9 @@
 """One-class SVM on FIR coefficient vectors (paper Section 4), resampling (Section 4.2) and the
 cross-validated choice of the outlier fraction.
 
-The solver is the C++ SMO in ``mpmpp._core`` (libsvm's algorithm, reproducing
-``sklearn.svm.OneClassSVM`` with ``gamma = 1 / kernel_scale`` to round-off). Two scalings of the
-same solution are exposed:
+The solver (SMO, libsvm's algorithm, reproducing ``sklearn.svm.OneClassSVM`` with
+``gamma = 1 / kernel_scale`` to round-off), the resampling and the cross-validation are C++
+(``mpmpp._core``). Two scalings of the same solution are exposed:
 
 * scikit-learn / libsvm scaling: ``dual_coef_`` in (0, 1] summing to ``nu * l`` and
   ``decision_function(x) = sum_i dual_coef_i k(sv_i, x) - offset_``;
@@ -15,7 +15,6 @@ same solution are exposed:
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 from numbers import Integral, Real
 
 import numpy as np
@@ -29,7 +28,6 @@ __all__ = [
     "OneClassSVM",
     "outlier_offset",
     "cross_validate_outlier_fraction",
-    "OutlierFractionCV",
     "resample",
     "coefficient_statistics",
 ]
@@ -37,25 +35,8 @@ __all__ = [
 
 def outlier_offset(scores, fraction):
     """Offset that makes ``fraction`` of ``scores`` fall below it (MATLAB ``fitcsvm``'s
-    OutlierFraction behaviour, applied after training).
-
-    With ``n`` scores sorted ascending as ``s_1 <= ... <= s_n``, ``k = round(fraction * n)``
-    clipped to ``[1, n - 1]`` (a positive fraction flags at least one point and never all of
-    them) and the offset is the midpoint ``(s_k + s_{k+1}) / 2``: exactly ``k`` points get a
-    negative decision value unless scores tie at the cut (tied points score 0 and ``predict``
-    calls them outliers, as libsvm does for 0). With one score the offset is that score.
-    """
-    s = np.sort(np.asarray(scores, dtype=np.float64).ravel())
-    if not 0.0 < fraction < 1.0:
-        raise ValueError(f"fraction: must be in (0, 1), got {fraction}")
-    n = s.size
-    if n == 0:
-        raise ValueError("scores: empty")
-    if n == 1:
-        return float(s[0])
-    k = int(np.floor(fraction * n + 0.5))
-    k = min(max(k, 1), n - 1)
-    return float(0.5 * (s[k - 1] + s[k]))
+    OutlierFraction, applied after training; the rule is in detector_training.hpp)."""
+    return _core.outlier_offset(np.ascontiguousarray(scores, dtype=np.float64).ravel(), float(fraction))
 
 
 class OneClassSVM(OutlierMixin, BaseEstimator):
@@ -203,63 +184,28 @@ class OneClassSVM(OutlierMixin, BaseEstimator):
         return tags
 
 
-@dataclass
-class OutlierFractionCV:
-    """Result of :func:`cross_validate_outlier_fraction`."""
-
-    fractions: np.ndarray  # the grid
-    accuracy: np.ndarray  # validation accuracy per grid value
-    outlier_fraction: float  # the chosen value
-    validation_accuracy: float  # its accuracy
-    n_folds: int
-
-
 def cross_validate_outlier_fraction(X, fractions=(0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3),
-                                    n_folds=10, seed=0, **svm_params):
-    """K-fold cross-validation of the outlier fraction on normal (training) data.
+                                    n_folds=10, seed=0, nu=0.5, kernel_scale=1.0, tol=1e-3,
+                                    cache_mb=200.0, shrinking=True, max_iter=-1):
+    """K-fold cross-validation of the outlier fraction on normal (training) data, the rule
+    of detector_training.hpp: the rows are shuffled (``order``, from ``seed``) and cut into
+    ``n_folds`` folds; an SVM (the solver parameters) is fitted on all folds but one, and each
+    grid value's offset is placed on its training scores. The accuracy of a fraction f is the
+    share of held-out rows accepted, pooled over folds; the chosen fraction is the one whose
+    accuracy is closest to 1 - f (ties to the smaller f). The paper's 0.9498 at f = 0.05 reads,
+    under this definition, as a held-out acceptance rate within 0.1 % of the designed 95 %.
 
-    The rows of X are shuffled with ``numpy.random.default_rng(seed)`` and split into
-    ``n_folds`` near-equal folds. For every fold an :class:`OneClassSVM` (``svm_params``) is
-    trained on the other folds; the solver does not depend on the outlier fraction, so each
-    grid value only changes the offset (:func:`outlier_offset` on the training scores).
-
-    Validation accuracy of a fraction f = share of held-out points scored positive (accepted as
-    normal), pooled over all folds. All data are normal, so the ideal value is 1 - f: a
-    held-out model is then rejected no more often than a training model. The chosen fraction is
-    the one whose accuracy is closest to 1 - f (calibration; ties go to the smaller f): smaller
-    values over-fit (held-out models fall outside a boundary drawn tightly around the training
-    ones, accuracy well below 1 - f), larger ones reject more normal windows than needed. The
-    paper's 0.9498 at f = 0.05 reads, under this definition, as a held-out acceptance rate
-    within 0.1 % of the designed 95 %.
-    """
-    X = np.ascontiguousarray(np.asarray(X, dtype=np.float64))
+    Returns an object with ``fractions``, ``accuracy``, ``outlier_fraction``,
+    ``validation_accuracy``, ``n_folds`` and ``order``."""
+    X = np.ascontiguousarray(X, dtype=np.float64)
     if X.ndim != 2:
         raise ValueError(f"X: expected a 2-D array, got shape {X.shape}")
-    fractions = np.asarray(fractions, dtype=np.float64).ravel()
-    if fractions.size == 0 or np.any(~((fractions > 0) & (fractions < 1))):
-        raise ValueError("fractions: need a non-empty grid of values in (0, 1)")
-    if isinstance(n_folds, bool) or not isinstance(n_folds, Integral) or n_folds < 2:
+    if isinstance(n_folds, bool) or not isinstance(n_folds, Integral):
         raise ValueError(f"n_folds: must be an integer >= 2, got {n_folds!r}")
-    n = X.shape[0]
-    if n < 2 * n_folds:
-        raise ValueError(f"X: need at least 2 * n_folds = {2 * n_folds} rows, got {n}")
-    svm_params = dict(svm_params)
-    svm_params.pop("outlier_fraction", None)
-    order = np.random.default_rng(seed).permutation(n)
-    accepted = np.zeros(fractions.size)
-    for held in np.array_split(order, n_folds):
-        train = np.setdiff1d(order, held, assume_unique=True)
-        svm = OneClassSVM(**svm_params).fit(X[train])
-        train_scores = svm.score_samples(X[train])
-        held_scores = svm.score_samples(X[held])
-        for k, f in enumerate(fractions):
-            accepted[k] += np.count_nonzero(held_scores - outlier_offset(train_scores, f) > 0)
-    accuracy = accepted / n
-    gap = np.abs(accuracy - (1.0 - fractions))
-    best = min(range(fractions.size), key=lambda k: (gap[k], fractions[k]))
-    return OutlierFractionCV(fractions=fractions, accuracy=accuracy,
-                             outlier_fraction=float(fractions[best]),
-                             validation_accuracy=float(accuracy[best]), n_folds=int(n_folds))
+    return _core.cross_validate_outlier_fraction(
+        X, [float(f) for f in np.ravel(fractions)], int(n_folds), int(seed), nu=float(nu),
+        kernel_scale=float(kernel_scale), tol=float(tol), cache_mb=float(cache_mb),
+        shrinking=bool(shrinking), max_iter=int(max_iter))
 
 
 def coefficient_statistics(features):

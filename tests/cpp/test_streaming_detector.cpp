@@ -19,6 +19,7 @@
 #include "mpmpp/error.hpp"
 #include "mpmpp/model_io.hpp"
 #include "mpmpp/streaming_detector.hpp"
+#include "small_loop.hpp"
 
 using namespace mpmpp;
 
@@ -53,10 +54,7 @@ std::vector<StreamWindow> stream_all(StreamingDetector& s, const Eigen::VectorXd
   return out;
 }
 
-struct Series {
-  Eigen::VectorXd t;
-  Eigen::MatrixXd u, y;
-};
+using Series = test_loops::LoopSamples;
 
 Series columns(const DataTable& d, const Model& m) {
   Series s{d.time_s, Eigen::MatrixXd(d.num_samples(), m.num_inputs()), Eigen::MatrixXd(d.num_samples(), m.num_outputs())};
@@ -68,21 +66,8 @@ Series columns(const DataTable& d, const Model& m) {
 // A cheap detector for long streams: short windows, low ARX orders, random SVMs (the
 // stream does not care how the SVMs were trained).
 Detector cheap_detector(double train_end_s) {
-  Eigen::VectorXd b(1), a(2), hn(2), hd(2);
-  b << 0.1003;
-  a << 1.0, -0.9048;
-  hn << 1.0, -0.3;
-  hd << 1.0, 0.6;
-  Model m = make_model("siso", 5.0, {"u"}, {"y"}, {{"y", {{"u", TransferFunction(b, a, 3)}}}},
-                       {{"y", TransferFunction(hn, hd)}});
-  DetectorConfig c = DetectorConfig::paper_siso();
-  c.window_s = 600;
-  c.step_s = 300;
-  c.inspection_s = 3000;
-  c.arx_order_a = 3;
-  c.arx_order_b = 3;
-  c.fir_length = 6;
-  c.oe_structure = OeStructure::Fir;
+  const Model m = test_loops::small_siso_model();
+  const DetectorConfig c = test_loops::short_window_config(3000);
   WindowFeatures f(m, c);
   std::mt19937_64 rng(7);
   std::normal_distribution<double> n(0.0, 1.0);
@@ -101,24 +86,6 @@ Detector cheap_detector(double train_end_s) {
     scorers.push_back(s);
   }
   return Detector(m, c, train_end_s, scorers);
-}
-
-// Closed-loop-free synthetic plant data: random-step input through the detector's own
-// model, white noise through its noise model; optional missing cells.
-Series synthetic(const Model& m, Eigen::Index n, std::uint64_t seed, double t0 = 0.0) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> e(0.0, 0.05);
-  std::uniform_real_distribution<double> level(-1.0, 1.0);
-  Series s{Eigen::VectorXd(n), Eigen::MatrixXd(n, 1), Eigen::MatrixXd(n, 1)};
-  double v = 0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    if (k % 13 == 0) v = level(rng);
-    s.u(k, 0) = v;
-    s.t[k] = t0 + 5.0 * static_cast<double>(k);
-  }
-  Eigen::VectorXd white = Eigen::VectorXd::NullaryExpr(n, [&] { return e(rng); });
-  s.y.col(0) = m.process[0][0]->filter(s.u.col(0)) + m.noise[0].filter(white);
-  return s;
 }
 
 long resident_kb() {
@@ -189,7 +156,7 @@ TEST(StreamingDetector, PythonTrainedDetectorMatchesBatchScoresAndAlarms) {
 // The same in C++ alone against Detector::monitor, on data with gaps in training and later.
 TEST(StreamingDetector, MatchesBatchMonitorWithMissingValues) {
   const Detector d = cheap_detector(3600.0);
-  Series data = synthetic(d.model(), 2000, 3, 1000.0);
+  Series data = test_loops::random_step_samples(d.model(), 2000, 3, 1000.0);
   data.y(100, 0) = kNaN;   // training
   data.u(900, 0) = kNaN;   // monitoring
   data.y(1500, 0) = kNaN;
@@ -222,7 +189,7 @@ TEST(StreamingDetector, MatchesBatchMonitorWithMissingValues) {
 
 TEST(StreamingDetector, BlockPushEqualsSamplePush) {
   const Detector d = cheap_detector(1800.0);
-  const Series data = synthetic(d.model(), 700, 5);
+  const Series data = test_loops::random_step_samples(d.model(), 700, 5);
   StreamingDetector one(d), block(d);
   const auto a = stream_all(one, data.t, data.u, data.y);
   std::vector<StreamWindow> b;
@@ -278,7 +245,7 @@ TEST(StreamingDetector, CheckpointRestartGivesBitIdenticalScores) {
 
 TEST(StreamingDetector, CheckpointErrorsAreClearAndLeaveStateUnchanged) {
   const Detector d = cheap_detector(1800.0);
-  const Series data = synthetic(d.model(), 300, 9);
+  const Series data = test_loops::random_step_samples(d.model(), 300, 9);
   StreamingDetector s(d);
   stream_all(s, data.t, data.u, data.y, 0, 200);
   const std::string good = s.checkpoint_json();
@@ -363,7 +330,7 @@ TEST(StreamingDetector, MemoryStaysFlatOverSevenDays) {
   const Detector d = cheap_detector(3600.0);
   StreamingDetector s(d);
   const Eigen::Index per_day = 86400 / 5;
-  const Series day = synthetic(d.model(), per_day, 11);
+  const Series day = test_loops::random_step_samples(d.model(), per_day, 11);
   StreamWindow w;
   // Heap in use (glibc) and resident memory after day 2 and after day 7, read right at the
   // day's end (before any other call allocates). Day 1 is warm-up: reused workspaces (the

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import mpmpp
-from mpmpp.detect import train_scorer
+from mpmpp import _core
 
 
 def anticorrelated_fir_windows(n_windows=73, seed=0):
@@ -29,8 +29,8 @@ def config(resampling):
 def test_doubled_gain_is_outside_the_covariance_cloud_only():
     X = anticorrelated_fir_windows()
     doubled = 2 * X.mean(0)
-    independent = train_scorer(X, config("independent"), seed=1)
-    covariance = train_scorer(X, config("covariance"), seed=1)
+    independent = _core.train_channel_scorer(X, config("independent"), seed=1)
+    covariance = _core.train_channel_scorer(X, config("covariance"), seed=1)
     assert independent.feature_decorrelation.size == 0
     assert covariance.feature_decorrelation.shape == (2, 2)
     # The independent box is wide along the gain direction: the doubled gain still fits.
@@ -44,7 +44,7 @@ def test_doubled_gain_is_outside_the_covariance_cloud_only():
 def test_decorrelation_whitens_the_resampled_models():
     X = anticorrelated_fir_windows(seed=3)
     c = config("covariance")
-    s = train_scorer(X, c, seed=2)
+    s = _core.train_channel_scorer(X, c, seed=2)
     Z = mpmpp.resample(X, c.resampled_models, c.alpha, 2, correlated=True)
     z = ((Z - s.feature_mean) / s.feature_scale) @ s.feature_decorrelation.T
     np.testing.assert_allclose(np.cov(z, rowvar=False, ddof=0), np.eye(2) / 2, atol=1e-12)
@@ -52,7 +52,7 @@ def test_decorrelation_whitens_the_resampled_models():
 
 def test_too_few_independent_windows_fall_back_to_independent_draws():
     X = anticorrelated_fir_windows(n_windows=25)  # 25 windows span 4 h: 2 independent, 2 coefficients
-    s = train_scorer(X, config("covariance"), seed=1)
+    s = _core.train_channel_scorer(X, config("covariance"), seed=1)
     assert s.feature_decorrelation.size == 0
 
 

@@ -123,6 +123,28 @@ def test_nan_windows_are_skipped_and_reported(trained):
     assert len(r.to_dict()["skipped_windows"]) == expect.sum()
 
 
+def test_json_writer_carries_the_result_tables(trained, tmp_path):
+    """The C++ writer (detector_io) against the Python tables it formats: every kept window's
+    times, scores and indicator, every skipped window with its reason, every alarm."""
+    model, data, _, detector = trained
+    gap = data.copy()
+    gap.loc[5000:5010, "dry_weight"] = np.nan
+    r = detector.monitor(gap)
+    d = r.to_dict()
+    keep = ~r.windows["skipped"].to_numpy(bool)
+    assert [(w["start_s"], w["end_s"]) for w in d["windows"]] == list(
+        zip(r.windows["start_s"][keep], r.windows["end_s"][keep]))
+    np.testing.assert_array_equal(np.array([w["scores"] for w in d["windows"]]), r.scores[keep])
+    np.testing.assert_array_equal(np.array([w["indicator"] for w in d["windows"]]), r.indicator[keep])
+    assert [(w["start_s"], w["reason"]) for w in d["skipped_windows"]] == list(
+        zip(r.windows["start_s"][~keep], r.windows["skip_reason"][~keep]))
+    assert d["alarms"] == [{k: v for k, v in a.items() if k != "channel"} for a in r.alarms]
+    assert (d["train_end_s"], d["threshold"], d["channels"]) == (r.train_end_s, r.threshold, r.channels)
+    path = tmp_path / "detect.json"
+    r.save_json(path)
+    assert json.loads(path.read_text()) == d
+
+
 def test_save_load_new_process_identical_scores(trained, tmp_path):
     model, data, result, detector = trained
     path = tmp_path / "detector.json"

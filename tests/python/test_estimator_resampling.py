@@ -13,7 +13,7 @@ import scipy.linalg
 
 import mpmpp
 from mpmpp import _core, scenarios
-from mpmpp.detect import Detector, _directional_max, _draw_models, make_config, mean_variance_ratio, train_scorer
+from mpmpp.detect import Detector, make_config
 from mpmpp.evaluate import nominal_model
 from mpmpp.identify import arx_oe_model, channel_inputs
 
@@ -54,7 +54,7 @@ def symmetric_root(M, power):
 def scorer():
     X, covs, C_ref = windows_and_covariances()
     c = estimator_config(outlier_fraction=0.05)
-    return train_scorer(X, c, seed=1, covariances=covs), X, C_ref
+    return _core.train_channel_scorer(X, c, seed=1, covariances=covs), X, C_ref
 
 
 def test_reference_covariance_is_the_mean_window_covariance(scorer):
@@ -66,19 +66,19 @@ def test_reference_covariance_is_the_mean_window_covariance(scorer):
 
 def test_mean_variance_ratio_analytic_cases():
     W = 100
-    assert mean_variance_ratio([0, 100, 200, 300], W) == pytest.approx(1 / 4)  # disjoint: 1/n
-    assert mean_variance_ratio([0, 0, 0], W) == pytest.approx(1.0)              # one window thrice
+    assert _core.mean_variance_ratio([0, 100, 200, 300], W) == pytest.approx(1 / 4)  # disjoint: 1/n
+    assert _core.mean_variance_ratio([0, 0, 0], W) == pytest.approx(1.0)              # one window thrice
     # Two windows overlapping by half: var((A + B)/2 + (B + C)/2) / 4 with A, B, C halves = 3/4.
-    assert mean_variance_ratio([0, 50], W) == pytest.approx(0.75)
+    assert _core.mean_variance_ratio([0, 50], W) == pytest.approx(0.75)
     # The paper MIMO training: 73 windows of 2 h every 5 min in 8 h.
-    assert mean_variance_ratio(np.arange(73) * 60, 1440) == pytest.approx(0.2928, abs=1e-4)
+    assert _core.mean_variance_ratio(np.arange(73) * 60, 1440) == pytest.approx(0.2928, abs=1e-4)
     with pytest.raises(ValueError, match="mean_variance_ratio"):
-        mean_variance_ratio([], W)
+        _core.mean_variance_ratio([], W)
 
 
 def test_mean_covariance_widens_the_frame_and_every_window():
     X, covs, C_ref = windows_and_covariances(seed=6)
-    s = train_scorer(X, estimator_config(), seed=1, covariances=covs, mean_ratio=0.25)
+    s = _core.train_channel_scorer(X, estimator_config(), seed=1, covariances=covs, mean_ratio=0.25)
     np.testing.assert_allclose(s.mean_covariance, 0.25 * C_ref, rtol=1e-14)
     np.testing.assert_allclose(s.reference_covariance, 1.25 * C_ref, rtol=1e-14)
     plain = without_reference(s)
@@ -101,12 +101,12 @@ def test_draws_have_covariance_alpha_squared_directional_max():
     Vinv = np.linalg.inv(V)
     expected_spread = Vinv.T @ np.diag(np.maximum(lam, 1.0)) @ Vinv
     assert lam.min() < 1 < lam.max()  # both branches of the max are exercised
-    spread = _directional_max(C_ref, S)
+    spread = _core.directional_max(C_ref, S)
     np.testing.assert_allclose(spread, expected_spread, rtol=1e-10)
     for lower in (C_ref, S):  # at least as wide as either estimate
         assert np.linalg.eigvalsh(spread - lower).min() > -1e-12 * np.abs(spread).max()
     c = estimator_config(resampled_models=200_000)
-    Z, correlated = _draw_models(X, c, 7, C_ref, noise=False)
+    Z, correlated = _core.draw_training_models(X, c, 7, C_ref, noise=False)
     assert correlated
     np.testing.assert_allclose(np.cov(Z, rowvar=False), c.alpha ** 2 * expected_spread, rtol=0.02,
                                atol=0.02 * c.alpha ** 2 * np.abs(expected_spread).max())
@@ -116,11 +116,11 @@ def test_draws_have_covariance_alpha_squared_directional_max():
 def test_noise_channels_use_noise_alpha_and_independent_draws():
     X, _, _ = windows_and_covariances(seed=5)
     c = estimator_config(resampled_models=100_000)
-    Z, correlated = _draw_models(X, c, 3, None, noise=True)
+    Z, correlated = _core.draw_training_models(X, c, 3, noise=True)
     assert not correlated
     np.testing.assert_allclose(Z.std(0), c.noise_alpha * X.std(0, ddof=1), rtol=0.02)
     c.noise_alpha = 0  # 0: the process channels' alpha
-    Z, _ = _draw_models(X, c, 3, None, noise=True)
+    Z, _ = _core.draw_training_models(X, c, 3, noise=True)
     np.testing.assert_allclose(Z.std(0), c.alpha * X.std(0, ddof=1), rtol=0.02)
 
 

@@ -4,23 +4,24 @@
 // A Detector holds, per monitored channel (window_features.hpp: every process channel of the
 // nominal model, and the noise model of every output), the trained one-class SVM that bounds
 // the "normal" cluster of estimates from the training period, with the feature
-// standardisation it was trained in. Training (resampling, cross-validated outlier fraction,
-// SVM fit) is orchestrated by Python (mpmpp.detect), which builds the Detector from the
-// trained parts; everything a plant needs afterwards is here, in C++ alone:
+// standardisation it was trained in. train_detector (detector_training.hpp) builds it from
+// the training windows; everything a plant needs afterwards is here:
 //   * score_window: ARX-OE on one window -> SVM score h(x) per channel (eq. 20, paper scale);
 //   * monitor: every window of a series -> scores (0 inside the training period, as in the
 //     paper's Figs 4, 7, 8; NaN for skipped windows), the indicator of eq. 23 and the
 //     alarms per channel (mismatch_indicator.hpp) with their start times;
-//   * save / load: a versioned JSON file ("format": "mpmpp-detector", "version": 3),
+//   * save / load: a versioned JSON file ("format": "mpmpp-detector", "version":
+//     kFormatVersion; CHANGELOG.md "File formats" lists the versions, all of which load),
 //     written atomically; a missing, truncated, corrupt or newer file is a clear InputError.
-// The streaming front end of issue 9 is WindowFeatures + ChannelScorer + MismatchIndicator.
+// The streaming front end (streaming_detector.hpp) is WindowFeatures + ChannelScorer +
+// MismatchIndicator.
 #include <Eigen/Dense>
 #include <string>
 #include <vector>
 
 #include "mpmpp/detector_config.hpp"
+#include "mpmpp/eigen_types.hpp"
 #include "mpmpp/model.hpp"
-#include "mpmpp/one_class_svm.hpp"
 #include "mpmpp/window_features.hpp"
 
 namespace mpmpp {
@@ -123,7 +124,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 4;  // 2 added feature_decorrelation, 3 reference_covariance, 4 mean_covariance
+  static constexpr int kFormatVersion = 4;  // history in CHANGELOG.md, "File formats"
 
  private:
   Model model_;
@@ -133,7 +134,9 @@ class Detector {
   std::vector<MonitoredChannel> channels_;
 };
 
-// Short channel name for messages and plots: "G[y <- u]" or "H[y]".
+// Short channel name for messages, tables and plots: "G[y <- u]" for a process channel,
+// "H[y]" for a noise channel (input empty).
+std::string channel_label(const std::string& output, const std::string& input);
 std::string channel_label(const Model& model, const MonitoredChannel& channel);
 
 }  // namespace mpmpp

@@ -14,7 +14,7 @@
 //    gives no evidence of mismatch; it can delay an alarm, never create one.
 // Alarm: active while negatives >= alarm_count (i.e. s >= s_T); it starts at the window
 // where it becomes active and clears when s drops below s_T; a channel may alarm again.
-// State is O(n_T) and fixed-size (a ring of flags), suited to streaming (issue 9).
+// State is O(n_T) and fixed-size (a ring of flags), suited to streaming.
 #include <cstdint>
 #include <vector>
 

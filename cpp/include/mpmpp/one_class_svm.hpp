@@ -16,9 +16,9 @@
 
 #include <cstdint>
 
-namespace mpmpp {
+#include "mpmpp/eigen_types.hpp"
 
-using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+namespace mpmpp {
 
 struct OneClassSvmOptions {
   double nu = 0.5;            // (0, 1]: upper bound on the outlier fraction, lower bound on SVs

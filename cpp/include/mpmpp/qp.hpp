@@ -6,6 +6,8 @@
 // is active, y_i < 0 when the lower bound is active, and P x + q + A'y = 0.
 #include <Eigen/Dense>
 
+#include <memory>
+
 namespace mpmpp {
 
 enum class QpStatus {
@@ -63,7 +65,7 @@ class QpSolver {
 
  private:
   struct Impl;
-  Impl* impl_;
+  std::unique_ptr<Impl> impl_;
 };
 
 // One-shot convenience: builds a QpSolver and solves once.

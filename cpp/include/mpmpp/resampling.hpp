@@ -16,7 +16,7 @@
 
 #include <cstdint>
 
-#include "mpmpp/one_class_svm.hpp"
+#include "mpmpp/eigen_types.hpp"
 
 namespace mpmpp {
 

@@ -1,8 +1,8 @@
 #pragma once
-// Plant-side streaming front end of the trained MPM / noise-change detector (issue 9).
+// Plant-side streaming front end of the trained MPM / noise-change detector.
 //
-// A StreamingDetector wraps a Detector trained offline (Python saves it, Detector::load
-// reads it) and is fed one sample at a time, as a historian or an MPC monitoring service
+// A StreamingDetector wraps a trained Detector (train_detector, or Detector::load of a file
+// saved by Python or C++) and is fed one sample at a time, as a historian or an MPC monitoring service
 // receives them. It keeps only the last window of samples (a ring buffer of
 // window_samples rows) plus the n_T-window ring of each channel's indicator, so memory
 // does not grow with the run length. Whenever a moving window completes (the first after

@@ -79,8 +79,7 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
     findings = [diagnosis.finding(i) for i in ids]
     changes: list[ModelChange] = []
     for f in findings:
-        changes.append(f.change)
-        changes += getattr(f, "extra_changes", [])
+        changes += f.model_changes()
     new_model = apply_changes(model, changes, name)
 
     time_s = data["time"].to_numpy(dtype=float)

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .diagnose import DiagnoseResult, ModelChange, diagnose, one_step_errors
-from .signals import extract
+from .diagnose.pipeline import diagnosis_signals
 
 
 @dataclass
@@ -82,9 +82,8 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
         changes += f.model_changes()
     new_model = apply_changes(model, changes, name)
 
-    time_s = data["time"].to_numpy(dtype=float)
-    reference = None if train_end_s is None else time_s < train_end_s
-    sig = extract(model, data, reference=reference)
+    sig = diagnosis_signals(model, data, train_end_s).sig
+    time_s = sig.time_s
     block = max(int(round(3600.0 / sig.sample_time_s)), 10)
     heldout = (np.arange(len(time_s)) // block) % 2 == 1
     errors = []

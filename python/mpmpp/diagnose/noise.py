@@ -14,10 +14,10 @@ import numpy as np
 
 from .._core import TransferFunction
 from .errors import held_out_error
-from .result import Finding, ModelChange
+from .result import Finding, InsufficientData, ModelChange
 from .scoring import confidence
 from .trend import trend_fit
-from .whitening import AR_ORDER, SETTLE, OutputResidual
+from .whitening import AR_ORDER, MIN_AR_ROWS_PER_COEFFICIENT, SETTLE, OutputResidual, masked_ar, stable
 
 DRIFT_POLES = (0.995, 0.998, 0.999, 0.9995)
 DRIFT_ZEROS = (0.8, 0.9, 0.95, 0.98)
@@ -67,6 +67,9 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
     n_after = int(after.sum())
     if n_after < 4 * AR_ORDER:
         return None
+    if min(f.sum() for f in fold) < MIN_AR_ROWS_PER_COEFFICIENT * AR_ORDER:
+        raise InsufficientData(f"{out.name}: too few held-out rows after t={sig.time_s[onset] / 3600:.1f} h "
+                               f"to test a disturbance change there")
 
     def heldout_gain(make_filter):
         """sum over both folds of n_test log(var nominal / var filtered), filter fitted on the other fold."""
@@ -109,6 +112,12 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
     candidates.append(DisturbanceCandidate("output_drift", drift.gain - (2 + onset_params) * logn, drift.gain, 0.0))
     if drift_onset is not None:
         candidates = [c for c in candidates if c.effect == "output_drift"]
+    if out.noise_estimated:
+        # The noise model was fitted to this record: a "change" present from its start is only
+        # the estimate's imperfection, not a change of the disturbance.
+        candidates = [c for c in candidates if c.effect != "noise_change" or onset > first_onset]
+    if not candidates:
+        return None
     best = max(candidates, key=lambda c: c.score)
     if best.score <= 0.0 and drift_onset is None:
         return None
@@ -154,22 +163,3 @@ def _drift_onset(out: OutputResidual, first_onset: int, grid: int = 120) -> tupl
     fit = trend_fit(np.nan_to_num(out.e), out.weight > 0, out.noise.inverse(), first_onset, grid,
                     max(first_onset, 2 * SETTLE))
     return fit.onset, fit.drop / out.sigma[0] ** 2
-
-
-def masked_ar(e: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Least-squares AR(AR_ORDER) on the rows in mask (lags may reach outside it)."""
-    rows = np.flatnonzero(mask)
-    rows = rows[rows >= AR_ORDER]
-    lagged = e[rows[:, None] - np.arange(1, AR_ORDER + 1)]
-    a = np.linalg.solve(lagged.T @ lagged, lagged.T @ e[rows])
-    return np.r_[1.0, -a]
-
-
-def stable(poly: np.ndarray) -> np.ndarray:
-    """Reflect roots outside the unit circle inside (same spectrum shape): H/A must be stable."""
-    roots = np.roots(poly)
-    if np.all(np.abs(roots) < 1.0):
-        return poly
-    mag = np.abs(roots)
-    roots = np.where(mag >= 1.0, np.minimum(1.0 / np.maximum(mag, 1e-12), 0.999) * roots / np.maximum(mag, 1e-12), roots)
-    return np.real(np.poly(roots))

@@ -2,14 +2,54 @@
 the disturbance side where the process passed, and rank what survives."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
-from ..signals import extract
+import numpy as np
+
+from ..signals import Signals, extract
 from .actuator import actuator_findings
 from .noise import noise_finding
 from .process import process_findings
-from .result import DiagnoseResult, Finding
-from .whitening import AR_ORDER, output_residual
+from .result import DiagnoseResult, Finding, InsufficientData
+from .whitening import AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual
+
+
+@dataclasses.dataclass
+class DiagnosisSignals:
+    """The deviation signals the diagnosis works on, with a noise model for every output."""
+
+    sig: Signals
+    estimated_noise: list[str]          # outputs whose noise model was estimated from the data
+    notes: list[str]
+
+
+def diagnosis_signals(model, data, train_end_s: float | None = None) -> DiagnosisSignals:
+    """Deviation signals of ``data`` for ``model``. An output without a noise model (H = 1 in
+    the file) is the normal case for hand-written models: its disturbance model is estimated
+    from the data (on the rows before ``train_end_s`` when given), so the whitening and the
+    reported errors use a realistic H, and its absence is never taken for a noise change."""
+    if train_end_s is not None and train_end_s < 0:
+        raise ValueError(f"--train-end must be >= 0 seconds, got {train_end_s}")
+    time_s = data["time"].to_numpy(dtype=float)
+    reference = None if train_end_s is None else time_s < train_end_s
+    if reference is not None and reference.sum() < 10:
+        raise ValueError(f"--train-end {train_end_s} leaves fewer than 10 rows of training data")
+    sig = extract(model, data, reference=reference)
+    rows = np.ones(len(time_s), bool) if reference is None else reference
+    noise, estimated, notes = list(sig.noise), [], []
+    for i, name in enumerate(sig.outputs):
+        if has_noise_model(noise[i]):
+            continue
+        try:
+            noise[i] = estimated_noise_model(sig, i, rows)
+        except InsufficientData as exc:
+            raise ValueError(f"data: cannot estimate a disturbance model for '{name}' ({exc})") from None
+        estimated.append(name)
+        notes.append(f"{name}: the model has no noise model; its disturbance model was estimated from the "
+                     f"data (AR({NOISE_ORDER}) of the output error"
+                     + (", training rows)" if reference is not None else ")"))
+    return DiagnosisSignals(dataclasses.replace(sig, noise=noise), estimated, notes)
 
 
 def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float = 3600.0,
@@ -24,13 +64,9 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     ``train_end_s``: the data before it are taken to agree with the model (operating point
     from them, no onset inside them except a change present from the start).
     """
-    if train_end_s is not None and train_end_s < 0:
-        raise ValueError(f"--train-end must be >= 0 seconds, got {train_end_s}")
-    time_s = data["time"].to_numpy(dtype=float)
-    reference = None if train_end_s is None else time_s < train_end_s
-    if reference is not None and reference.sum() < 10:
-        raise ValueError(f"--train-end {train_end_s} leaves fewer than 10 rows of training data")
-    sig = extract(model, data, reference=reference)
+    prepared = diagnosis_signals(model, data, train_end_s)
+    sig, notes = prepared.sig, list(prepared.notes)
+    time_s = sig.time_s
     ts = sig.sample_time_s
     min_segment = max(int(round(min_segment_s / ts)), 4 * AR_ORDER)
     block = max(int(round(block_s / ts)), 10)
@@ -41,7 +77,8 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
         raise ValueError(f"data: {n} rows are too few for diagnosis (need at least {3 * min_segment})")
     logn = math.log(n)
 
-    outputs = [output_residual(sig, i, min_segment, first_onset, block) for i in range(len(sig.outputs))]
+    outputs = [output_residual(sig, i, min_segment, first_onset, block, name in prepared.estimated_noise)
+               for i, name in enumerate(sig.outputs)]
     found: list[Finding] = []
     for out in outputs:
         found += process_findings(out, first_onset, min_segment, step, logn, min_effect)
@@ -55,11 +92,15 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:
         if out.name not in with_process:
-            f = noise_finding(out, first_onset, logn)
+            try:
+                f = noise_finding(out, first_onset, logn)
+            except InsufficientData as exc:
+                notes.append(str(exc))
+                continue
             if f is not None:
                 found.append(f)
     found.sort(key=lambda f: -f.score)
     for k, f in enumerate(found, start=1):
         f.id = f"F{k}"
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
-                          time_s=time_s, residuals={o.name: o.e for o in outputs})
+                          time_s=time_s, residuals={o.name: o.e for o in outputs}, notes=notes)

@@ -22,7 +22,7 @@ from .._core import TransferFunction
 from ..signals import Signals
 from .errors import held_out_error
 from .noise import drift_finding
-from .result import Finding, ModelChange
+from .result import Finding, InsufficientData, ModelChange
 from .scoring import ProfilePoint, ci_from_profile, confidence
 from .whitening import OutputResidual
 
@@ -255,7 +255,10 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
             break
         taken.add(top.shape.column)
         if top.shape.effect == "output_drift":
-            finding = drift_finding(out, first_onset, logn, int(top.shape.label))
+            try:
+                finding = drift_finding(out, first_onset, logn, int(top.shape.label))
+            except InsufficientData:
+                finding = None
             if finding is not None:
                 finding.score = top.score
         else:

@@ -18,6 +18,11 @@ METRIC = ("RMS of the one-step prediction error of the output (deviation units) 
           "held-out 1 h blocks after onset_s")
 
 
+class InsufficientData(Exception):
+    """A candidate cannot be assessed on these data (too few held-out rows after its onset);
+    the diagnosis reports it as a note, not as an error in the input."""
+
+
 @dataclass
 class ModelChange:
     """What ``update`` applies: a process channel (possibly from a new input column) set to
@@ -88,9 +93,15 @@ class DiagnoseResult:
     # per output: time and the nominal model's one-step error (for the figures)
     time_s: np.ndarray = field(repr=False, default=None)
     residuals: dict = field(repr=False, default_factory=dict)
+    # what the user should know about how the data were read (estimated noise models, parts
+    # of the search the data were too short for)
+    notes: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict:
-        return {"findings": [f.to_dict() for f in self.findings]}
+        d = {"findings": [f.to_dict() for f in self.findings]}
+        if self.notes:
+            d["notes"] = list(self.notes)
+        return d
 
     def finding(self, finding_id: str) -> Finding:
         for f in self.findings:
@@ -100,14 +111,15 @@ class DiagnoseResult:
         raise ValueError(f"--apply: no finding '{finding_id}' (findings: {known})")
 
     def summary(self) -> str:
+        notes = [f"  note: {n}" for n in self.notes]
         if not self.findings:
-            return f"diagnose: model '{self.model}' is consistent with the data (no finding)"
+            return "\n".join([f"diagnose: model '{self.model}' is consistent with the data (no finding)", *notes])
         lines = [f"diagnose: model '{self.model}', {len(self.findings)} finding(s), most likely first"]
         for f in self.findings:
             lines.append(f"  {f.id} [{f.effect}] {f.explanation} (confidence {f.confidence:.2f}; "
                          f"error {f.error_before:.4g} -> {f.error_after:.4g})")
         lines.append(f"  error = {self.metric}")
-        return "\n".join(lines)
+        return "\n".join(lines + notes)
 
     def plot(self, out_dir) -> list[Path]:
         from .plots import plot_residuals

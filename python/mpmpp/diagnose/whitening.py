@@ -18,10 +18,13 @@ import numpy as np
 from .. import _core
 from .._core import TransferFunction
 from ..signals import Signals, per_segment
+from .result import InsufficientData
 from .trend import trend_fit
 
 AR_ORDER = 5                 # AR correction of the noise model (residual whitening)
 SETTLE = 60                  # samples left out after the start of each filtered segment
+NOISE_ORDER = 10             # AR order of a disturbance model estimated from the data
+MIN_AR_ROWS_PER_COEFFICIENT = 10
 
 
 @dataclass
@@ -43,6 +46,7 @@ class OutputResidual:
     r: np.ndarray = field(repr=False)            # whitened output error
     fold: list[np.ndarray] = field(repr=False)   # weights of the even / odd held-out blocks
     n: int
+    noise_estimated: bool = False                # H estimated from these data, not the model's
 
     @property
     def row(self) -> list:
@@ -65,7 +69,8 @@ class OutputResidual:
         return np.nan_to_num(per_segment(self.sig, g.filter, x))
 
 
-def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, block: int) -> OutputResidual:
+def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, block: int,
+                    noise_estimated: bool = False) -> OutputResidual:
     """Residuals of output i, its disturbance split and whitening, and the held-out blocks
     (even / odd blocks of ``block`` samples)."""
     n = len(sig.time_s)
@@ -96,7 +101,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
                          split_onset=split_onset, split_significant=split_significant, pieces=pieces,
                          ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
-                         n=int(weight.sum()))
+                         n=int(weight.sum()), noise_estimated=noise_estimated)
     out.r = out.whiten(np.nan_to_num(v))
     return out
 
@@ -108,3 +113,42 @@ def _pieces(segments, cuts):
         edges = [a, *inner, b]
         out += list(zip(edges[:-1], edges[1:]))
     return out
+
+
+def has_noise_model(h: TransferFunction) -> bool:
+    """False for H = 1, what the model format gives an output without a noise model."""
+    return not (h.delay == 0 and np.array_equal(h.num, [1.0]) and np.array_equal(h.den, [1.0]))
+
+
+def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray) -> TransferFunction:
+    """H = 1 / A(q), A the least-squares AR(NOISE_ORDER) of the output error y_i - G_i u on
+    ``rows`` (roots reflected inside the unit circle, so H^-1 = A and H are stable)."""
+    v = per_segment(sig, lambda yy, uu: _core.output_error(sig.rows[i], yy, uu), sig.y[:, i], sig.u)
+    usable = np.zeros(len(v), bool)
+    for a, b in sig.segments:
+        usable[a + SETTLE:b] = True
+    return TransferFunction([1.0], stable(masked_ar(np.nan_to_num(v), usable & rows, NOISE_ORDER)), 0)
+
+
+def masked_ar(e: np.ndarray, mask: np.ndarray, order: int = AR_ORDER) -> np.ndarray:
+    """Least-squares AR(order) on the rows in mask (lags may reach outside it)."""
+    rows = np.flatnonzero(mask)
+    rows = rows[rows >= order]
+    if len(rows) < MIN_AR_ROWS_PER_COEFFICIENT * order:
+        raise InsufficientData(f"{len(rows)} rows for an AR({order}) fit")
+    lagged = e[rows[:, None] - np.arange(1, order + 1)]
+    try:
+        a = np.linalg.solve(lagged.T @ lagged, lagged.T @ e[rows])
+    except np.linalg.LinAlgError:
+        raise InsufficientData(f"the error has no variation to fit an AR({order}) to") from None
+    return np.r_[1.0, -a]
+
+
+def stable(poly: np.ndarray) -> np.ndarray:
+    """Reflect roots outside the unit circle inside (same spectrum shape): H/A must be stable."""
+    roots = np.roots(poly)
+    if np.all(np.abs(roots) < 1.0):
+        return poly
+    mag = np.abs(roots)
+    roots = np.where(mag >= 1.0, np.minimum(1.0 / np.maximum(mag, 1e-12), 0.999) * roots / np.maximum(mag, 1e-12), roots)
+    return np.real(np.poly(roots))

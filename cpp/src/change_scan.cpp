@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "mpmpp/error.hpp"
 
@@ -40,6 +41,91 @@ double ar_variance(const Eigen::MatrixXd& gram, int order, double n) {
   return std::max(rss, 1e-300) / n;
 }
 
+// Suffix sums over t >= k of the statistic's three terms, kept only at the onsets a scan
+// considers (k = 0 and k = min_segment, min_segment + step, ..., N - min_segment), for up to
+// three weightings of the samples: weight, weight * fold_even, weight * fold_odd.
+class GridSums {
+ public:
+  GridSums(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+           const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+           const double* fold_even, const double* fold_odd, Eigen::Index min_segment, Eigen::Index step) {
+    const Eigen::Index n = r.size();
+    onsets_.push_back(0);
+    for (Eigen::Index k = min_segment; k + min_segment <= n; k += step) onsets_.push_back(k);
+    const int m = fold_even ? 3 : 1;
+    const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
+    drop_.setZero(rows, m);
+    rp_.setZero(rows, m);
+    pp_.setZero(rows, m);
+    if (fold_even)
+      accumulate<3>(r, r_without, psi, weight, fold_even, fold_odd);
+    else
+      accumulate<1>(r, r_without, psi, weight, nullptr, nullptr);
+  }
+
+ private:
+  template <int M>
+  void accumulate(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                  const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+                  const double* fold_even, const double* fold_odd) {
+    const Eigen::Index n = r.size();
+    const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
+    double d[3] = {0.0, 0.0, 0.0}, x[3] = {0.0, 0.0, 0.0}, p[3] = {0.0, 0.0, 0.0};
+    Eigen::Index row = rows - 1;
+    for (Eigen::Index t = n - 1; t >= 0 && row >= 0; --t) {
+      const double dt = r[t] * r[t] - r_without[t] * r_without[t];
+      const double xt = r_without[t] * psi[t];
+      const double pt = psi[t] * psi[t];
+      d[0] += weight[t] * dt;
+      x[0] += weight[t] * xt;
+      p[0] += weight[t] * pt;
+      if constexpr (M == 3) {
+        const double w1 = weight[t] * fold_even[t], w2 = weight[t] * fold_odd[t];
+        d[1] += w1 * dt;
+        x[1] += w1 * xt;
+        p[1] += w1 * pt;
+        d[2] += w2 * dt;
+        x[2] += w2 * xt;
+        p[2] += w2 * pt;
+      }
+      if (t == onsets_[row]) {
+        for (int j = 0; j < M; ++j) {
+          drop_(row, j) = d[j];
+          rp_(row, j) = x[j];
+          pp_(row, j) = p[j];
+        }
+        --row;
+      }
+    }
+  }
+
+ public:
+  // Best onset for weighting j; `row` receives its grid index.
+  OnsetFit scan(int j, Eigen::Index* row = nullptr) const {
+    OnsetFit best = make_fit(0, drop_(0, j), rp_(0, j), pp_(0, j));
+    Eigen::Index best_row = 0;
+    for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
+      const OnsetFit f = make_fit(onsets_[i], drop_(i, j), rp_(i, j), pp_(i, j));
+      if (f.statistic > best.statistic) {
+        best = f;
+        best_row = i;
+      }
+    }
+    if (row) *row = best_row;
+    return best;
+  }
+
+  // Drop of the squared error after the grid onset `row` with channel scale theta, weighting j:
+  // sum w (r^2 - (r_without - theta psi)^2) = drop + 2 theta rp - theta^2 pp.
+  double drop_with(int j, Eigen::Index row, double theta) const {
+    return drop_(row, j) + 2.0 * theta * rp_(row, j) - theta * theta * pp_(row, j);
+  }
+
+ private:
+  std::vector<Eigen::Index> onsets_;
+  Eigen::MatrixXd drop_, rp_, pp_;
+};
+
 }  // namespace
 
 OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
@@ -60,22 +146,29 @@ OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref
                     const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
                     Eigen::Index min_segment, Eigen::Index step) {
   check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
-  const Eigen::Index n = r.size();
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
-  // Suffix sums over t >= k of the three terms of the statistic.
-  Eigen::VectorXd sd(n + 1), srp(n + 1), spp(n + 1);
-  sd[n] = srp[n] = spp[n] = 0.0;
-  for (Eigen::Index t = n - 1; t >= 0; --t) {
-    sd[t] = sd[t + 1] + weight[t] * (r[t] * r[t] - r_without[t] * r_without[t]);
-    srp[t] = srp[t + 1] + weight[t] * r_without[t] * psi[t];
-    spp[t] = spp[t + 1] + weight[t] * psi[t] * psi[t];
+  return GridSums(r, r_without, psi, weight, nullptr, nullptr, min_segment, step).scan(0);
+}
+
+CrossValidatedOnset scan_onset_cross_validated(
+    const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+    const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+    const Eigen::Ref<const Eigen::VectorXd>& fold_even, const Eigen::Ref<const Eigen::VectorXd>& fold_odd,
+    Eigen::Index min_segment, Eigen::Index step) {
+  check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
+  check_same_length(r.size(), fold_even.size(), fold_odd.size(), weight.size());
+  if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
+  // Contiguous copies only if the caller passed strided views.
+  const Eigen::VectorXd even = fold_even, odd = fold_odd;
+  const GridSums sums(r, r_without, psi, weight, even.data(), odd.data(), min_segment, step);
+  CrossValidatedOnset out;
+  out.full = sums.scan(0);
+  for (int k = 0; k < 2; ++k) {
+    Eigen::Index row = 0;
+    out.fold[k] = sums.scan(1 + k, &row);
+    out.heldout[k] = sums.drop_with(2 - k, row, out.fold[k].theta);
   }
-  OnsetFit best = make_fit(0, sd[0], srp[0], spp[0]);
-  for (Eigen::Index k = min_segment; k + min_segment <= n; k += step) {
-    const OnsetFit f = make_fit(k, sd[k], srp[k], spp[k]);
-    if (f.statistic > best.statistic) best = f;
-  }
-  return best;
+  return out;
 }
 
 Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,

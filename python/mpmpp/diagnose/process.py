@@ -48,6 +48,7 @@ class Shape:
     label: float                  # the grid value (gain 1, time-constant factor, delay, pole, drift onset)
     params: int                   # fitted parameters incl. the grid choice (onset counted later)
     drive: np.ndarray = field(repr=False, default=None)   # the column the channel filters
+    drift_form: str = ""          # "ramp" or "step" for an output drift (its drive is built on demand)
 
 
 @dataclass
@@ -80,15 +81,19 @@ class WhitenedShape:
 
 class ShapeResponses:
     """Whitened responses and weights per shape; they do not change between the greedy rounds,
-    only the residual does."""
+    only the residual does, so channel responses are kept. Drift responses are rebuilt on
+    demand from one response per piece (there are hundreds of drift onsets in a long record)."""
 
     def __init__(self, out: OutputResidual):
         self.out = out
         self._shapes: dict = {}
         self._nominal: dict = {}
         self._weight: dict = {}
+        self._drift_base: dict = {}
 
     def whitened(self, shape: Shape) -> WhitenedShape:
+        if shape.kind == "drift":
+            return WhitenedShape(self._drift(int(shape.label), shape.drift_form), None)
         key = id(shape)
         if key not in self._shapes:
             drive = np.nan_to_num(shape.drive)
@@ -102,8 +107,31 @@ class ShapeResponses:
             self._shapes[key] = WhitenedShape(psi, nominal)
         return self._shapes[key]
 
+    def _drift(self, onset: int, form: str) -> np.ndarray:
+        """Whitened response of a ramp (per hour) or step starting at ``onset``. In the piece
+        holding the onset the whitening filter starts at rest and sees zeros until the onset,
+        so the response there is the piece's response to a drift starting at its first sample,
+        delayed; later pieces restart their filters and are filtered directly."""
+        out = self.out
+        psi = np.zeros(len(out.r))
+        hour = 3600.0 / out.sig.sample_time_s
+        for p, (a, b) in enumerate(out.pieces):
+            if b <= onset:
+                continue
+            if a <= onset:
+                key = (p, form)
+                if key not in self._drift_base:
+                    self._drift_base[key] = out.whiten_piece(p, _drift_drive(b - a, 0, form, hour))
+                psi[onset:b] = self._drift_base[key][: b - onset]
+            else:
+                psi[a:b] = out.whiten_piece(p, _drift_drive(b - a, onset - a, form, hour))
+        return psi
+
     def weight(self, shape: Shape) -> np.ndarray:
-        """The output's weight where the shape's drive is known."""
+        """The output's weight where the shape's drive is known (model inputs and drifts are
+        known wherever the output's weight is nonzero)."""
+        if shape.kind != "extra":
+            return self.out.weight
         key = id(shape.drive)
         if key not in self._weight:
             self._weight[key] = self.out.weight * np.isfinite(shape.drive)
@@ -118,6 +146,13 @@ def first_order_with_time_constant(g: TransferFunction, factor: float) -> Transf
     new_den = np.real(np.poly(poles.real ** (1.0 / factor)))
     scale = g.dc_gain() * new_den.sum() / g.num.sum()
     return TransferFunction(np.asarray(g.num) * scale, new_den, g.delay)
+
+
+def _drift_drive(length: int, onset: int, form: str, hour: float) -> np.ndarray:
+    """A drift starting at ``onset`` (may be negative: started before the first sample):
+    ramp max(t - onset, 0) in hours, or step (t > onset)."""
+    t = np.maximum(np.arange(length) - onset, 0.0)
+    return t / hour if form == "ramp" else (t > 0).astype(float)
 
 
 def _unit_foptd(pole: float, delay: int) -> TransferFunction:
@@ -145,13 +180,11 @@ def process_shapes(sig: Signals, i: int) -> list[Shape]:
     # onset tau on (grid of DRIFT_GRID_S). In closed loop the controller cancels a drift with
     # its inputs, so a drift otherwise poses as a channel change fitted to that compensation.
     n = len(sig.time_s)
-    hour = 3600.0 / sig.sample_time_s
     grid = max(int(round(DRIFT_GRID_S / sig.sample_time_s)), 1)
     for tau in range(0, max(n - 2 * grid, 1), grid):
-        t = np.maximum(np.arange(n) - tau, 0.0)
-        shapes.append(Shape("output_drift", DRIFT_COLUMN, "drift", TransferFunction(), None, tau, 2, t / hour))
-        shapes.append(Shape("output_drift", DRIFT_COLUMN, "drift", TransferFunction(), None, tau, 2,
-                            (t > 0).astype(float)))
+        for form in ("ramp", "step"):
+            shapes.append(Shape("output_drift", DRIFT_COLUMN, "drift", TransferFunction(), None, tau, 2,
+                                drift_form=form))
     for k, name in enumerate(sig.extras):
         z = sig.z[:, k]
         shapes += [Shape("unmodeled_input", name, "extra", _unit_foptd(p, d), None, d, 3, z)
@@ -193,24 +226,12 @@ def _fit_shape(out: OutputResidual, r: np.ndarray, shape: Shape, min_onset: int,
                step: int, responses: ShapeResponses) -> Fit:
     """Onset scan of one shape on all data and on each fold (the folds feed the held-out test)."""
     w = responses.whitened(shape)
-    psi = w.psi
-    weight = responses.weight(shape)
-    r_without = _without_channel(r, w)
     tail = slice(min_onset, None)
-
-    def scan(mask):
-        f = _core.scan_onset(r[tail], r_without[tail], psi[tail], mask[tail], min_segment, step)
-        return min_onset + f.onset, f
-
-    onset, full = scan(weight)
-    folds = []
-    for k in (0, 1):
-        on_k, f_k = scan(weight * out.fold[k])
-        # held-out drop of the squared error on the other fold, theta and onset from this one
-        test = (weight * out.fold[1 - k])[on_k:]
-        resid = r_without[on_k:] - f_k.theta * psi[on_k:]
-        folds.append(FoldFit(f_k.statistic, float(np.sum(test * (r[on_k:] ** 2 - resid**2))), f_k.theta))
-    return Fit(shape, onset, full.statistic, 0.0, full.theta, full.theta_se, folds, 0.0)
+    r_without = _without_channel(r, w)
+    cv = _core.scan_onset_cross_validated(r[tail], r_without[tail], w.psi[tail], responses.weight(shape)[tail],
+                                          out.fold[0][tail], out.fold[1][tail], min_segment, step)
+    folds = [FoldFit(f.statistic, h, f.theta) for f, h in zip(cv.folds, cv.heldout)]
+    return Fit(shape, min_onset + cv.full.onset, cv.full.statistic, 0.0, cv.full.theta, cv.full.theta_se, folds, 0.0)
 
 
 def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:

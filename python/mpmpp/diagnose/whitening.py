@@ -59,10 +59,13 @@ class OutputResidual:
     def whiten(self, x: np.ndarray) -> np.ndarray:
         """A_s H^-1 x / sigma_s per piece (filters restart at every piece)."""
         out = np.zeros_like(x, dtype=float)
-        hinv = self.noise.inverse()
-        for (a, b), poly, s in zip(self.pieces, self.ar, self.sigma):
-            out[a:b] = TransferFunction(poly, [1.0], 0).filter(hinv.filter(x[a:b])) / s
+        for p, (a, b) in enumerate(self.pieces):
+            out[a:b] = self.whiten_piece(p, x[a:b])
         return out
+
+    def whiten_piece(self, p: int, x: np.ndarray) -> np.ndarray:
+        """A_p H^-1 x / sigma_p for x on piece p (filters start at rest)."""
+        return TransferFunction(self.ar[p], [1.0], 0).filter(self.noise.inverse().filter(x)) / self.sigma[p]
 
     def channel_response(self, g: TransferFunction, x: np.ndarray) -> np.ndarray:
         """g x per data segment (zero outside)."""

@@ -70,9 +70,20 @@ class GridSums {
                   const double* fold_even, const double* fold_odd) {
     const Eigen::Index n = r.size();
     const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
+    // Before the first sample where the candidate differs from the nominal model (psi != 0 or
+    // r != r_without: a drift that starts late) every term is zero and the sums stay put.
+    Eigen::Index first = 0;
+    while (first < n && psi[first] == 0.0 && r[first] == r_without[first]) ++first;
     double d[3] = {0.0, 0.0, 0.0}, x[3] = {0.0, 0.0, 0.0}, p[3] = {0.0, 0.0, 0.0};
+    const auto store = [&](Eigen::Index row) {
+      for (int j = 0; j < M; ++j) {
+        drop_(row, j) = d[j];
+        rp_(row, j) = x[j];
+        pp_(row, j) = p[j];
+      }
+    };
     Eigen::Index row = rows - 1;
-    for (Eigen::Index t = n - 1; t >= 0 && row >= 0; --t) {
+    for (Eigen::Index t = n - 1; t >= first && row >= 0; --t) {
       const double dt = r[t] * r[t] - r_without[t] * r_without[t];
       const double xt = r_without[t] * psi[t];
       const double pt = psi[t] * psi[t];
@@ -88,15 +99,9 @@ class GridSums {
         x[2] += w2 * xt;
         p[2] += w2 * pt;
       }
-      if (t == onsets_[row]) {
-        for (int j = 0; j < M; ++j) {
-          drop_(row, j) = d[j];
-          rp_(row, j) = x[j];
-          pp_(row, j) = p[j];
-        }
-        --row;
-      }
+      if (t == onsets_[row]) store(row--);
     }
+    for (; row >= 0; --row) store(row);
   }
 
  public:

@@ -1,12 +1,13 @@
 """The diagnosis's fast kernels against plain NumPy implementations of the same equations:
-the cross-validated onset scan, the step + ramp trend fit over all onsets, and the drift
-responses built from one response per piece."""
+the cross-validated onset scan, the step + ramp trend fit over all onsets, and the drift and
+delayed-channel responses built from one response per family."""
 import numpy as np
 import pytest
 
+import mpmpp
 from mpmpp import TransferFunction, _core
 from mpmpp.diagnose.pipeline import diagnosis_signals
-from mpmpp.diagnose.process import ShapeResponses, process_shapes
+from mpmpp.diagnose.process import DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
 from mpmpp.diagnose.trend import trend_fit
 from mpmpp.diagnose.whitening import output_residual
 
@@ -101,4 +102,24 @@ def test_drift_responses_match_direct_whitening():
         t = np.maximum(np.arange(n) - int(s.label), 0.0)
         drive = t / hour if s.drift_form == "ramp" else (t > 0).astype(float)
         direct = out.whiten(out.channel_response(s.shape, drive))
+        np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("with_channel", [True, False])
+def test_delayed_responses_match_direct_whitening(with_channel):
+    # two data segments (a gap) and a noise split inside the first: pieces that start a
+    # segment and one that starts inside a segment
+    data = loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9], w_gain=1.0)
+    data.loc[6000:6300, "y"] = np.nan
+    model = loop.model() if with_channel else mpmpp.Model(
+        "no channel", loop.TS, ["u"], ["y"], {}, {"y": loop.model().noise("y")})
+    sig = diagnosis_signals(model, data).sig
+    out = output_residual(sig, 0, 720, 0, 720)
+    assert len(sig.segments) == 2 and len(out.pieces) == 3
+    responses = ShapeResponses(out)
+    shapes = [s for s in process_shapes(sig, 0) if s.effect in DELAY_GRID_EFFECTS]
+    assert {s.effect for s in shapes} == ({"delay", "unmodeled_input"} if with_channel
+                                          else {"missing_coupling", "unmodeled_input"})
+    for s in shapes:
+        direct = out.whiten(out.channel_response(s.shape, np.nan_to_num(s.drive)))
         np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)

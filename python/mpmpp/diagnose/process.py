@@ -34,6 +34,7 @@ COUPLING_DELAYS = range(1, 41)
 DRIFT_GRID_S = 1800.0
 DRIFT_COLUMN = "(drift)"
 MAX_FINDINGS_PER_OUTPUT = 3
+DELAY_GRID_EFFECTS = ("delay", "missing_coupling", "unmodeled_input")
 
 
 @dataclass
@@ -74,6 +75,15 @@ class Fit:
 
 
 @dataclass
+class DelayFamily:
+    """One channel shape without delay, driven by one column: the shapes that differ from it
+    only in their delay are delayed copies of its responses."""
+
+    response: np.ndarray = field(repr=False)   # channel response per data segment
+    whitened: np.ndarray = field(repr=False)   # and whitened per piece
+
+
+@dataclass
 class WhitenedShape:
     psi: np.ndarray                     # whitened response of the candidate shape
     nominal: np.ndarray | None          # whitened response of the nominal channel it replaces
@@ -81,8 +91,9 @@ class WhitenedShape:
 
 class ShapeResponses:
     """Whitened responses and weights per shape; they do not change between the greedy rounds,
-    only the residual does, so channel responses are kept. Drift responses are rebuilt on
-    demand from one response per piece (there are hundreds of drift onsets in a long record)."""
+    only the residual does. Gain and time-constant responses are kept; shapes on a grid of
+    delays or drift onsets (hundreds in a long record) are rebuilt on demand from one response
+    per family."""
 
     def __init__(self, out: OutputResidual):
         self.out = out
@@ -90,22 +101,54 @@ class ShapeResponses:
         self._nominal: dict = {}
         self._weight: dict = {}
         self._drift_base: dict = {}
+        self._delay_families: dict = {}
+        self._segment_starts = {a for a, _ in out.sig.segments}
 
     def whitened(self, shape: Shape) -> WhitenedShape:
         if shape.kind == "drift":
             return WhitenedShape(self._drift(int(shape.label), shape.drift_form), None)
+        if shape.effect in DELAY_GRID_EFFECTS:
+            return WhitenedShape(self._delayed(shape), self._nominal_response(shape))
         key = id(shape)
         if key not in self._shapes:
             drive = np.nan_to_num(shape.drive)
             psi = self.out.whiten(self.out.channel_response(shape.shape, drive))
-            nominal = None
-            if shape.nominal is not None:
-                nkey = (id(shape.nominal), id(shape.drive))
-                if nkey not in self._nominal:
-                    self._nominal[nkey] = self.out.whiten(self.out.channel_response(shape.nominal, drive))
-                nominal = self._nominal[nkey]
-            self._shapes[key] = WhitenedShape(psi, nominal)
+            self._shapes[key] = WhitenedShape(psi, self._nominal_response(shape))
         return self._shapes[key]
+
+    def _nominal_response(self, shape: Shape) -> np.ndarray | None:
+        if shape.nominal is None:
+            return None
+        key = (id(shape.nominal), id(shape.drive))
+        if key not in self._nominal:
+            self._nominal[key] = self.out.whiten(self.out.channel_response(shape.nominal, np.nan_to_num(shape.drive)))
+        return self._nominal[key]
+
+    def _delayed(self, shape: Shape) -> np.ndarray:
+        """Whitened response of a delayed channel. In a piece that starts a data segment, the
+        channel and the whitening filter start at rest and see zeros for the first ``delay``
+        samples, so the response is the undelayed one, delayed; a piece that starts inside a
+        segment (after a noise split) inherits the channel's history and is filtered directly."""
+        out, g = self.out, shape.shape
+        key = (id(shape.drive), tuple(g.num), tuple(g.den))
+        if key not in self._delay_families:
+            x = out.channel_response(TransferFunction(g.num, g.den, 0), np.nan_to_num(shape.drive))
+            self._delay_families[key] = DelayFamily(x, out.whiten(x))
+        family, d = self._delay_families[key], g.delay
+        psi = np.zeros(len(out.r))
+        for p, (a, b) in enumerate(out.pieces):
+            if a in self._segment_starts:
+                if d < b - a:
+                    psi[a + d:b] = family.whitened[a:b - d]
+            else:
+                start = max(a, self._segment_start(a) + d)
+                x = np.zeros(b - a)
+                x[start - a:] = family.response[start - d:b - d]
+                psi[a:b] = out.whiten_piece(p, x)
+        return psi
+
+    def _segment_start(self, t: int) -> int:
+        return max(a for a in self._segment_starts if a <= t)
 
     def _drift(self, onset: int, form: str) -> np.ndarray:
         """Whitened response of a ramp (per hour) or step starting at ``onset``. In the piece

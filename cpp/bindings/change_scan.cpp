@@ -28,7 +28,7 @@ void bind_change_scan(py::module_& m) {
   m.def("scan_onset", &scan_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"), py::arg("weight"),
         py::arg("min_segment"), py::arg("step"), py::call_guard<py::gil_scoped_release>());
   m.def("scan_onset_cross_validated", &scan_onset_cross_validated, py::arg("r"), py::arg("r_without"),
-        py::arg("psi"), py::arg("weight"), py::arg("fold_even"), py::arg("fold_odd"), py::arg("min_segment"),
+        py::arg("psi"), py::arg("weight"), py::arg("odd"), py::arg("min_segment"),
         py::arg("step"), py::call_guard<py::gil_scoped_release>());
   m.def("fit_at_onset", &fit_at_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"), py::arg("weight"),
         py::arg("onset"));

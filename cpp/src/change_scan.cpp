@@ -42,44 +42,49 @@ double ar_variance(const Eigen::MatrixXd& gram, int order, double n) {
 }
 
 // Suffix sums over t >= k of the statistic's three terms, kept only at the onsets a scan
-// considers (k = 0 and k = min_segment, min_segment + step, ..., N - min_segment), for up to
-// three weightings of the samples: weight, weight * fold_even, weight * fold_odd.
+// considers (k = 0 and k = min_segment, min_segment + step, ..., N - min_segment), for the
+// weighting `weight` (column 0) and, with a fold assignment, for the even and odd folds'
+// samples (columns 1 and 2; column 0 is then their sum).
 class GridSums {
  public:
   GridSums(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
            const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-           const double* fold_even, const double* fold_odd, Eigen::Index min_segment, Eigen::Index step) {
+           const double* odd, Eigen::Index min_segment, Eigen::Index step) {
     const Eigen::Index n = r.size();
     onsets_.push_back(0);
     for (Eigen::Index k = min_segment; k + min_segment <= n; k += step) onsets_.push_back(k);
-    const int m = fold_even ? 3 : 1;
+    const int m = odd ? 3 : 1;
     const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
     drop_.setZero(rows, m);
     rp_.setZero(rows, m);
     pp_.setZero(rows, m);
-    if (fold_even)
-      accumulate<3>(r, r_without, psi, weight, fold_even, fold_odd);
+    if (odd)
+      accumulate<3>(r, r_without, psi, weight, odd);
     else
-      accumulate<1>(r, r_without, psi, weight, nullptr, nullptr);
+      accumulate<1>(r, r_without, psi, weight, nullptr);
   }
 
  private:
   template <int M>
   void accumulate(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
                   const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-                  const double* fold_even, const double* fold_odd) {
+                  const double* odd) {
     const Eigen::Index n = r.size();
     const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
     // Before the first sample where the candidate differs from the nominal model (psi != 0 or
     // r != r_without: a drift that starts late) every term is zero and the sums stay put.
     Eigen::Index first = 0;
     while (first < n && psi[first] == 0.0 && r[first] == r_without[first]) ++first;
-    double d[3] = {0.0, 0.0, 0.0}, x[3] = {0.0, 0.0, 0.0}, p[3] = {0.0, 0.0, 0.0};
+    double d0 = 0.0, x0 = 0.0, p0 = 0.0, d1 = 0.0, x1 = 0.0, p1 = 0.0, d2 = 0.0, x2 = 0.0, p2 = 0.0;
     const auto store = [&](Eigen::Index row) {
-      for (int j = 0; j < M; ++j) {
-        drop_(row, j) = d[j];
-        rp_(row, j) = x[j];
-        pp_(row, j) = p[j];
+      if constexpr (M == 3) {
+        drop_.row(row) << d1 + d2, d1, d2;
+        rp_.row(row) << x1 + x2, x1, x2;
+        pp_.row(row) << p1 + p2, p1, p2;
+      } else {
+        drop_(row, 0) = d0;
+        rp_(row, 0) = x0;
+        pp_(row, 0) = p0;
       }
     };
     Eigen::Index row = rows - 1;
@@ -87,17 +92,21 @@ class GridSums {
       const double dt = r[t] * r[t] - r_without[t] * r_without[t];
       const double xt = r_without[t] * psi[t];
       const double pt = psi[t] * psi[t];
-      d[0] += weight[t] * dt;
-      x[0] += weight[t] * xt;
-      p[0] += weight[t] * pt;
       if constexpr (M == 3) {
-        const double w1 = weight[t] * fold_even[t], w2 = weight[t] * fold_odd[t];
-        d[1] += w1 * dt;
-        x[1] += w1 * xt;
-        p[1] += w1 * pt;
-        d[2] += w2 * dt;
-        x[2] += w2 * xt;
-        p[2] += w2 * pt;
+        // blocks of one fold are long runs, so the branch is well predicted
+        if (odd[t] != 0.0) {
+          d2 += weight[t] * dt;
+          x2 += weight[t] * xt;
+          p2 += weight[t] * pt;
+        } else {
+          d1 += weight[t] * dt;
+          x1 += weight[t] * xt;
+          p1 += weight[t] * pt;
+        }
+      } else {
+        d0 += weight[t] * dt;
+        x0 += weight[t] * xt;
+        p0 += weight[t] * pt;
       }
       if (t == onsets_[row]) store(row--);
     }
@@ -152,20 +161,18 @@ OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref
                     Eigen::Index min_segment, Eigen::Index step) {
   check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
-  return GridSums(r, r_without, psi, weight, nullptr, nullptr, min_segment, step).scan(0);
+  return GridSums(r, r_without, psi, weight, nullptr, min_segment, step).scan(0);
 }
 
 CrossValidatedOnset scan_onset_cross_validated(
     const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
     const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-    const Eigen::Ref<const Eigen::VectorXd>& fold_even, const Eigen::Ref<const Eigen::VectorXd>& fold_odd,
-    Eigen::Index min_segment, Eigen::Index step) {
+    const Eigen::Ref<const Eigen::VectorXd>& odd, Eigen::Index min_segment, Eigen::Index step) {
   check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
-  check_same_length(r.size(), fold_even.size(), fold_odd.size(), weight.size());
+  if (odd.size() != r.size()) throw InputError("odd must have the same length as r");
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
-  // Contiguous copies only if the caller passed strided views.
-  const Eigen::VectorXd even = fold_even, odd = fold_odd;
-  const GridSums sums(r, r_without, psi, weight, even.data(), odd.data(), min_segment, step);
+  const Eigen::VectorXd in_odd = odd;   // contiguous even if the caller passed a strided view
+  const GridSums sums(r, r_without, psi, weight, in_odd.data(), min_segment, step);
   CrossValidatedOnset out;
   out.full = sums.scan(0);
   for (int k = 0; k < 2; ++k) {

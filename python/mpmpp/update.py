@@ -59,6 +59,8 @@ class UpdateResult:
             lines.append(f"  {e.output}: error {e.error_before:.4g} -> {e.error_after:.4g} ({change:+.1f} %) "
                          f"after t={e.onset_s / 3600:.1f} h")
         lines.append(f"  error = {self.metric}")
+        if self.diagnosis is not None:
+            lines += [f"  note: {n}" for n in self.diagnosis.notes]
         return "\n".join(lines)
 
     def save(self, path) -> None:

@@ -66,6 +66,7 @@ def test_no_noise_model_gain_change_is_a_gain_change():
     assert not any(f.effect == "noise_change" for f in res.findings)
     up = update(model_without_noise(), loop.simulate(n=8000, seed=3, onset=4000, gain=2.0), "F1")
     assert up.errors[0].error_after < up.errors[0].error_before
+    assert "no noise model" in up.summary()
 
 
 def test_no_noise_model_real_noise_change_is_found_after_its_onset():

@@ -39,7 +39,7 @@ def test_cross_validated_scan_matches_numpy(late_start):
     weight = (rng.random(n) > 0.05).astype(float)
     parity = (np.arange(n) // 100) % 2
     folds = [weight * (parity == 0), weight * (parity == 1)]
-    cv = _core.scan_onset_cross_validated(r, r_without, psi, weight, folds[0], folds[1], 60, 7)
+    cv = _core.scan_onset_cross_validated(r, r_without, psi, weight, (parity == 1).astype(float), 60, 7)
     full = brute_scan(r, r_without, psi, weight, 60, 7)
     assert cv.full.onset == full[0]
     assert cv.full.statistic == pytest.approx(full[1], rel=1e-10)

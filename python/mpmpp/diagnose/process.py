@@ -272,7 +272,7 @@ def _fit_shape(out: OutputResidual, r: np.ndarray, shape: Shape, min_onset: int,
     tail = slice(min_onset, None)
     r_without = _without_channel(r, w)
     cv = _core.scan_onset_cross_validated(r[tail], r_without[tail], w.psi[tail], responses.weight(shape)[tail],
-                                          out.fold[0][tail], out.fold[1][tail], min_segment, step)
+                                          out.fold[1][tail], min_segment, step)
     folds = [FoldFit(f.statistic, h, f.theta) for f, h in zip(cv.folds, cv.heldout)]
     return Fit(shape, min_onset + cv.full.onset, cv.full.statistic, 0.0, cv.full.theta, cv.full.theta_se, folds, 0.0)
 

@@ -64,6 +64,10 @@ def test_no_noise_model_gain_change_is_a_gain_change():
     assert res.findings and res.findings[0].effect == "gain"
     assert res.findings[0].estimate["gain_ratio"] == pytest.approx(2.0, rel=0.2)
     assert not any(f.effect == "noise_change" for f in res.findings)
+    # the figures' after-update error is the one update reports on (odd blocks after onset)
+    after = res.residuals_after["F1"]
+    rows = ((np.arange(8000) // 720) % 2 == 1) & (res.time_s >= res.findings[0].onset_s) & np.isfinite(after)
+    assert np.sqrt(np.mean(after[rows] ** 2)) == pytest.approx(res.findings[0].error_after, rel=1e-9)
     up = update(model_without_noise(), loop.simulate(n=8000, seed=3, onset=4000, gain=2.0), "F1")
     assert up.errors[0].error_after < up.errors[0].error_before
     assert "no noise model" in up.summary()

@@ -7,6 +7,7 @@ import pytest
 import mpmpp
 from mpmpp import TransferFunction, _core
 from mpmpp.diagnose.pipeline import diagnosis_signals
+from mpmpp.diagnose.plots import rolling_rms
 from mpmpp.diagnose.process import DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
 from mpmpp.diagnose.trend import trend_fit
 from mpmpp.diagnose.whitening import output_residual
@@ -123,3 +124,15 @@ def test_delayed_responses_match_direct_whitening(with_channel):
     for s in shapes:
         direct = out.whiten(out.channel_response(s.shape, np.nan_to_num(s.drive)))
         np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)
+
+
+def test_rolling_rms_matches_a_plain_window():
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal(200)
+    x[50:55] = np.nan
+    got = rolling_rms(x, 21)
+    for t in range(200):
+        window = x[max(t - 10, 0):t + 11]
+        window = window[np.isfinite(window)]
+        expected = np.sqrt(np.mean(window**2)) if len(window) > 10 else np.nan
+        assert got[t] == pytest.approx(expected, rel=1e-12, nan_ok=True)

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..signals import Signals, extract
 from .actuator import actuator_findings
+from .errors import one_step_errors
 from .noise import noise_finding
 from .process import process_findings
 from .result import DiagnoseResult, Finding, InsufficientData
@@ -102,5 +103,8 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     found.sort(key=lambda f: -f.score)
     for k, f in enumerate(found, start=1):
         f.id = f"F{k}"
+    after = {f.id: one_step_errors(sig, sig.outputs.index(f.output), f.model_changes())
+             for f in found if f.output is not None}
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
-                          time_s=time_s, residuals={o.name: o.e for o in outputs}, notes=notes)
+                          time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
+                          notes=notes)

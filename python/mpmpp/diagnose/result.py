@@ -90,9 +90,11 @@ class DiagnoseResult:
     train_end_s: float | None
     findings: list[Finding]
     metric: str = METRIC
-    # per output: time and the nominal model's one-step error (for the figures)
+    # per output: time and the nominal model's one-step error; per finding id: the one-step
+    # error of its output with the model ``update`` writes (for the figures)
     time_s: np.ndarray = field(repr=False, default=None)
     residuals: dict = field(repr=False, default_factory=dict)
+    residuals_after: dict = field(repr=False, default_factory=dict)
     # what the user should know about how the data were read (estimated noise models, parts
     # of the search the data were too short for)
     notes: list[str] = field(default_factory=list)

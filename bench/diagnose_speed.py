@@ -1,15 +1,23 @@
-"""Speed of compare / diagnose, printed as ratios against named peers in the same run.
+"""Cost of diagnose against record length, and its kernels against named peers.
 
-    python bench/diagnose_speed.py
+    python bench/diagnose_speed.py [--lengths 3h,6h,1d,3d,7d]
 
-- diagnose on a 3x3, 20 h closed-loop data set (the paper's MIMO MD process under MPC,
-  14400 samples) against the issue's 10 s budget;
-- the C++ onset scan (`scan_onset`) against the same scan written with NumPy suffix sums
-  (peer), per candidate shape;
+- diagnose on the paper's 3x3 MD process under MPC at 5 s (scenarios.paper_mimo), records
+  from 3 h (the shortest it accepts: three 1 h segments) to 7 days: CPU seconds and peak
+  memory of a fresh process per length (the memory before diagnose, imports and data, is
+  printed apart), with the CPU per sample relative to the shortest record (1.0 = linear);
+- the cross-validated onset scan (`scan_onset_cross_validated`) against the same scan written
+  with NumPy suffix sums (peer);
+- the step + ramp trend fit over all onsets (FFT cross-correlations) against one least-squares
+  fit per onset with numpy.linalg.lstsq (peer);
 - the C++ k-step predictor against scipy.signal.lfilter doing the same filtering (peer).
 """
 from __future__ import annotations
 
+import argparse
+import json
+import resource
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -21,63 +29,131 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 
 import mpmpp  # noqa: E402
 from mpmpp import _core  # noqa: E402
-from mpmpp.compare import compare  # noqa: E402
 from mpmpp.diagnose import diagnose  # noqa: E402
+from mpmpp.diagnose.trend import trend_fit  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from diagnose_eval import model_of  # noqa: E402
+
+UNITS = {"h": 3600.0, "d": 86400.0}
+
+
+def seconds(text: str) -> float:
+    return float(text[:-1]) * UNITS[text[-1]]
+
+
+def peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def child(duration_s: float) -> int:
+    """One record length in this (fresh) process; prints a JSON line."""
+    sc = mpmpp.scenarios.paper_mimo()
+    sc["duration_s"] = duration_s
+    sc["events"] = [e for e in sc["events"] if e["time_s"] < duration_s]
+    data = mpmpp.simulate(sc, seed=1)
+    model = model_of(sc)
+    base = peak_mb()
+    t0 = time.process_time()
+    res = diagnose(model, data)
+    cpu = time.process_time() - t0
+    print(json.dumps({"n": len(data), "cpu_s": cpu, "peak_mb": peak_mb(), "base_mb": base,
+                      "findings": [f"{f.effect} {f.output}" for f in res.findings]}))
+    return 0
+
+
+def cost_table(lengths: list[str]) -> None:
+    print("diagnose, 3x3 MD process under MPC, 5 s sampling (fresh process per length)")
+    print("| record | samples | CPU s | CPU per sample vs shortest | peak MB | of which before diagnose |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    first = None
+    for text in lengths:
+        out = subprocess.run([sys.executable, __file__, "--child", str(seconds(text))], capture_output=True,
+                             text=True, check=True).stdout.strip().splitlines()[-1]
+        r = json.loads(out)
+        per_sample = r["cpu_s"] / r["n"]
+        first = first or per_sample
+        print(f"| {text} | {r['n']} | {r['cpu_s']:.2f} | {per_sample / first:.2f} | {r['peak_mb']:.0f} | "
+              f"{r['base_mb']:.0f} |", flush=True)
 
 
 def best_of(fn, repeat=3):
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(time.process_time() - t0)
     return min(times)
 
 
-def numpy_scan(r, r_without, psi, weight, min_segment, step):
-    d = np.cumsum((weight * (r**2 - r_without**2))[::-1])[::-1]
-    rp = np.cumsum((weight * r_without * psi)[::-1])[::-1]
-    pp = np.cumsum((weight * psi**2)[::-1])[::-1]
+def numpy_cross_validated_scan(r, r_without, psi, weight, folds, min_segment, step):
+    """The peer: suffix sums per weighting with NumPy, then the held-out drops."""
+    def suffix(w):
+        d = np.cumsum((w * (r**2 - r_without**2))[::-1])[::-1]
+        rp = np.cumsum((w * r_without * psi)[::-1])[::-1]
+        pp = np.cumsum((w * psi**2)[::-1])[::-1]
+        return d, rp, pp
+
     ks = np.r_[0, np.arange(min_segment, len(r) - min_segment + 1, step)]
-    stat = d[ks] + rp[ks] ** 2 / pp[ks]
-    k = ks[np.argmax(stat)]
-    return k, stat.max()
+
+    def scan(sums):
+        d, rp, pp = sums
+        theta = np.divide(rp[ks], pp[ks], out=np.zeros(len(ks)), where=pp[ks] > 0)
+        stat = d[ks] + theta * rp[ks]
+        i = np.argmax(stat)
+        return ks[i], theta[i]
+
+    full = scan(suffix(weight))
+    sums = [suffix(weight * f) for f in folds]
+    heldout = []
+    for k in (0, 1):
+        on, theta = scan(sums[k])
+        d, rp, pp = sums[1 - k]
+        heldout.append(d[on] + 2 * theta * rp[on] - theta**2 * pp[on])
+    return full, heldout
 
 
-def main() -> int:
-    sc = mpmpp.scenarios.paper_mimo()
-    sc["duration_s"] = 20 * 3600.0
-    sc["events"] = [e for e in sc["events"] if e["time_s"] < sc["duration_s"]]
-    t0 = time.perf_counter()
-    data = mpmpp.simulate(sc, seed=1)
-    t_sim = time.perf_counter() - t0
-    model = model_of(sc)
-    t_diag = best_of(lambda: diagnose(model, data), repeat=2)
-    for f in diagnose(model, data).findings:
-        print(f"  finding {f.id}: {f.effect} {f.output} <- {f.input} at {f.onset_s / 60:.0f} min")
-    t_cmp = best_of(lambda: compare(model, data), repeat=2)
-    print(f"3x3, 20 h, {len(data)} samples (simulated in {t_sim:.1f} s)")
-    print(f"  diagnose: {t_diag:.2f} s = {t_diag / 10.0:.2f} x the 10 s budget")
-    print(f"  compare:  {t_cmp:.2f} s")
+def per_onset_trend(e, ok, hinv, grid, earliest):
+    """The peer: one least-squares fit of e on H^-1 [1, step, ramp] per onset."""
+    n = len(e)
+    step0, ramp0 = hinv.filter(np.ones(n)), hinv.filter(np.arange(n) / n)
+    rss0 = np.sum((e[ok] - e[ok].mean()) ** 2)
+    best = (0, 0.0)
+    for k in range(earliest, n - 2 * grid, grid):
+        x = np.column_stack([np.ones(n), np.r_[np.zeros(k), step0[: n - k]], np.r_[np.zeros(k), ramp0[: n - k]]])
+        coef = np.linalg.lstsq(x[ok], e[ok], rcond=None)[0]
+        drop = rss0 - np.sum((e[ok] - x[ok] @ coef) ** 2)
+        if drop > best[1]:
+            best = (k, drop)
+    return best
 
+
+def kernel_ratios(n: int) -> None:
     rng = np.random.default_rng(0)
-    n = len(data)
-    r, rw, psi = rng.standard_normal(n), rng.standard_normal(n), rng.standard_normal(n)
+    r, rw, psi = rng.standard_normal((3, n))
     w = np.ones(n)
-    t_cpp = best_of(lambda: _core.scan_onset(r, rw, psi, w, 720, 12), repeat=20)
-    t_np = best_of(lambda: numpy_scan(r, rw, psi, w, 720, 12), repeat=20)
-    f = _core.scan_onset(r, rw, psi, w, 720, 12)
-    assert numpy_scan(r, rw, psi, w, 720, 12)[0] == f.onset
-    print(f"  onset scan, {n} samples: C++ {1e3 * t_cpp:.2f} ms, NumPy suffix sums {1e3 * t_np:.2f} ms "
-          f"-> C++ is {t_np / t_cpp:.1f}x faster")
+    parity = (np.arange(n) // 720) % 2
+    folds = [w * (parity == 0), w * (parity == 1)]
+    t_cpp = best_of(lambda: _core.scan_onset_cross_validated(r, rw, psi, w, folds[1], 720, 12), 20)
+    t_np = best_of(lambda: numpy_cross_validated_scan(r, rw, psi, w, folds, 720, 12), 20)
+    cv = _core.scan_onset_cross_validated(r, rw, psi, w, folds[1], 720, 12)
+    assert numpy_cross_validated_scan(r, rw, psi, w, folds, 720, 12)[0][0] == cv.full.onset
+    print(f"cross-validated onset scan, {n} samples: C++ {1e3 * t_cpp:.2f} ms, NumPy suffix sums "
+          f"{1e3 * t_np:.2f} ms -> C++ is {t_np / t_cpp:.1f}x faster")
+
+    e = rng.standard_normal(n) + 1e-4 * np.maximum(np.arange(n) - n // 2, 0)
+    ok = np.ones(n, bool)
+    hinv = mpmpp.TransferFunction([1.0, 0.5], [1.0, -0.3])
+    t_fft = best_of(lambda: trend_fit(e, ok, hinv, 0, 120, 120), 3)
+    t_ls = best_of(lambda: per_onset_trend(e, ok, hinv, 120, 120), 1)
+    assert per_onset_trend(e, ok, hinv, 120, 120)[0] == trend_fit(e, ok, hinv, 0, 120, 120).onset
+    print(f"trend fit over {len(range(120, n - 240, 120))} onsets, {n} samples: FFT {1e3 * t_fft:.1f} ms, "
+          f"least squares per onset {1e3 * t_ls:.0f} ms -> {t_ls / t_fft:.0f}x faster")
 
     g = mpmpp.TransferFunction([0.0763], [1.0, -0.0723], 15)
     h = mpmpp.TransferFunction([1.0, -0.5], [1.0, 0.5])
     u, y = rng.standard_normal((n, 1)), rng.standard_normal(n)
-    t_pred = best_of(lambda: _core.predict_output([g], h, y, u, 10), repeat=20)
+    t_pred = best_of(lambda: _core.predict_output([g], h, y, u, 10), 20)
 
     def scipy_pred():
         v = y - lfilter(np.r_[np.zeros(15), 0.0763], [1.0, -0.0723], u[:, 0])
@@ -85,9 +161,21 @@ def main() -> int:
         hk = lfilter([1.0, -0.5], [1.0, 0.5], np.r_[1.0, np.zeros(9)])
         return y - lfilter(hk, [1.0], e)
 
-    t_sp = best_of(scipy_pred, repeat=20)
-    print(f"  10-step prediction, {n} samples: C++ {1e3 * t_pred:.2f} ms, scipy lfilter {1e3 * t_sp:.2f} ms "
+    t_sp = best_of(scipy_pred, 20)
+    print(f"10-step prediction, {n} samples: C++ {1e3 * t_pred:.2f} ms, scipy lfilter {1e3 * t_sp:.2f} ms "
           f"-> ratio C++/scipy {t_pred / t_sp:.2f}")
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--lengths", default="3h,6h,1d,3d,7d")
+    p.add_argument("--child", type=float, help=argparse.SUPPRESS)
+    args = p.parse_args(argv)
+    if args.child is not None:
+        return child(args.child)
+    cost_table(args.lengths.split(","))
+    print()
+    kernel_ratios(17280)
     return 0
 
 

@@ -14,6 +14,11 @@ void bind_change_scan(py::module_& m) {
       .def_readonly("statistic", &OnsetFit::statistic)
       .def_readonly("theta", &OnsetFit::theta)
       .def_readonly("theta_se", &OnsetFit::theta_se);
+  py::class_<CrossValidatedOnset>(m, "CrossValidatedOnset", "onset scan on all samples and two-fold cross-validated")
+      .def_readonly("full", &CrossValidatedOnset::full)
+      .def_property_readonly("folds", [](const CrossValidatedOnset& c) { return py::make_tuple(c.fold[0], c.fold[1]); })
+      .def_property_readonly("heldout",
+                             [](const CrossValidatedOnset& c) { return py::make_tuple(c.heldout[0], c.heldout[1]); });
   py::class_<ArSplit>(m, "ArSplit", "two-segment AR split of a residual")
       .def_readonly("onset", &ArSplit::onset)
       .def_readonly("statistic", &ArSplit::statistic)
@@ -22,6 +27,9 @@ void bind_change_scan(py::module_& m) {
       .def_readonly("variance_all", &ArSplit::variance_all);
   m.def("scan_onset", &scan_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"), py::arg("weight"),
         py::arg("min_segment"), py::arg("step"), py::call_guard<py::gil_scoped_release>());
+  m.def("scan_onset_cross_validated", &scan_onset_cross_validated, py::arg("r"), py::arg("r_without"),
+        py::arg("psi"), py::arg("weight"), py::arg("odd"), py::arg("min_segment"),
+        py::arg("step"), py::call_guard<py::gil_scoped_release>());
   m.def("fit_at_onset", &fit_at_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"), py::arg("weight"),
         py::arg("onset"));
   m.def("fit_ar", &fit_ar, py::arg("e"), py::arg("order"), py::arg("begin"), py::arg("end"));

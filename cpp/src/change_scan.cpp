@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "mpmpp/error.hpp"
 
@@ -40,6 +41,105 @@ double ar_variance(const Eigen::MatrixXd& gram, int order, double n) {
   return std::max(rss, 1e-300) / n;
 }
 
+// Suffix sums over t >= k of the statistic's three terms, kept only at the onsets a scan
+// considers (k = 0 and k = min_segment, min_segment + step, ..., N - min_segment), for the
+// weighting `weight` (column 0) and, with a fold assignment, for the even and odd folds'
+// samples (columns 1 and 2; column 0 is then their sum).
+class GridSums {
+ public:
+  GridSums(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+           const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+           const double* odd, Eigen::Index min_segment, Eigen::Index step) {
+    const Eigen::Index n = r.size();
+    onsets_.push_back(0);
+    for (Eigen::Index k = min_segment; k + min_segment <= n; k += step) onsets_.push_back(k);
+    const int m = odd ? 3 : 1;
+    const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
+    drop_.setZero(rows, m);
+    rp_.setZero(rows, m);
+    pp_.setZero(rows, m);
+    if (odd)
+      accumulate<3>(r, r_without, psi, weight, odd);
+    else
+      accumulate<1>(r, r_without, psi, weight, nullptr);
+  }
+
+ private:
+  template <int M>
+  void accumulate(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                  const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+                  const double* odd) {
+    const Eigen::Index n = r.size();
+    const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
+    // Before the first sample where the candidate differs from the nominal model (psi != 0 or
+    // r != r_without: a drift that starts late) every term is zero and the sums stay put.
+    Eigen::Index first = 0;
+    while (first < n && psi[first] == 0.0 && r[first] == r_without[first]) ++first;
+    double d0 = 0.0, x0 = 0.0, p0 = 0.0, d1 = 0.0, x1 = 0.0, p1 = 0.0, d2 = 0.0, x2 = 0.0, p2 = 0.0;
+    const auto store = [&](Eigen::Index row) {
+      if constexpr (M == 3) {
+        drop_.row(row) << d1 + d2, d1, d2;
+        rp_.row(row) << x1 + x2, x1, x2;
+        pp_.row(row) << p1 + p2, p1, p2;
+      } else {
+        drop_(row, 0) = d0;
+        rp_(row, 0) = x0;
+        pp_(row, 0) = p0;
+      }
+    };
+    Eigen::Index row = rows - 1;
+    for (Eigen::Index t = n - 1; t >= first && row >= 0; --t) {
+      const double dt = r[t] * r[t] - r_without[t] * r_without[t];
+      const double xt = r_without[t] * psi[t];
+      const double pt = psi[t] * psi[t];
+      if constexpr (M == 3) {
+        // blocks of one fold are long runs, so the branch is well predicted
+        if (odd[t] != 0.0) {
+          d2 += weight[t] * dt;
+          x2 += weight[t] * xt;
+          p2 += weight[t] * pt;
+        } else {
+          d1 += weight[t] * dt;
+          x1 += weight[t] * xt;
+          p1 += weight[t] * pt;
+        }
+      } else {
+        d0 += weight[t] * dt;
+        x0 += weight[t] * xt;
+        p0 += weight[t] * pt;
+      }
+      if (t == onsets_[row]) store(row--);
+    }
+    for (; row >= 0; --row) store(row);
+  }
+
+ public:
+  // Best onset for weighting j; `row` receives its grid index.
+  OnsetFit scan(int j, Eigen::Index* row = nullptr) const {
+    OnsetFit best = make_fit(0, drop_(0, j), rp_(0, j), pp_(0, j));
+    Eigen::Index best_row = 0;
+    for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
+      const OnsetFit f = make_fit(onsets_[i], drop_(i, j), rp_(i, j), pp_(i, j));
+      if (f.statistic > best.statistic) {
+        best = f;
+        best_row = i;
+      }
+    }
+    if (row) *row = best_row;
+    return best;
+  }
+
+  // Drop of the squared error after the grid onset `row` with channel scale theta, weighting j:
+  // sum w (r^2 - (r_without - theta psi)^2) = drop + 2 theta rp - theta^2 pp.
+  double drop_with(int j, Eigen::Index row, double theta) const {
+    return drop_(row, j) + 2.0 * theta * rp_(row, j) - theta * theta * pp_(row, j);
+  }
+
+ private:
+  std::vector<Eigen::Index> onsets_;
+  Eigen::MatrixXd drop_, rp_, pp_;
+};
+
 }  // namespace
 
 OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
@@ -60,22 +160,27 @@ OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref
                     const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
                     Eigen::Index min_segment, Eigen::Index step) {
   check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
-  const Eigen::Index n = r.size();
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
-  // Suffix sums over t >= k of the three terms of the statistic.
-  Eigen::VectorXd sd(n + 1), srp(n + 1), spp(n + 1);
-  sd[n] = srp[n] = spp[n] = 0.0;
-  for (Eigen::Index t = n - 1; t >= 0; --t) {
-    sd[t] = sd[t + 1] + weight[t] * (r[t] * r[t] - r_without[t] * r_without[t]);
-    srp[t] = srp[t + 1] + weight[t] * r_without[t] * psi[t];
-    spp[t] = spp[t + 1] + weight[t] * psi[t] * psi[t];
+  return GridSums(r, r_without, psi, weight, nullptr, min_segment, step).scan(0);
+}
+
+CrossValidatedOnset scan_onset_cross_validated(
+    const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+    const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+    const Eigen::Ref<const Eigen::VectorXd>& odd, Eigen::Index min_segment, Eigen::Index step) {
+  check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
+  if (odd.size() != r.size()) throw InputError("odd must have the same length as r");
+  if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
+  const Eigen::VectorXd in_odd = odd;   // contiguous even if the caller passed a strided view
+  const GridSums sums(r, r_without, psi, weight, in_odd.data(), min_segment, step);
+  CrossValidatedOnset out;
+  out.full = sums.scan(0);
+  for (int k = 0; k < 2; ++k) {
+    Eigen::Index row = 0;
+    out.fold[k] = sums.scan(1 + k, &row);
+    out.heldout[k] = sums.drop_with(2 - k, row, out.fold[k].theta);
   }
-  OnsetFit best = make_fit(0, sd[0], srp[0], spp[0]);
-  for (Eigen::Index k = min_segment; k + min_segment <= n; k += step) {
-    const OnsetFit f = make_fit(k, sd[k], srp[k], spp[k]);
-    if (f.statistic > best.statistic) best = f;
-  }
-  return best;
+  return out;
 }
 
 Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,

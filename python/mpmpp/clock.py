@@ -32,15 +32,6 @@ def parse_duration(text, option: str = "duration") -> float:
     return float(m.group(1)) * _UNITS.get(m.group(2), 1.0)
 
 
-def time_axis(clock, t, origin: float = 0.0, label: str = "time (h)"):
-    """x values and axis label for times ``t`` of the ``time`` column: the data's own time
-    when its ``clock`` is known, else hours since ``origin``."""
-    if clock is not None:
-        return clock.axis(t)
-    import numpy as np
-
-    return (np.asarray(t, dtype=float) - origin) / 3600.0, label
-
 
 @dataclass(frozen=True)
 class Clock:
@@ -172,22 +163,3 @@ class Clock:
                 out[key[:-2]] = self.stamp(value)
         return out
 
-    def axis(self, t):
-        """x values and axis label for times ``t`` (an array on the ``time`` axis)."""
-        import numpy as np
-
-        t = np.asarray(t, dtype=float)
-        if not self.calendar:
-            return (t - self.start_s) / 3600.0, "time since the first sample (h)"
-        # One offset for the whole axis (the first row's): an axis must not jump back an hour.
-        base = np.datetime64(self.datetime(self.start_s).replace(tzinfo=None), "ms")
-        x = base + ((t - self.start_s) * 1000.0).round().astype("timedelta64[ms]")
-        return x, f"time ({self.zone_name()})"
-
-    def zone_name(self) -> str:
-        if self.offset_s is None:
-            return "local time"
-        if self.offset_s == 0:
-            return "UTC"
-        sign, minutes = "+-"[self.offset_s < 0], abs(self.offset_s) // 60
-        return f"UTC{sign}{minutes // 60:02d}:{minutes % 60:02d}"

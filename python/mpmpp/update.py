@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .diagnose import DiagnoseResult, ModelChange, diagnose, one_step_errors
-from .signals import extract
+from .diagnose.pipeline import diagnosis_signals
 
 
 @dataclass
@@ -59,6 +59,8 @@ class UpdateResult:
             lines.append(f"  {e.output}: error {e.error_before:.4g} -> {e.error_after:.4g} ({change:+.1f} %) "
                          f"after t={e.onset_s / 3600:.1f} h")
         lines.append(f"  error = {self.metric}")
+        if self.diagnosis is not None:
+            lines += [f"  note: {n}" for n in self.diagnosis.notes]
         return "\n".join(lines)
 
     def save(self, path) -> None:
@@ -79,13 +81,11 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
     findings = [diagnosis.finding(i) for i in ids]
     changes: list[ModelChange] = []
     for f in findings:
-        changes.append(f.change)
-        changes += getattr(f, "extra_changes", [])
+        changes += f.model_changes()
     new_model = apply_changes(model, changes, name)
 
-    time_s = data["time"].to_numpy(dtype=float)
-    reference = None if train_end_s is None else time_s < train_end_s
-    sig = extract(model, data, reference=reference)
+    sig = diagnosis_signals(model, data, train_end_s).sig
+    time_s = sig.time_s
     block = max(int(round(3600.0 / sig.sample_time_s)), 10)
     heldout = (np.arange(len(time_s)) // block) % 2 == 1
     errors = []

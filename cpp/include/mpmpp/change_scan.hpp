@@ -28,6 +28,21 @@ OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref
                     const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
                     Eigen::Index min_segment, Eigen::Index step);
 
+// Two-fold cross-validation of the scan (the held-out test of `diagnose`): sample t is in the
+// odd fold where odd(t) != 0, else in the even fold. The onset and theta are chosen on one
+// fold's samples and the drop of the squared error
+//   sum_{t >= onset_k, t in the other fold} weight (r^2 - (r_without - theta_k psi)^2)
+// is measured on the other fold's; `full` is the scan on all samples. One pass of suffix sums
+// serves the three scans and both held-out drops.
+struct CrossValidatedOnset {
+  OnsetFit full;
+  OnsetFit fold[2];
+  double heldout[2] = {0.0, 0.0};   // drop on fold 1 - k with the fit of fold k
+};
+CrossValidatedOnset scan_onset_cross_validated(
+    const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
+    const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
+    const Eigen::Ref<const Eigen::VectorXd>& odd, Eigen::Index min_segment, Eigen::Index step);
 // The same fit at a given onset (no scan).
 OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
                       const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,

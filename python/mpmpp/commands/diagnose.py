@@ -15,9 +15,10 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from ..diagnose import diagnose
+    from ..timeaxis import origin_of
 
     model, data, clock = load_pair(args)
     end = train_end(args, clock, MONITORING_S, "diagnose")
     result = diagnose(model, data, train_end_s=end, min_segment_s=MONITORING_S)
     return report(result, args, "diagnose", clock, summary_in_data_time(result, clock),
-                  plot=lambda out: result.plot(out, clock=clock))
+                  plot=lambda out: result.plot(out, origin_of(data)))

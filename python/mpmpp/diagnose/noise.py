@@ -1,0 +1,165 @@
+"""Disturbance-side findings: ``noise_change`` and ``output_drift``.
+
+On outputs without a process finding: a new noise model H / A_after (or an innovation-level
+change) and a slow drift component H (1 - c q^-1) / (1 - rho q^-1) after the onset, scored on
+held-out blocks in the nominal model's one-step-error domain. A drift that wins in the process
+pool is written the same way.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._core import TransferFunction
+from .errors import held_out_error
+from .result import Finding, InsufficientData, ModelChange
+from .scoring import confidence
+from .trend import trend_fit
+from .whitening import AR_ORDER, MIN_AR_ROWS_PER_COEFFICIENT, SETTLE, OutputResidual, masked_ar, stable
+
+DRIFT_POLES = (0.995, 0.998, 0.999, 0.9995)
+DRIFT_ZEROS = (0.8, 0.9, 0.95, 0.98)
+
+
+@dataclass
+class DriftNoise:
+    """The drift noise factor (1 - rho q^-1) / (1 - c q^-1) with the best held-out gain."""
+
+    rho: float
+    c: float
+    gain: float
+
+
+@dataclass
+class DisturbanceCandidate:
+    effect: str          # "noise_change" or "output_drift"
+    score: float         # held-out gain minus the parameter penalty
+    gain: float          # held-out log-likelihood gain of the refitted filter
+    level: float         # likelihood ratio of an innovation-level change (noise_change only)
+
+
+def noise_finding(out: OutputResidual, first_onset: int, logn: float) -> Finding | None:
+    """noise_change or output_drift on an output whose process model passed."""
+    return _disturbance_finding(out, first_onset, logn, None)
+
+
+def drift_finding(out: OutputResidual, first_onset: int, logn: float, drift_onset: int) -> Finding | None:
+    """The output_drift finding for a drift that won in the process pool at ``drift_onset``."""
+    return _disturbance_finding(out, first_onset, logn, drift_onset)
+
+
+def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, drift_onset: int | None):
+    sig = out.sig
+    e = out.e
+    ok = np.isfinite(e) & (out.weight > 0)
+    if drift_onset is not None:
+        onset = drift_onset
+    elif out.split_significant:
+        onset = out.split_onset
+    else:
+        ramp_onset, ramp_stat = _drift_onset(out, first_onset)
+        onset = ramp_onset if ramp_stat > 3 * logn else first_onset
+    after = ok & (np.arange(len(e)) >= onset)
+    fold = [out.fold[0].astype(bool) & after, out.fold[1].astype(bool) & after]
+    e0 = np.nan_to_num(e)
+    n_after = int(after.sum())
+    if n_after < 4 * AR_ORDER:
+        return None
+    if min(f.sum() for f in fold) < MIN_AR_ROWS_PER_COEFFICIENT * AR_ORDER:
+        raise InsufficientData(f"{out.name}: too few held-out rows after t={sig.time_s[onset] / 3600:.1f} h "
+                               f"to test a disturbance change there")
+
+    def heldout_gain(make_filter):
+        """sum over both folds of n_test log(var nominal / var filtered), filter fitted on the other fold."""
+        gain = 0.0
+        for k in (0, 1):
+            filt = make_filter(fold[k])
+            w = filt.filter(e0)
+            test = fold[1 - k]
+            gain += test.sum() * math.log(np.mean(e0[test] ** 2) / np.mean(w[test] ** 2))
+        return gain
+
+    def ar_on(mask):
+        return TransferFunction(masked_ar(e0, mask), [1.0], 0)
+
+    candidates = []
+    noise_gain = heldout_gain(ar_on)
+    level = 0.0
+    if out.split_significant and out.split.variance_before > 0:
+        # Innovation level: likelihood ratio of separate variances (AR colour already fitted).
+        ratio = out.split.variance_after / out.split.variance_before
+        nb, na = onset - first_onset, n_after
+        pooled = (nb * out.split.variance_before + na * out.split.variance_after) / (nb + na)
+        level = (nb + na) * math.log(pooled) - nb * math.log(out.split.variance_before) - na * math.log(
+            out.split.variance_after)
+    else:
+        ratio = 1.0
+    onset_params = 1 if onset > first_onset else 0
+    noise_score = max(noise_gain - (AR_ORDER + onset_params) * logn, level - (1 + onset_params) * logn)
+    candidates.append(DisturbanceCandidate("noise_change", noise_score, noise_gain, level))
+
+    # A slow drift on top of the modelled disturbance: v = H e + d with d a slowly wandering
+    # level has the innovations form H (1 - c q^-1) / (1 - rho q^-1), rho close to 1 (the
+    # drift) and c < rho (how fast the level wanders); rho < 1 keeps H stable as FORMATS asks.
+    drift = None
+    for rho in DRIFT_POLES:
+        for c in DRIFT_ZEROS:
+            g = heldout_gain(lambda mask, rho=rho, c=c: TransferFunction([1.0, -rho], [1.0, -c], 0))
+            if drift is None or g > drift.gain:
+                drift = DriftNoise(rho, c, g)
+    candidates.append(DisturbanceCandidate("output_drift", drift.gain - (2 + onset_params) * logn, drift.gain, 0.0))
+    if drift_onset is not None:
+        candidates = [c for c in candidates if c.effect == "output_drift"]
+    if out.noise_estimated:
+        # The noise model was fitted to this record: a "change" present from its start is only
+        # the estimate's imperfection, not a change of the disturbance.
+        candidates = [c for c in candidates if c.effect != "noise_change" or onset > first_onset]
+    if not candidates:
+        return None
+    best = max(candidates, key=lambda c: c.score)
+    if best.score <= 0.0 and drift_onset is None:
+        return None
+    onset_s = float(sig.time_s[onset])
+    when = f"since t={onset_s / 3600:.1f} h" if onset > first_onset else "throughout the record"
+    if best.effect == "noise_change":
+        poly = stable(masked_ar(e0, after))
+        noise = TransferFunction(out.noise.num, np.convolve(out.noise.den, poly), 0)
+        se = math.sqrt(2.0 / max(n_after, 1) + 2.0 / max(onset - first_onset, 1))
+        estimate = {"variance_ratio": ratio, "ci95": [ratio * math.exp(-1.96 * se), ratio * math.exp(1.96 * se)],
+                    "noise_den": list(map(float, noise.den))}
+        text = (f"the disturbance on {out.name} changed {when} (innovation variance x{ratio:.2f}, "
+                f"new colour); the process model still fits")
+        params = AR_ORDER + onset_params
+        conf_stat = max(best.gain, best.level)
+        # The noise model update writes is refitted on the fit blocks only (errors on the others).
+        written = TransferFunction(out.noise.num, np.convolve(out.noise.den, stable(masked_ar(e0, fold[0]))), 0)
+    else:
+        written = TransferFunction(np.convolve(out.noise.num, [1.0, -drift.c]),
+                                   np.convolve(out.noise.den, [1.0, -drift.rho]), 0)
+        estimate = {"drift_pole": drift.rho, "ci95": [min(DRIFT_POLES), max(DRIFT_POLES)], "drift_zero": drift.c,
+                    "drift_time_constant_s": -sig.sample_time_s / math.log(drift.rho)}
+        text = f"slow drift on {out.name} {when}; the process model still fits"
+        params = 2 + onset_params
+        conf_stat = best.gain
+    change = ModelChange(output=out.name, noise=written)
+    err = held_out_error(out, onset, change)
+    # A pure level change is a real disturbance change the model file cannot hold (H is monic,
+    # the innovation variance is not in FORMATS.md), so it need not lower the error.
+    level_driven = best.effect == "noise_change" and best.level - (1 + onset_params) * logn >= noise_gain - (
+        AR_ORDER + onset_params) * logn
+    if not err.improved and not level_driven:
+        return None
+    return Finding(id="", effect=best.effect, output=out.name, input=None, onset_s=onset_s,
+                   confidence=confidence(conf_stat, params), estimate=estimate,
+                   error_before=err.before, error_after=err.after, explanation=text,
+                   score=best.score, change=change)
+
+
+def _drift_onset(out: OutputResidual, first_onset: int, grid: int = 120) -> tuple[int, float]:
+    """Onset of an additive step + ramp on the output (see ``trend_fit``), with the drop of
+    the residual sum of squares in units of the early error variance."""
+    fit = trend_fit(np.nan_to_num(out.e), out.weight > 0, out.noise.inverse(), first_onset, grid,
+                    max(first_onset, 2 * SETTLE))
+    return fit.onset, fit.drop / out.sigma[0] ** 2

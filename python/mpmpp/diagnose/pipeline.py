@@ -1,0 +1,110 @@
+"""``diagnose(model, data)``: whiten each output, search process and actuator candidates, then
+the disturbance side where the process passed, and rank what survives."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..signals import Signals, extract
+from .actuator import actuator_findings
+from .errors import one_step_errors
+from .noise import noise_finding
+from .process import process_findings
+from .result import DiagnoseResult, Finding, InsufficientData
+from .whitening import AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual
+
+
+@dataclasses.dataclass
+class DiagnosisSignals:
+    """The deviation signals the diagnosis works on, with a noise model for every output."""
+
+    sig: Signals
+    estimated_noise: list[str]          # outputs whose noise model was estimated from the data
+    notes: list[str]
+
+
+def diagnosis_signals(model, data, train_end_s: float | None = None) -> DiagnosisSignals:
+    """Deviation signals of ``data`` for ``model``. An output without a noise model (H = 1 in
+    the file) is the normal case for hand-written models: its disturbance model is estimated
+    from the data (on the rows before ``train_end_s`` when given), so the whitening and the
+    reported errors use a realistic H, and its absence is never taken for a noise change."""
+    if train_end_s is not None and train_end_s < 0:
+        raise ValueError(f"--train-end must be >= 0 seconds, got {train_end_s}")
+    time_s = data["time"].to_numpy(dtype=float)
+    reference = None if train_end_s is None else time_s < train_end_s
+    if reference is not None and reference.sum() < 10:
+        raise ValueError(f"--train-end {train_end_s} leaves fewer than 10 rows of training data")
+    sig = extract(model, data, reference=reference)
+    rows = np.ones(len(time_s), bool) if reference is None else reference
+    noise, estimated, notes = list(sig.noise), [], []
+    for i, name in enumerate(sig.outputs):
+        if has_noise_model(noise[i]):
+            continue
+        try:
+            noise[i] = estimated_noise_model(sig, i, rows)
+        except InsufficientData as exc:
+            raise ValueError(f"data: cannot estimate a disturbance model for '{name}' ({exc})") from None
+        estimated.append(name)
+        notes.append(f"{name}: the model has no noise model; its disturbance model was estimated from the "
+                     f"data (AR({NOISE_ORDER}) of the output error"
+                     + (", training rows)" if reference is not None else ")"))
+    return DiagnosisSignals(dataclasses.replace(sig, noise=noise), estimated, notes)
+
+
+def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float = 3600.0,
+             block_s: float = 3600.0, min_effect: float = 0.01) -> DiagnoseResult:
+    """Ranked findings (FORMATS.md ``diagnose --json``) for ``model`` against ``data``.
+
+    ``min_effect``: practical significance; a finding must remove at least this fraction of the
+    (whitened) one-step error variance after its onset on held-out data. Closed-loop records are
+    long, so statistically significant but practically void mismatches (a model one sample off
+    in dead time, a gain 3 % off) would otherwise be reported.
+
+    ``train_end_s``: the data before it are taken to agree with the model (operating point
+    from them, no onset inside them except a change present from the start).
+    """
+    prepared = diagnosis_signals(model, data, train_end_s)
+    sig, notes = prepared.sig, list(prepared.notes)
+    time_s = sig.time_s
+    ts = sig.sample_time_s
+    min_segment = max(int(round(min_segment_s / ts)), 4 * AR_ORDER)
+    block = max(int(round(block_s / ts)), 10)
+    step = max(min_segment // 60, 1)
+    first_onset = 0 if train_end_s is None else sig.seconds_to_index(train_end_s)
+    n = len(time_s)
+    if n < 3 * min_segment:
+        raise ValueError(f"data: {n} rows are too few for diagnosis (need at least {3 * min_segment})")
+    logn = math.log(n)
+
+    outputs = [output_residual(sig, i, min_segment, first_onset, block, name in prepared.estimated_noise)
+               for i, name in enumerate(sig.outputs)]
+    found: list[Finding] = []
+    for out in outputs:
+        found += process_findings(out, first_onset, min_segment, step, logn, min_effect)
+    # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels:
+    # it replaces them when it explains more than they do together.
+    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect):
+        rivals = [f for f in found if f.output in nl.outputs_driven and (
+            (f.input == nl.input and f.effect in ("gain", "time_constant", "delay")) or f.effect == "output_drift")]
+        if nl.score > sum(f.score for f in rivals):
+            found = [f for f in found if all(f is not r for r in rivals)] + [nl]
+    with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
+    for out in outputs:
+        if out.name not in with_process:
+            try:
+                f = noise_finding(out, first_onset, logn)
+            except InsufficientData as exc:
+                notes.append(str(exc))
+                continue
+            if f is not None:
+                found.append(f)
+    found.sort(key=lambda f: -f.score)
+    for k, f in enumerate(found, start=1):
+        f.id = f"F{k}"
+    after = {f.id: one_step_errors(sig, sig.outputs.index(f.output), f.model_changes())
+             for f in found if f.output is not None}
+    return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
+                          time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
+                          notes=notes)

@@ -1,0 +1,383 @@
+"""Process candidates: one channel replaced, from an onset on, by theta * S(q).
+
+Shapes S: the model's channel (``gain``), the channel with a new time constant
+(``time_constant``) or delay (``delay``), a unit-gain first-order-plus-delay channel from an
+input the model says has none (``missing_coupling``) or from an extra data column
+(``unmodeled_input``), or an additive ramp/step (``output_drift``). ``scan_onset`` gives the
+best onset and theta per shape (exact two-segment least squares); shapes are searched on grids.
+
+Held-out scoring: shape, onset and theta are chosen on the even 1 h blocks and scored on the
+odd ones and vice versa. The score is the held-out drop of the whitened squared error (a
+likelihood-ratio statistic) minus log(N)/2 per parameter (theta, grid value, onset).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import _core
+from .._core import TransferFunction
+from ..signals import Signals
+from .errors import held_out_error
+from .noise import drift_finding
+from .result import Finding, InsufficientData, ModelChange
+from .scoring import ProfilePoint, ci_from_profile, confidence
+from .whitening import OutputResidual
+
+TIME_CONSTANT_FACTORS = (0.33, 0.5, 0.67, 0.8, 1.25, 1.5, 2.0, 3.0)
+DELAY_RANGE = (-10, 15)      # new delay = model delay + this range (samples)
+COUPLING_POLES = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98)
+# Delay >= 1: in closed loop u(t) may already react to y(t), a lag-0 channel would fit feedback.
+COUPLING_DELAYS = range(1, 41)
+DRIFT_GRID_S = 1800.0
+DRIFT_COLUMN = "(drift)"
+MAX_FINDINGS_PER_OUTPUT = 3
+DELAY_GRID_EFFECTS = ("delay", "missing_coupling", "unmodeled_input")
+
+
+@dataclass
+class Shape:
+    """A candidate: channel (output <- column) replaced by theta * shape after an onset."""
+
+    effect: str
+    column: str
+    kind: str                     # "input", "extra" or "drift"
+    shape: TransferFunction       # theta = 1 means the shape itself
+    nominal: TransferFunction | None
+    label: float                  # the grid value (gain 1, time-constant factor, delay, pole, drift onset)
+    params: int                   # fitted parameters incl. the grid choice (onset counted later)
+    drive: np.ndarray = field(repr=False, default=None)   # the column the channel filters
+    drift_form: str = ""          # "ramp" or "step" for an output drift (its drive is built on demand)
+
+
+@dataclass
+class FoldFit:
+    """Onset scan on one fold's blocks, scored on the other fold's."""
+
+    statistic: float              # in-fold statistic
+    heldout: float                # drop of the whitened squared error on the other fold
+    theta: float
+
+
+@dataclass
+class Fit:
+    shape: Shape
+    onset: int
+    statistic: float
+    heldout: float
+    theta: float
+    theta_se: float
+    folds: list[FoldFit]
+    score: float
+    profile: list[ProfilePoint] = field(default_factory=list)   # same effect and column
+
+
+@dataclass
+class DelayFamily:
+    """One channel shape without delay, driven by one column: the shapes that differ from it
+    only in their delay are delayed copies of its responses."""
+
+    response: np.ndarray = field(repr=False)   # channel response per data segment
+    whitened: np.ndarray = field(repr=False)   # and whitened per piece
+
+
+@dataclass
+class WhitenedShape:
+    psi: np.ndarray                     # whitened response of the candidate shape
+    nominal: np.ndarray | None          # whitened response of the nominal channel it replaces
+
+
+class ShapeResponses:
+    """Whitened responses and weights per shape; they do not change between the greedy rounds,
+    only the residual does. Gain and time-constant responses are kept; shapes on a grid of
+    delays or drift onsets (hundreds in a long record) are rebuilt on demand from one response
+    per family."""
+
+    def __init__(self, out: OutputResidual):
+        self.out = out
+        self._shapes: dict = {}
+        self._nominal: dict = {}
+        self._weight: dict = {}
+        self._drift_base: dict = {}
+        self._delay_families: dict = {}
+        self._segment_starts = {a for a, _ in out.sig.segments}
+
+    def whitened(self, shape: Shape) -> WhitenedShape:
+        if shape.kind == "drift":
+            return WhitenedShape(self._drift(int(shape.label), shape.drift_form), None)
+        if shape.effect in DELAY_GRID_EFFECTS:
+            return WhitenedShape(self._delayed(shape), self._nominal_response(shape))
+        key = id(shape)
+        if key not in self._shapes:
+            drive = np.nan_to_num(shape.drive)
+            psi = self.out.whiten(self.out.channel_response(shape.shape, drive))
+            self._shapes[key] = WhitenedShape(psi, self._nominal_response(shape))
+        return self._shapes[key]
+
+    def _nominal_response(self, shape: Shape) -> np.ndarray | None:
+        if shape.nominal is None:
+            return None
+        key = (id(shape.nominal), id(shape.drive))
+        if key not in self._nominal:
+            self._nominal[key] = self.out.whiten(self.out.channel_response(shape.nominal, np.nan_to_num(shape.drive)))
+        return self._nominal[key]
+
+    def _delayed(self, shape: Shape) -> np.ndarray:
+        """Whitened response of a delayed channel. In a piece that starts a data segment, the
+        channel and the whitening filter start at rest and see zeros for the first ``delay``
+        samples, so the response is the undelayed one, delayed; a piece that starts inside a
+        segment (after a noise split) inherits the channel's history and is filtered directly."""
+        out, g = self.out, shape.shape
+        key = (id(shape.drive), tuple(g.num), tuple(g.den))
+        if key not in self._delay_families:
+            x = out.channel_response(TransferFunction(g.num, g.den, 0), np.nan_to_num(shape.drive))
+            self._delay_families[key] = DelayFamily(x, out.whiten(x))
+        family, d = self._delay_families[key], g.delay
+        psi = np.zeros(len(out.r))
+        for p, (a, b) in enumerate(out.pieces):
+            if a in self._segment_starts:
+                if d < b - a:
+                    psi[a + d:b] = family.whitened[a:b - d]
+            else:
+                start = max(a, self._segment_start(a) + d)
+                x = np.zeros(b - a)
+                x[start - a:] = family.response[start - d:b - d]
+                psi[a:b] = out.whiten_piece(p, x)
+        return psi
+
+    def _segment_start(self, t: int) -> int:
+        return max(a for a in self._segment_starts if a <= t)
+
+    def _drift(self, onset: int, form: str) -> np.ndarray:
+        """Whitened response of a ramp (per hour) or step starting at ``onset``. In the piece
+        holding the onset the whitening filter starts at rest and sees zeros until the onset,
+        so the response there is the piece's response to a drift starting at its first sample,
+        delayed; later pieces restart their filters and are filtered directly."""
+        out = self.out
+        psi = np.zeros(len(out.r))
+        hour = 3600.0 / out.sig.sample_time_s
+        for p, (a, b) in enumerate(out.pieces):
+            if b <= onset:
+                continue
+            if a <= onset:
+                key = (p, form)
+                if key not in self._drift_base:
+                    self._drift_base[key] = out.whiten_piece(p, _drift_drive(b - a, 0, form, hour))
+                psi[onset:b] = self._drift_base[key][: b - onset]
+            else:
+                psi[a:b] = out.whiten_piece(p, _drift_drive(b - a, onset - a, form, hour))
+        return psi
+
+    def weight(self, shape: Shape) -> np.ndarray:
+        """The output's weight where the shape's drive is known (model inputs and drifts are
+        known wherever the output's weight is nonzero)."""
+        if shape.kind != "extra":
+            return self.out.weight
+        key = id(shape.drive)
+        if key not in self._weight:
+            self._weight[key] = self.out.weight * np.isfinite(shape.drive)
+        return self._weight[key]
+
+
+def first_order_with_time_constant(g: TransferFunction, factor: float) -> TransferFunction | None:
+    """g with every real pole p moved to p^(1/factor) (time constant times factor), DC gain kept."""
+    poles = g.poles()
+    if len(poles) == 0 or np.any(np.abs(poles.imag) > 1e-9) or np.any(poles.real <= 0):
+        return None
+    new_den = np.real(np.poly(poles.real ** (1.0 / factor)))
+    scale = g.dc_gain() * new_den.sum() / g.num.sum()
+    return TransferFunction(np.asarray(g.num) * scale, new_den, g.delay)
+
+
+def _drift_drive(length: int, onset: int, form: str, hour: float) -> np.ndarray:
+    """A drift starting at ``onset`` (may be negative: started before the first sample):
+    ramp max(t - onset, 0) in hours, or step (t > onset)."""
+    t = np.maximum(np.arange(length) - onset, 0.0)
+    return t / hour if form == "ramp" else (t > 0).astype(float)
+
+
+def _unit_foptd(pole: float, delay: int) -> TransferFunction:
+    return TransferFunction([1.0 - pole], [1.0, -pole], delay)
+
+
+def process_shapes(sig: Signals, i: int) -> list[Shape]:
+    shapes = []
+    for j, name in enumerate(sig.inputs):
+        g, u = sig.rows[i][j], sig.u[:, j]
+        if g is None:
+            shapes += [Shape("missing_coupling", name, "input", _unit_foptd(p, d), None, d, 3, u)
+                       for p in COUPLING_POLES for d in COUPLING_DELAYS]
+            continue
+        shapes.append(Shape("gain", name, "input", g, g, 1.0, 1, u))
+        for f in TIME_CONSTANT_FACTORS:
+            s = first_order_with_time_constant(g, f)
+            if s is not None:
+                shapes.append(Shape("time_constant", name, "input", s, g, f, 2, u))
+        for dd in range(*DELAY_RANGE):
+            if dd != 0 and g.delay + dd >= 0:
+                shapes.append(Shape("delay", name, "input", TransferFunction(g.num, g.den, g.delay + dd),
+                                    g, g.delay + dd, 2, u))
+    # Output drift competes in the same pool: an additive ramp or step on the output from
+    # onset tau on (grid of DRIFT_GRID_S). In closed loop the controller cancels a drift with
+    # its inputs, so a drift otherwise poses as a channel change fitted to that compensation.
+    n = len(sig.time_s)
+    grid = max(int(round(DRIFT_GRID_S / sig.sample_time_s)), 1)
+    for tau in range(0, max(n - 2 * grid, 1), grid):
+        for form in ("ramp", "step"):
+            shapes.append(Shape("output_drift", DRIFT_COLUMN, "drift", TransferFunction(), None, tau, 2,
+                                drift_form=form))
+    for k, name in enumerate(sig.extras):
+        z = sig.z[:, k]
+        shapes += [Shape("unmodeled_input", name, "extra", _unit_foptd(p, d), None, d, 3, z)
+                   for p in COUPLING_POLES for d in COUPLING_DELAYS]
+    return shapes
+
+
+def _without_channel(r: np.ndarray, w: WhitenedShape) -> np.ndarray:
+    """The residual with the nominal channel the shape replaces added back."""
+    return r if w.nominal is None else r + w.nominal
+
+
+def _present_in_both_halves(out: OutputResidual, r: np.ndarray, fit: Fit, responses: ShapeResponses) -> bool:
+    """A changed channel is a lasting effect: with the fitted theta it must lower the squared
+    error in the first and in the second half of the data after its onset. The interleaved
+    1 h folds cannot see a fit that only works in part of the record (in closed loop, a drift
+    that starts later can pose as a channel change present throughout)."""
+    if fit.score <= 0.0:
+        return True   # rejected later anyway; no need to compute
+    w = responses.whitened(fit.shape)
+    drop = responses.weight(fit.shape) * (r**2 - (_without_channel(r, w) - fit.theta * w.psi) ** 2)
+    mid = (fit.onset + len(r)) // 2
+    return drop[fit.onset:mid].sum() > 0.0 and drop[mid:].sum() > 0.0
+
+
+def _preferred(fits: list[Fit]) -> Fit:
+    """The best-scoring fit, except that a new time constant or delay whose channel scale theta
+    is far from 1 is a change of gain *and* dynamics: when the gain-only fit of the same channel
+    already gets half of its held-out gain, the gain change is the main effect and is reported."""
+    top = max(fits, key=lambda f: f.score)
+    if top.shape.effect in ("time_constant", "delay") and abs(top.theta - 1.0) > max(0.2, 3 * top.theta_se):
+        gain = [f for f in fits if f.shape.effect == "gain" and f.shape.column == top.shape.column]
+        if gain and gain[0].score > 0 and gain[0].heldout >= 0.5 * top.heldout:
+            return gain[0]
+    return top
+
+
+def _fit_shape(out: OutputResidual, r: np.ndarray, shape: Shape, min_onset: int, min_segment: int,
+               step: int, responses: ShapeResponses) -> Fit:
+    """Onset scan of one shape on all data and on each fold (the folds feed the held-out test)."""
+    w = responses.whitened(shape)
+    tail = slice(min_onset, None)
+    r_without = _without_channel(r, w)
+    cv = _core.scan_onset_cross_validated(r[tail], r_without[tail], w.psi[tail], responses.weight(shape)[tail],
+                                          out.fold[1][tail], min_segment, step)
+    folds = [FoldFit(f.statistic, h, f.theta) for f, h in zip(cv.folds, cv.heldout)]
+    return Fit(shape, min_onset + cv.full.onset, cv.full.statistic, 0.0, cv.full.theta, cv.full.theta_se, folds, 0.0)
+
+
+def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
+    """Per (effect, column): honest two-fold cross-validation of the whole search. On each fold
+    the shape (grid point) and onset with the largest in-fold statistic are picked and scored
+    on the other fold; the score is the summed held-out gain minus log(N)/2 per parameter.
+    The reported fit is the best shape on all data."""
+    groups: dict = {}
+    for f in fits:
+        groups.setdefault((f.shape.effect, f.shape.column), []).append(f)
+    out = []
+    for group in groups.values():
+        top = max(group, key=lambda f: f.statistic)
+        heldout = sum(max(group, key=lambda f: f.folds[k].statistic).folds[k].heldout for k in (0, 1))
+        params = top.shape.params + (1 if top.onset > 0 else 0)
+        top.heldout = heldout
+        top.score = heldout - 0.5 * params * logn
+        top.profile = [ProfilePoint(f.shape.label, f.statistic) for f in group]
+        out.append(top)
+    return out
+
+
+def process_findings(out: OutputResidual, first_onset: int, min_segment: int, step: int, logn: float,
+                     min_effect: float) -> list[Finding]:
+    """Greedy: up to MAX_FINDINGS_PER_OUTPUT channel changes, each accepted change kept in the
+    residual the next candidates are fitted to."""
+    sig = out.sig
+    shapes = process_shapes(sig, out.i)
+    r = out.r.copy()
+    found = []
+    taken: set = set()
+    responses = ShapeResponses(out)
+    for _ in range(MAX_FINDINGS_PER_OUTPUT):
+        fits = [_fit_shape(out, r, s, first_onset, min_segment, step, responses)
+                for s in shapes if s.column not in taken]
+        fits = _best_per_channel(fits, logn)
+        fits = [f for f in fits if _present_in_both_halves(out, r, f, responses)]
+        if not fits:
+            break
+        top = _preferred(fits)
+        if top.score <= 0.0 or top.heldout < min_effect * out.weight[top.onset:].sum():
+            break
+        taken.add(top.shape.column)
+        if top.shape.effect == "output_drift":
+            try:
+                finding = drift_finding(out, first_onset, logn, int(top.shape.label))
+            except InsufficientData:
+                finding = None
+            if finding is not None:
+                finding.score = top.score
+        else:
+            finding = _process_finding(out, top)
+        if finding is None or not finding.error_after < finding.error_before:
+            # the whitened-domain gain does not carry over to the model the update would write
+            break
+        found.append(finding)
+        w = responses.whitened(top.shape)
+        r = np.where(np.arange(len(r)) >= top.onset, _without_channel(r, w) - top.theta * w.psi, r)
+    return found
+
+
+def _time_constant_s(g: TransferFunction, ts: float) -> float:
+    p = float(np.max(np.abs(g.poles()))) if len(g.poles()) else 0.0
+    return -ts / math.log(p) if 0.0 < p < 1.0 else 0.0
+
+
+def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
+    sig = out.sig
+    s = fit.shape
+    onset_s = float(sig.time_s[fit.onset])
+    theta, se = fit.theta, fit.theta_se
+    ci = [theta - 1.96 * se, theta + 1.96 * se]
+    when = f"since t={onset_s / 3600:.1f} h" if fit.onset > 0 else "throughout the record"
+    name = f"{out.name} <- {s.column}"
+    # The model update uses the fold-0 estimate (fitted on the even blocks); errors on odd ones.
+    theta_fit = fit.folds[0].theta
+    if s.effect == "gain":
+        estimate = {"gain_ratio": theta, "ci95": ci}
+        text = f"gain of {name} about {theta:.2f}x the model's {when}"
+    elif s.effect == "time_constant":
+        t_old = _time_constant_s(s.nominal, sig.sample_time_s)
+        estimate = {"time_constant_ratio": s.label, "time_constant_s": t_old * s.label,
+                    "gain_ratio": theta, "ci95": ci_from_profile(fit.profile, fit.statistic)}
+        text = (f"time constant of {name} about {s.label:g}x the model's "
+                f"({t_old * s.label:.0f} s instead of {t_old:.0f} s) {when}")
+    elif s.effect == "delay":
+        estimate = {"delay_samples": int(s.label), "delay_s": s.label * sig.sample_time_s,
+                    "model_delay_samples": s.nominal.delay, "gain_ratio": theta,
+                    "ci95": ci_from_profile(fit.profile, fit.statistic)}
+        text = (f"dead time of {name} about {s.label * sig.sample_time_s:.0f} s instead of "
+                f"{s.nominal.delay * sig.sample_time_s:.0f} s {when}")
+    else:
+        pole = 1.0 - float(s.shape.num[0])
+        estimate = {"gain": theta, "ci95": ci, "delay_samples": int(s.label),
+                    "time_constant_s": (-sig.sample_time_s / math.log(pole)) if pole > 0 else 0.0}
+        what = "input" if s.kind == "input" else "data column"
+        text = (f"{out.name} responds to {what} {s.column} (gain about {theta:.3g}, "
+                f"delay {int(s.label)} samples) but the model has no such channel, {when}")
+    new_channel = TransferFunction(np.asarray(s.shape.num) * theta_fit, s.shape.den, s.shape.delay)
+    change = ModelChange(output=out.name, input=s.column, channel=new_channel, new_input=s.kind == "extra")
+    err = held_out_error(out, fit.onset, change)
+    params = s.params + (1 if fit.onset > 0 else 0)
+    return Finding(id="", effect=s.effect, output=out.name, input=s.column, onset_s=onset_s,
+                   confidence=confidence(fit.heldout, params), estimate=estimate,
+                   error_before=err.before, error_after=err.after, explanation=text, score=fit.score,
+                   change=change)

@@ -1,0 +1,157 @@
+"""Per-output residuals and their whitening: the noise side every candidate fit shares.
+
+With v = y_i - G_i u the output error of the nominal model and e = H_i^-1 v its one-step
+prediction error, a two-segment AR split of e finds where the disturbance's level or colour
+changed. Each side gets its own AR correction A_s(q), so ``whiten(x) = A_s H^-1 x / sigma_s``
+turns e into (nearly) white, unit-variance noise whatever the disturbance did. Whitening with a
+re-estimated noise model keeps the process fits consistent in closed loop when the disturbance
+changed (the direct method is biased when the noise model is wrong); the AR is fitted to e
+alone, not jointly with the inputs, so it cannot manufacture an input correlation.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import _core
+from .._core import TransferFunction
+from ..signals import Signals, per_segment
+from .result import InsufficientData
+from .trend import trend_fit
+
+AR_ORDER = 5                 # AR correction of the noise model (residual whitening)
+SETTLE = 60                  # samples left out after the start of each filtered segment
+NOISE_ORDER = 10             # AR order of a disturbance model estimated from the data
+MIN_AR_ROWS_PER_COEFFICIENT = 10
+
+
+@dataclass
+class OutputResidual:
+    """Everything about one output that the candidate fits share."""
+
+    sig: Signals = field(repr=False)
+    i: int
+    name: str
+    v: np.ndarray = field(repr=False)            # output error y_i - G_i u
+    e: np.ndarray = field(repr=False)            # one-step error H^-1 v
+    weight: np.ndarray = field(repr=False)       # 1 on samples used (segments minus settling)
+    split: object = field(repr=False)            # _core AR split of e (level / colour change)
+    split_onset: int | None
+    split_significant: bool
+    pieces: list[tuple[int, int]]                # [start, stop) ranges with their own AR
+    ar: list[np.ndarray] = field(repr=False)     # AR correction A_s per piece
+    sigma: list[float] = field(repr=False)       # innovation RMS per piece
+    r: np.ndarray = field(repr=False)            # whitened output error
+    fold: list[np.ndarray] = field(repr=False)   # weights of the even / odd held-out blocks
+    n: int
+    noise_estimated: bool = False                # H estimated from these data, not the model's
+
+    @property
+    def row(self) -> list:
+        return self.sig.rows[self.i]
+
+    @property
+    def noise(self) -> TransferFunction:
+        return self.sig.noise[self.i]
+
+    def whiten(self, x: np.ndarray) -> np.ndarray:
+        """A_s H^-1 x / sigma_s per piece (filters restart at every piece)."""
+        out = np.zeros_like(x, dtype=float)
+        for p, (a, b) in enumerate(self.pieces):
+            out[a:b] = self.whiten_piece(p, x[a:b])
+        return out
+
+    def whiten_piece(self, p: int, x: np.ndarray) -> np.ndarray:
+        """A_p H^-1 x / sigma_p for x on piece p (filters start at rest)."""
+        return TransferFunction(self.ar[p], [1.0], 0).filter(self.noise.inverse().filter(x)) / self.sigma[p]
+
+    def channel_response(self, g: TransferFunction, x: np.ndarray) -> np.ndarray:
+        """g x per data segment (zero outside)."""
+        return np.nan_to_num(per_segment(self.sig, g.filter, x))
+
+
+def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, block: int,
+                    noise_estimated: bool = False) -> OutputResidual:
+    """Residuals of output i, its disturbance split and whitening, and the held-out blocks
+    (even / odd blocks of ``block`` samples)."""
+    n = len(sig.time_s)
+    row, noise = sig.rows[i], sig.noise[i]
+    v = per_segment(sig, lambda yy, uu: _core.output_error(row, yy, uu), sig.y[:, i], sig.u)
+    e = per_segment(sig, lambda vv: noise.inverse().filter(vv), v)
+    weight = np.zeros(n)
+    for a, b in sig.segments:
+        weight[a + SETTLE:b] = 1.0
+    e0 = np.nan_to_num(e)
+    # The split looks for a change of the disturbance's level or colour. A slow drift
+    # changes the AR fit too, and a split inside it lets each side's correction absorb a
+    # different part of it; so the split is made on e with its best step + ramp removed
+    # (the drift itself is a candidate of the process pool).
+    trend = trend_fit(e0, weight > 0, noise.inverse(), first_onset, 4 * min_segment // 12,
+                      max(first_onset, 2 * SETTLE)).trend
+    split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
+    split_onset = first_onset + split.onset if split.statistic > 0 else None
+    # The split is kept when it beats its parameters (AR coefficients, variance, onset).
+    split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
+    pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
+    ar = [_core.fit_ar(e0, AR_ORDER, a + SETTLE, b) for a, b in pieces]
+    sigma = []
+    for (a, b), poly in zip(pieces, ar):
+        w = TransferFunction(poly, [1.0], 0).filter(e0[a:b])[SETTLE:]
+        sigma.append(float(np.sqrt(np.mean(w**2))))
+    parity = (np.arange(n) // block) % 2
+    out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
+                         split_onset=split_onset, split_significant=split_significant, pieces=pieces,
+                         ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
+                         n=int(weight.sum()), noise_estimated=noise_estimated)
+    out.r = out.whiten(np.nan_to_num(v))
+    return out
+
+
+def _pieces(segments, cuts):
+    out = []
+    for a, b in segments:
+        inner = sorted(c for c in cuts if a + 2 * SETTLE < c < b - 2 * SETTLE)
+        edges = [a, *inner, b]
+        out += list(zip(edges[:-1], edges[1:]))
+    return out
+
+
+def has_noise_model(h: TransferFunction) -> bool:
+    """False for H = 1, what the model format gives an output without a noise model."""
+    return not (h.delay == 0 and np.array_equal(h.num, [1.0]) and np.array_equal(h.den, [1.0]))
+
+
+def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray) -> TransferFunction:
+    """H = 1 / A(q), A the least-squares AR(NOISE_ORDER) of the output error y_i - G_i u on
+    ``rows`` (roots reflected inside the unit circle, so H^-1 = A and H are stable)."""
+    v = per_segment(sig, lambda yy, uu: _core.output_error(sig.rows[i], yy, uu), sig.y[:, i], sig.u)
+    usable = np.zeros(len(v), bool)
+    for a, b in sig.segments:
+        usable[a + SETTLE:b] = True
+    return TransferFunction([1.0], stable(masked_ar(np.nan_to_num(v), usable & rows, NOISE_ORDER)), 0)
+
+
+def masked_ar(e: np.ndarray, mask: np.ndarray, order: int = AR_ORDER) -> np.ndarray:
+    """Least-squares AR(order) on the rows in mask (lags may reach outside it)."""
+    rows = np.flatnonzero(mask)
+    rows = rows[rows >= order]
+    if len(rows) < MIN_AR_ROWS_PER_COEFFICIENT * order:
+        raise InsufficientData(f"{len(rows)} rows for an AR({order}) fit")
+    lagged = e[rows[:, None] - np.arange(1, order + 1)]
+    try:
+        a = np.linalg.solve(lagged.T @ lagged, lagged.T @ e[rows])
+    except np.linalg.LinAlgError:
+        raise InsufficientData(f"the error has no variation to fit an AR({order}) to") from None
+    return np.r_[1.0, -a]
+
+
+def stable(poly: np.ndarray) -> np.ndarray:
+    """Reflect roots outside the unit circle inside (same spectrum shape): H/A must be stable."""
+    roots = np.roots(poly)
+    if np.all(np.abs(roots) < 1.0):
+        return poly
+    mag = np.abs(roots)
+    roots = np.where(mag >= 1.0, np.minimum(1.0 / np.maximum(mag, 1e-12), 0.999) * roots / np.maximum(mag, 1e-12), roots)
+    return np.real(np.poly(roots))

@@ -1,0 +1,132 @@
+"""diagnose on valid data that used to break it: models without a noise model, held-out folds
+left (nearly) empty after a late onset, user-style PI loops. The answer is a finding-free
+result or a note about the data, never an exception."""
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.signal import lfilter
+
+import mpmpp
+from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
+from mpmpp.diagnose.pipeline import diagnosis_signals
+from mpmpp.diagnose.result import InsufficientData
+from mpmpp.diagnose.whitening import NOISE_ORDER, masked_ar
+from mpmpp.update import update
+
+import closed_loop_case as loop
+
+
+def model_without_noise():
+    return mpmpp.Model("test loop, no noise model", loop.TS, ["u"], ["y"],
+                       {"y": {"u": mpmpp.TransferFunction(*loop.G)}})
+
+
+def pi_loop(n, seed, gain_after=1.0, ts=1.0, k=2.0, tau=60.0, dead=10, kc=0.2, ti=60.0):
+    """A user-style PI loop: first-order-plus-dead-time plant, velocity-form PI, setpoint steps
+    every 30 min, a slowly wandering disturbance; the plant gain times ``gain_after`` from the
+    middle on. Returns (data, the hand-written FOPTD model without a noise model)."""
+    rng = np.random.default_rng(seed)
+    a = np.exp(-ts / tau)
+    e = rng.standard_normal(n)
+    v = np.zeros(n)
+    for t in range(1, n):
+        v[t] = 0.99 * v[t - 1] + 0.02 * e[t]
+    v += 0.01 * rng.standard_normal(n)
+    phase = (np.arange(n) // int(1800 / ts)) % 3
+    sp = np.where(phase == 1, 1.0, np.where(phase == 2, -0.5, 0.0))
+    u, x, y = np.zeros(n), np.zeros(n), np.zeros(n)
+    err_prev = 0.0
+    for t in range(n):
+        gain = k * (gain_after if t >= n // 2 else 1.0)
+        x[t] = a * x[t - 1] + gain * (1 - a) * u[t - 1 - dead] if t > dead else 0.0
+        y[t] = x[t] + v[t]
+        err = sp[t] - y[t]
+        u[t] = (u[t - 1] if t else 0.0) + kc * (err - err_prev) + kc * ts / ti * err
+        err_prev = err
+    data = pd.DataFrame({"time": ts * np.arange(n), "u": u + 50.0, "y": y + 20.0, "y_sp": sp + 20.0})
+    model = mpmpp.Model("PI loop", ts, ["u"], ["y"],
+                        {"y": {"u": mpmpp.TransferFunction([k * (1 - a)], [1.0, -a], dead + 1)}})
+    return data, model
+
+
+# ---- no noise model --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_no_noise_model_and_no_change_gives_no_finding(seed):
+    res = diagnose(model_without_noise(), loop.simulate(n=8000, seed=seed))
+    assert res.findings == []
+    assert any("no noise model" in n and "estimated" in n for n in res.notes)
+    assert "notes" in res.to_dict()
+
+
+def test_no_noise_model_gain_change_is_a_gain_change():
+    res = diagnose(model_without_noise(), loop.simulate(n=8000, seed=3, onset=4000, gain=2.0))
+    assert res.findings and res.findings[0].effect == "gain"
+    assert res.findings[0].estimate["gain_ratio"] == pytest.approx(2.0, rel=0.2)
+    assert not any(f.effect == "noise_change" for f in res.findings)
+    # the figures' after-update error is the one update reports on (odd blocks after onset)
+    after = res.residuals_after["F1"]
+    rows = ((np.arange(8000) // 720) % 2 == 1) & (res.time_s >= res.findings[0].onset_s) & np.isfinite(after)
+    assert np.sqrt(np.mean(after[rows] ** 2)) == pytest.approx(res.findings[0].error_after, rel=1e-9)
+    up = update(model_without_noise(), loop.simulate(n=8000, seed=3, onset=4000, gain=2.0), "F1")
+    assert up.errors[0].error_after < up.errors[0].error_before
+    assert "no noise model" in up.summary()
+
+
+def test_no_noise_model_real_noise_change_is_found_after_its_onset():
+    res = diagnose(model_without_noise(), loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9]))
+    assert res.findings and res.findings[0].effect in ("noise_change", "output_drift")
+    assert not any(f.effect in PROCESS_EFFECTS for f in res.findings)
+    assert abs(res.findings[0].onset_s - 4000 * loop.TS) <= 3600
+
+
+def test_estimated_noise_model_matches_least_squares_reference():
+    """H = 1/A from the output error: against a plain NumPy least-squares AR fit on the same
+    rows, and close to the true AR(2) disturbance (open loop, white input)."""
+    rng = np.random.default_rng(5)
+    n = 20000
+    u = rng.standard_normal(n)
+    e = 0.1 * rng.standard_normal(n)
+    v = lfilter([1.0], [1.0, -1.2, 0.5], e)
+    num, den, d = loop.G
+    x = lfilter(np.r_[np.zeros(d), num], den, u)
+    data = pd.DataFrame({"time": loop.TS * np.arange(n), "u": u, "y": x + v})
+    prepared = diagnosis_signals(model_without_noise(), data)
+    assert prepared.estimated_noise == ["y"]
+    h = prepared.sig.noise[0]
+    assert np.array_equal(h.num, [1.0]) and len(h.den) == NOISE_ORDER + 1
+    # reference: v as deviations, rows after the 60-sample settling, lags 1..NOISE_ORDER
+    vd = (x + v) - np.mean(x + v)
+    vd = vd - lfilter(np.r_[np.zeros(d), num], den, u - u.mean())
+    rows = np.arange(60, n)
+    lagged = vd[rows[:, None] - np.arange(1, NOISE_ORDER + 1)]
+    a_ref = np.linalg.lstsq(lagged, vd[rows], rcond=None)[0]
+    assert np.allclose(h.den[1:], -a_ref, atol=1e-6)
+    assert h.den[1] == pytest.approx(-1.2, abs=0.05) and h.den[2] == pytest.approx(0.5, abs=0.05)
+    assert np.all(np.abs(h.den[3:]) < 0.05)
+
+
+# ---- degenerate folds and singular fits --------------------------------------------------------
+
+def test_masked_ar_reports_too_little_data_not_a_singular_matrix():
+    e = np.random.default_rng(0).standard_normal(500)
+    with pytest.raises(InsufficientData):
+        masked_ar(e, np.zeros(500, bool))
+    with pytest.raises(InsufficientData):
+        masked_ar(np.zeros(500), np.ones(500, bool))
+
+
+def test_change_in_the_last_block_leaves_a_note_not_an_error():
+    # 8 h of 1 h blocks; the disturbance changes at the start of the last block, so after the
+    # change only one of the two held-out folds has data.
+    res = diagnose(loop.model(), loop.simulate(n=5760, seed=0, onset=5040, noise_den_after=[1.0, -0.9]))
+    assert not any(f.effect in PROCESS_EFFECTS for f in res.findings)
+    assert any("too few held-out rows" in n for n in res.notes)
+    assert "note:" in res.summary()
+
+
+def test_valid_pi_loop_record_gives_an_answer():
+    data, model = pi_loop(6 * 3600, seed=1, gain_after=2.0)
+    res = diagnose(model, data)
+    assert not any(f.effect == "noise_change" and f.onset_s == 0.0 for f in res.findings)
+    assert any("no noise model" in n for n in res.notes)

@@ -1,0 +1,138 @@
+"""The diagnosis's fast kernels against plain NumPy implementations of the same equations:
+the cross-validated onset scan, the step + ramp trend fit over all onsets, and the drift and
+delayed-channel responses built from one response per family."""
+import numpy as np
+import pytest
+
+import mpmpp
+from mpmpp import TransferFunction, _core
+from mpmpp.diagnose.pipeline import diagnosis_signals
+from mpmpp.diagnose.plots import rolling_rms
+from mpmpp.diagnose.process import DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
+from mpmpp.diagnose.trend import trend_fit
+from mpmpp.diagnose.whitening import output_residual
+
+import closed_loop_case as loop
+
+
+def brute_scan(r, r_without, psi, weight, min_segment, step):
+    best = None
+    for k in [0, *range(min_segment, len(r) - min_segment + 1, step)]:
+        w = weight[k:]
+        pp = np.sum(w * psi[k:] ** 2)
+        theta = np.sum(w * r_without[k:] * psi[k:]) / pp if pp > 0 else 0.0
+        stat = np.sum(w * (r[k:] ** 2 - r_without[k:] ** 2)) + pp * theta**2
+        if best is None or stat > best[1]:
+            best = (k, stat, theta)
+    return best
+
+
+@pytest.mark.parametrize("late_start", [False, True])
+def test_cross_validated_scan_matches_numpy(late_start):
+    rng = np.random.default_rng(1)
+    n = 900
+    psi = rng.standard_normal(n)
+    r_without = np.where(np.arange(n) >= 500, 0.6 * psi, 0.0) + rng.standard_normal(n)
+    r = r_without - 0.2 * psi
+    if late_start:   # a drift: no nominal channel, the candidate starts at sample 430
+        psi[:430] = 0.0
+        r = r_without
+    weight = (rng.random(n) > 0.05).astype(float)
+    parity = (np.arange(n) // 100) % 2
+    folds = [weight * (parity == 0), weight * (parity == 1)]
+    cv = _core.scan_onset_cross_validated(r, r_without, psi, weight, (parity == 1).astype(float), 60, 7)
+    full = brute_scan(r, r_without, psi, weight, 60, 7)
+    assert cv.full.onset == full[0]
+    assert cv.full.statistic == pytest.approx(full[1], rel=1e-10)
+    assert cv.full.theta == pytest.approx(full[2], rel=1e-10)
+    for k in (0, 1):
+        # held-out blocks leave runs of onsets with identical sums (exact ties): compare the
+        # statistic reached, and the held-out drop at the onset the scan chose
+        _, stat, _ = brute_scan(r, r_without, psi, weight * folds[k], 60, 7)
+        on = cv.folds[k].onset
+        assert cv.folds[k].statistic == pytest.approx(stat, rel=1e-10)
+        w = (weight * folds[k])[on:]
+        theta = np.sum(w * r_without[on:] * psi[on:]) / np.sum(w * psi[on:] ** 2)
+        assert cv.folds[k].theta == pytest.approx(theta, rel=1e-10)
+        test = (weight * folds[1 - k])[on:]
+        heldout = np.sum(test * (r[on:] ** 2 - (r_without[on:] - theta * psi[on:]) ** 2))
+        assert cv.heldout[k] == pytest.approx(heldout, rel=1e-9, abs=1e-9)
+
+
+def brute_trend(e, ok, hinv, first_onset, grid, earliest):
+    n = len(e)
+    step0, ramp0 = hinv.filter(np.ones(n)), hinv.filter(np.arange(n) / n)
+    rss0 = np.sum((e[ok] - e[ok].mean()) ** 2)
+    best = (first_onset, 0.0)
+    for k in range(earliest, n - 2 * grid, grid):
+        x = np.column_stack([np.ones(n), np.r_[np.zeros(k), step0[: n - k]], np.r_[np.zeros(k), ramp0[: n - k]]])
+        coef = np.linalg.lstsq(x[ok], e[ok], rcond=None)[0]
+        drop = rss0 - np.sum((e[ok] - x[ok] @ coef) ** 2)
+        if drop > best[1]:
+            best = (k, drop)
+    return best
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_trend_fit_matches_least_squares_per_onset(seed):
+    rng = np.random.default_rng(seed)
+    n = 3000
+    e = rng.standard_normal(n) + 0.002 * np.maximum(np.arange(n) - 1700, 0) + 0.5 * (np.arange(n) > 2200)
+    ok = np.ones(n, bool)
+    ok[:60] = False
+    ok[900:1000] = False
+    hinv = TransferFunction([1.0, -0.3], [1.0, 0.5]).inverse()
+    fit = trend_fit(e, ok, hinv, 0, 40, 120)
+    onset, drop = brute_trend(e, ok, hinv, 0, 40, 120)
+    assert fit.onset == onset
+    assert fit.drop == pytest.approx(drop, rel=1e-8)
+
+
+def test_drift_responses_match_direct_whitening():
+    # a noise change half-way: two whitening pieces, so drifts start in either piece
+    data = loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9])
+    sig = diagnosis_signals(loop.model(), data).sig
+    out = output_residual(sig, 0, 720, 0, 720)
+    assert len(out.pieces) == 2
+    responses = ShapeResponses(out)
+    hour = 3600.0 / sig.sample_time_s
+    n = len(sig.time_s)
+    drifts = [s for s in process_shapes(sig, 0) if s.kind == "drift"]
+    assert {s.drift_form for s in drifts} == {"ramp", "step"}
+    for s in drifts:
+        t = np.maximum(np.arange(n) - int(s.label), 0.0)
+        drive = t / hour if s.drift_form == "ramp" else (t > 0).astype(float)
+        direct = out.whiten(out.channel_response(s.shape, drive))
+        np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("with_channel", [True, False])
+def test_delayed_responses_match_direct_whitening(with_channel):
+    # two data segments (a gap) and a noise split inside the first: pieces that start a
+    # segment and one that starts inside a segment
+    data = loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9], w_gain=1.0)
+    data.loc[6000:6300, "y"] = np.nan
+    model = loop.model() if with_channel else mpmpp.Model(
+        "no channel", loop.TS, ["u"], ["y"], {}, {"y": loop.model().noise("y")})
+    sig = diagnosis_signals(model, data).sig
+    out = output_residual(sig, 0, 720, 0, 720)
+    assert len(sig.segments) == 2 and len(out.pieces) == 3
+    responses = ShapeResponses(out)
+    shapes = [s for s in process_shapes(sig, 0) if s.effect in DELAY_GRID_EFFECTS]
+    assert {s.effect for s in shapes} == ({"delay", "unmodeled_input"} if with_channel
+                                          else {"missing_coupling", "unmodeled_input"})
+    for s in shapes:
+        direct = out.whiten(out.channel_response(s.shape, np.nan_to_num(s.drive)))
+        np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)
+
+
+def test_rolling_rms_matches_a_plain_window():
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal(200)
+    x[50:55] = np.nan
+    got = rolling_rms(x, 21)
+    for t in range(200):
+        window = x[max(t - 10, 0):t + 11]
+        window = window[np.isfinite(window)]
+        expected = np.sqrt(np.mean(window**2)) if len(window) > 10 else np.nan
+        assert got[t] == pytest.approx(expected, rel=1e-12, nan_ok=True)

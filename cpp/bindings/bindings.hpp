@@ -16,4 +16,5 @@ void bind_mpc(pybind11::module_& m);
 void bind_closed_loop(pybind11::module_& m);
 void bind_detector(pybind11::module_& m);
 void bind_streaming_detector(pybind11::module_& m);
+void bind_valve(pybind11::module_& m);
 }  // namespace mpmpp::bindings

@@ -16,4 +16,5 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_closed_loop(m);
   mpmpp::bindings::bind_detector(m);
   mpmpp::bindings::bind_streaming_detector(m);
+  mpmpp::bindings::bind_valve(m);
 }

@@ -21,6 +21,7 @@ from mpmpp._core import Valve, ValveKind
 from mpmpp.io import atomic_output
 from mpmpp.stiction import analyse_loop
 from mpmpp.stiction import bicoherence, curve_fit, hammerstein, horch, kano
+from mpmpp.stiction.oscillation import REGULARITY_THRESHOLD
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
 
 N = 751
@@ -110,29 +111,43 @@ def records(family: str, dynamics: list, seeds: int):
 
 
 def scores(rec: dict) -> dict:
-    """Continuous score per method (verdict = score > threshold) and mpmpp's report."""
+    """Continuous score per method (verdict = score > threshold) and mpmpp's report. The
+    oscillation-gated baselines (Horch, curve fit) score 0 on a loop that does not oscillate."""
     report = analyse_loop(rec["op"], rec["pv"], rec["sp"])
     h = report.mpmpp
-    b = report.baselines
-    gated = h.gain_per_sample if (h.ranking and h.confidence > hammerstein.CONFIDENCE_THRESHOLD
-                                  and _best_kind(h) in hammerstein.HYSTERESIS_KINDS) else 0.0
+    b = {name: details for name, (_, details) in report.baselines.items()}
+    best = next(c.kind for c in h.ranking if c.kind != "linear")
+    regular = b["horch"]["regularity"] > REGULARITY_THRESHOLD
     return {
-        "mpmpp": gated,
-        "horch": b["horch"][1]["index"],
-        "bicoherence": min(b["bicoherence"][1]["NGI"] / bicoherence.NGI_THRESHOLD,
-                           b["bicoherence"][1]["NLI"] / bicoherence.NLI_THRESHOLD),
-        "kano": b["kano"][1]["stick_fraction"],
-        "curve_fit": np.nan_to_num(np.nanmax([b["curve_fit"][1]["SI_op"], b["curve_fit"][1]["SI_pv"]])),
+        "mpmpp": h.gain_per_sample if best in hammerstein.HYSTERESIS_KINDS else -1.0,
+        "horch": b["horch"]["index"] if regular else 0.0,
+        "bicoherence": min(b["bicoherence"]["NGI"] / bicoherence.NGI_THRESHOLD,
+                           b["bicoherence"]["NLI"] / bicoherence.NLI_THRESHOLD),
+        "kano": b["kano"]["stick_fraction"],
+        "curve_fit": np.nan_to_num(b["curve_fit"]["SI"]) if regular else 0.0,
         "_report": report,
     }
 
 
-def _best_kind(h) -> str:
-    return next(c.kind for c in h.ranking if c.kind != "linear")
+def calibration(rows: list) -> tuple[float, float]:
+    """Logistic fit of P(stiction | gain) on rows: (slope, gain at probability 1/2)."""
+    from sklearn.linear_model import LogisticRegression
+
+    g = np.array([[r["_report"].mpmpp.gain_per_sample] for r in rows])
+    y = np.array([r["case"] == "stiction" for r in rows])
+    fit = LogisticRegression(C=1e6, max_iter=10000).fit(g, y)
+    slope = float(fit.coef_[0, 0])
+    return slope, float(-fit.intercept_[0] / slope)
+
+
+def brier(rows: list) -> float:
+    p = np.array([r["_report"].mpmpp.confidence for r in rows])
+    y = np.array([r["case"] == "stiction" for r in rows], float)
+    return float(np.mean((p - y) ** 2))
 
 
 THRESHOLDS = {
-    "mpmpp": hammerstein.GAIN_THRESHOLD,
+    "mpmpp": hammerstein.CAL_GAIN_AT_HALF,
     "horch": horch.THRESHOLD,
     "bicoherence": 1.0,   # both indices above their thresholds
     "kano": kano.THRESHOLD,
@@ -159,8 +174,9 @@ def metrics(rows: list, method: str, threshold: float) -> dict:
 def best_threshold(rows: list, method: str) -> float:
     values = np.unique([r[method] for r in rows])
     cands = np.concatenate([[values[0] - 1], (values[:-1] + values[1:]) / 2])
-    accs = [metrics(rows, method, t)["accuracy"] for t in cands]
-    return float(cands[int(np.argmax(accs))])
+    accs = np.array([metrics(rows, method, t)["accuracy"] for t in cands])
+    best = np.flatnonzero(accs == accs.max())   # the middle of the best-accuracy range
+    return float(cands[best[len(best) // 2]])
 
 
 def table(rows_by_family: dict) -> str:
@@ -203,6 +219,10 @@ def main(argv=None) -> int:
            ", ".join(f"{m} {t:.3g} [{tuned[m]:.3g}]" for m, t in THRESHOLDS.items()), "",
            table(rows_by_family), "", "Stiction recall by size, HELD-OUT:", "",
            recall_by_size(rows_by_family["held-out"])]
+    slope, half = calibration(rows_by_family["tuning"])
+    out += ["", f"mpmpp confidence: logistic fit on TUNING slope {slope:.4g}, gain at 1/2 {half:.4g} "
+            f"(in use: {hammerstein.CAL_SLOPE:g}, {hammerstein.CAL_GAIN_AT_HALF:g}); Brier score "
+            + ", ".join(f"{f} {brier(rows):.3f}" for f, rows in rows_by_family.items())]
     held = [r for r in rows_by_family["held-out"] if r["case"] == "stiction" and r["mpmpp"] > 0]
     if held:
         est = np.array([[r["S"], r["_report"].mpmpp.params.get("S", np.nan)] for r in held])

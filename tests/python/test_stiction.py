@@ -213,3 +213,12 @@ def test_analyse_loop_reports_every_baseline():
 def test_bad_input_is_one_clear_error(op, pv, message):
     with pytest.raises(ValueError, match=message):
         fit_valve(op, pv)
+
+
+def test_regularity_of_a_sine_and_of_noise():
+    from mpmpp.stiction.oscillation import regularity
+    t = np.arange(751)
+    rng = np.random.default_rng(4)
+    r, period = regularity(np.sin(2 * np.pi * t / 37) + 0.2 * rng.standard_normal(751))
+    assert r > 1 and period == pytest.approx(37, rel=0.05)
+    assert regularity(rng.standard_normal(751))[0] < 1

@@ -18,8 +18,8 @@ import numpy as np
 
 # Published thresholds (Choudhury et al. 2004): NGI 0.001, NLI 0.01. Ours are chosen on the
 # TUNING families of studies/stiction_benchmark.py.
-NGI_THRESHOLD = 0.001
-NLI_THRESHOLD = 0.01
+NGI_THRESHOLD = 0.0027
+NLI_THRESHOLD = 0.027
 CHI2_2_95 = 5.991464547107979  # chi-square quantile, 2 degrees of freedom, alpha = 0.05
 
 

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-THRESHOLD = 0.6   # He et al. use 0.6; checked on the TUNING families of the benchmark
+from .oscillation import regularity, REGULARITY_THRESHOLD
+
+THRESHOLD = 0.67  # He et al. use 0.6; chosen on the TUNING families of the benchmark
 MIN_HALF = 4      # samples per half cycle
 
 
@@ -44,6 +46,9 @@ def stiction_index(x) -> float:
 
 
 def curve_fit_test(op, pv) -> tuple[bool, dict]:
+    """Stiction when the loop oscillates regularly and a triangle fits better than a sine."""
     si_op, si_pv = stiction_index(op), stiction_index(pv)
-    si = np.nanmax([si_op, si_pv]) if np.isfinite([si_op, si_pv]).any() else float("nan")
-    return bool(si > THRESHOLD), {"SI_op": si_op, "SI_pv": si_pv}
+    si = float(np.nanmax([si_op, si_pv])) if np.isfinite([si_op, si_pv]).any() else float("nan")
+    r, _ = regularity(pv)
+    return bool(r > REGULARITY_THRESHOLD and si > THRESHOLD), {"SI": si, "SI_op": si_op,
+                                                              "SI_pv": si_pv, "regularity": r}

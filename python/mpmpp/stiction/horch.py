@@ -11,8 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._core import cross_correlation
+from .oscillation import regularity, REGULARITY_THRESHOLD
 
-THRESHOLD = 0.45  # chosen on the TUNING families of studies/stiction_benchmark.py
+THRESHOLD = 0.23  # chosen on the TUNING families of studies/stiction_benchmark.py
 
 
 def _first_crossing(r: np.ndarray) -> float:
@@ -35,6 +36,8 @@ def horch_index(op, pv, max_lag: int = 100) -> float:
     return abs(tau_r + tau_l) / (tau_r - tau_l)
 
 
-def horch_test(op, pv) -> tuple[bool, float]:
+def horch_test(op, pv) -> tuple[bool, dict]:
+    """Stiction when the PV oscillates regularly and the OP-PV correlation is odd."""
     index = horch_index(op, pv)
-    return index > THRESHOLD, index
+    r, _ = regularity(pv)
+    return bool(r > REGULARITY_THRESHOLD and index > THRESHOLD), {"index": index, "regularity": r}

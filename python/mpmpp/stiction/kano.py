@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-THRESHOLD = 0.25        # chosen on the TUNING families of studies/stiction_benchmark.py
-PV_STILL = 0.3          # |dPV| below this fraction of std(dPV) counts as "PV still"
+THRESHOLD = 0.035       # chosen on the TUNING families of studies/stiction_benchmark.py
+PV_STILL = 0.5          # |dPV| below this fraction of std(dPV) counts as "PV still"
 MIN_SECTION = 3         # samples
 
 

@@ -11,41 +11,7 @@ from mpmpp.stiction.curve_fit import stiction_index
 from mpmpp.stiction.horch import horch_index
 from mpmpp.stiction.kano import kano_index
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
-
-
-def choudhury_reference(x, S, J):
-    """Choudhury et al. (2005) stick-slip flowchart, written out sample by sample."""
-    y = np.empty_like(x)
-    y[0] = x[0]
-    stuck, xss, direction = True, x[0], 0
-    for k in range(1, len(x)):
-        v = np.sign(x[k] - x[k - 1])
-        if not stuck and v != direction:
-            stuck, xss = True, x[k - 1]
-        if stuck:
-            d = np.sign(x[k] - xss)
-            need = J if d == direction else S
-            if d != 0 and abs(x[k] - xss) > need:
-                stuck, direction = False, d
-                y[k] = x[k] - d * (S - J) / 2
-            else:
-                y[k] = y[k - 1]
-        else:
-            y[k] = x[k] - direction * (S - J) / 2
-    return y
-
-
-def he_reference(x, fs, fd):
-    """He et al. (2007) two-parameter model: u_r accumulates the OP change while stuck."""
-    y = np.empty_like(x)
-    y[0], ur = x[0], 0.0
-    for k in range(1, len(x)):
-        cum = ur + x[k] - x[k - 1]
-        if abs(cum) > fs:
-            y[k], ur = x[k] - np.sign(cum) * fd, np.sign(cum) * fd
-        else:
-            y[k], ur = y[k - 1], cum
-    return y
+from valve_reference import choudhury_reference, he_reference
 
 
 def test_stick_slip_matches_the_published_flowchart_on_hysteresis_and_random_inputs():

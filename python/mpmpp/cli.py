@@ -22,6 +22,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "detect": ("moving-window MPM and noise-change detection per channel", "mpmpp.commands.detect"),
     "diagnose": ("ranked findings: which physical effect is missing, where, when", "mpmpp.commands.diagnose"),
     "update": ("add/refit the effect(s), write the new model, print error before and after", "mpmpp.commands.update"),
+    "stiction": ("valve stiction in a PI loop from OP and PV, with the literature tests beside it", "mpmpp.commands.stiction"),
     "check": ("validate a model file (and a data file against it) and summarise them", "mpmpp.commands.check"),
 }
 

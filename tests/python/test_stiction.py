@@ -188,3 +188,15 @@ def test_regularity_of_a_sine_and_of_noise():
     r, period = regularity(np.sin(2 * np.pi * t / 37) + 0.2 * rng.standard_normal(751))
     assert r > 1 and period == pytest.approx(37, rel=0.05)
     assert regularity(rng.standard_normal(751))[0] < 1
+
+
+def test_valve_regressors_start_at_lag_one():
+    """A PI controller moves the OP within the sample, so no lag-0 valve term may enter."""
+    from mpmpp.stiction import hammerstein as hm
+    y = np.arange(100.0)
+    v = 1000.0 + np.arange(100.0)
+    phi, target = hm._lagged(y, v)
+    start = max(hm.N_Y, hm.N_U)
+    np.testing.assert_array_equal(target, y[start:])
+    np.testing.assert_array_equal(phi[:, hm.N_Y], v[start - 1:-1])
+    assert not np.any(phi[:, :-1] == v[start:, None])

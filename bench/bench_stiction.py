@@ -14,10 +14,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "python"), str(ROOT / "tests" / "python")]
 
-from mpmpp._core import Valve, ValveKind  # noqa: E402
-from mpmpp.stiction import BASELINES, fit_valve  # noqa: E402
-from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop  # noqa: E402
-from valve_reference import choudhury_reference  # noqa: E402
+from mpmpp._core import Valve, ValveKind
+from mpmpp.stiction import BASELINES, fit_valve
+from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
+from valve_reference import choudhury_reference
 
 
 def best_of(fn, repeat):
@@ -46,7 +46,7 @@ def main() -> int:
     t_fit = best_of(lambda: fit_valve(rec["op"], rec["pv"]), args.repeat)
     print(f"Hammerstein fit of one 751-sample record: {t_fit * 1e3:.0f} ms")
     for name, test in BASELINES.items():
-        t = best_of(lambda: test(rec["op"], rec["pv"], rec["sp"]), args.repeat)
+        t = best_of(lambda test=test: test(rec["op"], rec["pv"], rec["sp"]), args.repeat)
         print(f"  {name}: {t * 1e3:.1f} ms (Hammerstein fit / {name} time: {t_fit / t:.1f})")
     return 0
 

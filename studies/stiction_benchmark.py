@@ -15,14 +15,19 @@ import sys
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
-
 from mpmpp._core import Valve, ValveKind
 from mpmpp.io import atomic_output
-from mpmpp.stiction import analyse_loop
-from mpmpp.stiction import bicoherence, curve_fit, hammerstein, horch, kano
-from mpmpp.stiction.oscillation import REGULARITY_THRESHOLD
+from mpmpp.stiction import (
+    analyse_loop,
+    bicoherence,
+    curve_fit,
+    hammerstein,
+    horch,
+    kano,
+)
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
+from mpmpp.stiction.oscillation import REGULARITY_THRESHOLD
+from scipy.signal import lfilter
 
 N = 751
 STICTION_S = (1.0, 2.0, 4.0, 6.0)       # % OP
@@ -226,8 +231,8 @@ def main(argv=None) -> int:
     held = [r for r in rows_by_family["held-out"] if r["case"] == "stiction" and r["mpmpp"] > 0]
     if held:
         est = np.array([[r["S"], r["_report"].mpmpp.params.get("S", np.nan)] for r in held])
-        out += ["", f"mpmpp size on detected HELD-OUT stiction: median S_hat/S = "
-                f"{np.nanmedian(est[:, 1] / est[:, 0]):.2f}"]
+        ratio = np.nanmedian(est[:, 1] / est[:, 0])
+        out += ["", f"mpmpp size on detected HELD-OUT stiction: median S_hat/S = {ratio:.2f}"]
     text = "\n".join(out)
     print(text)
     if args.out:

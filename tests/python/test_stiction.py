@@ -2,8 +2,6 @@
 references (plain NumPy/Python implementations of the published equations, analytic results)."""
 import numpy as np
 import pytest
-from scipy.signal import lfilter
-
 from mpmpp._core import Valve, ValveKind
 from mpmpp.stiction import analyse_loop, fit_valve
 from mpmpp.stiction.bicoherence import apparent_stiction, ngi_nli, squared_bicoherence
@@ -11,6 +9,7 @@ from mpmpp.stiction.curve_fit import stiction_index
 from mpmpp.stiction.horch import horch_index
 from mpmpp.stiction.kano import kano_index
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
+from scipy.signal import lfilter
 from valve_reference import choudhury_reference, he_reference
 
 

@@ -4,7 +4,6 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-
 from mpmpp._core import Valve, ValveKind
 from mpmpp.cli import main
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop

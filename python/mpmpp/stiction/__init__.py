@@ -41,4 +41,4 @@ def analyse_loop(op, pv, sp=None) -> LoopReport:
     return LoopReport(result, baselines)
 
 
-__all__ = ["analyse_loop", "fit_valve", "LoopReport", "HammersteinResult", "BASELINES"]
+__all__ = ["BASELINES", "HammersteinResult", "LoopReport", "analyse_loop", "fit_valve"]

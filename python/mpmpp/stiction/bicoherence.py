@@ -73,7 +73,7 @@ def apparent_stiction(op, pv) -> float:
     0 when the fit is not an ellipse."""
     u = np.asarray(op, float) - np.mean(op)
     y = np.asarray(pv, float) - np.mean(pv)
-    a, b, c, d, e = fit_ellipse(u, y)
+    a, b, c, d, _ = fit_ellipse(u, y)
     if b * b - 4 * a * c >= 0:
         return 0.0
     # chord at y = 0: a x^2 + d x - 1 = 0

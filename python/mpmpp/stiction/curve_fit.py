@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .oscillation import regularity, REGULARITY_THRESHOLD
+from .oscillation import REGULARITY_THRESHOLD, regularity
 
 THRESHOLD = 0.67  # He et al. use 0.6; chosen on the TUNING families of the benchmark
 MIN_HALF = 4      # samples per half cycle

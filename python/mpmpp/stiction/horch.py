@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._core import cross_correlation
-from .oscillation import regularity, REGULARITY_THRESHOLD
+from .oscillation import REGULARITY_THRESHOLD, regularity
 
 THRESHOLD = 0.23  # chosen on the TUNING families of studies/stiction_benchmark.py
 

@@ -199,3 +199,10 @@ def test_valve_regressors_start_at_lag_one():
     np.testing.assert_array_equal(target, y[start:])
     np.testing.assert_array_equal(phi[:, hm.N_Y], v[start - 1:-1])
     assert not np.any(phi[:, :-1] == v[start:, None])
+
+
+def test_coloured_noise_is_the_ar1_filter():
+    rng_a, rng_b = np.random.default_rng(9), np.random.default_rng(9)
+    x = coloured_noise(rng_a, 500, 2.0, 0.8)
+    ref = lfilter([1.0], [1.0, -0.8], rng_b.standard_normal(700))[200:]
+    np.testing.assert_allclose(x, 2.0 * ref / np.std(ref), rtol=1e-12)

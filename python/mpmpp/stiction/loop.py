@@ -9,7 +9,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter
 
 from .._core import Valve, ValveKind
 
@@ -70,5 +69,10 @@ def simulate_pi_loop(process: Process, kc: float, ti_samples: float, n: int, *,
 def coloured_noise(rng: np.random.Generator, n: int, std: float, pole: float) -> np.ndarray:
     """AR(1) noise 1/(1 - pole q^-1) e scaled to the given standard deviation."""
     e = rng.standard_normal(n + 200)
-    x = lfilter([1.0], [1.0, -pole], e)[200:]
+    x = np.empty_like(e)
+    previous = 0.0
+    for k, ek in enumerate(e):
+        previous = ek + pole * previous
+        x[k] = previous
+    x = x[200:]  # the first samples carry the zero initial state
     return std * x / np.std(x)

@@ -26,6 +26,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "identify": ("a model file from routine closed-loop data: gain, time constant, dead time", "mpmpp.commands.identify"),
     "monitor": ("new data through a saved detector: one loop (resumable) or a fleet of loops", "mpmpp.commands.monitor"),
     "report": ("one self-contained HTML page: data, compare, diagnose, update, detect", "mpmpp.commands.report"),
+    "stiction": ("valve stiction in a PI loop from OP and PV, with the literature tests beside it", "mpmpp.commands.stiction"),
     "check": ("validate a model file (and a data file against it) and summarise them", "mpmpp.commands.check"),
 }
 

@@ -1,0 +1,44 @@
+"""Valve stiction and other actuator nonlinearities from routine PI-loop data (OP, PV, SP).
+
+``analyse_loop`` runs mpmpp's closed-loop Hammerstein fit (``hammerstein``) and the
+literature baselines (Horch, Choudhury's bicoherence, Kano, He's curve fit) on one record.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .bicoherence import bicoherence_test
+from .curve_fit import curve_fit_test
+from .hammerstein import HammersteinResult, fit_valve
+from .horch import horch_test
+from .kano import kano_test
+
+BASELINES = {
+    "horch": lambda op, pv, sp: horch_test(op, pv),
+    "bicoherence": bicoherence_test,
+    "kano": lambda op, pv, sp: kano_test(op, pv),
+    "curve_fit": lambda op, pv, sp: curve_fit_test(op, pv),
+}
+
+
+@dataclass
+class LoopReport:
+    mpmpp: HammersteinResult
+    baselines: dict   # name -> (verdict, details)
+
+
+def analyse_loop(op, pv, sp=None) -> LoopReport:
+    op = np.asarray(op, float)
+    pv = np.asarray(pv, float)
+    sp = None if sp is None else np.asarray(sp, float)
+    result = fit_valve(op, pv)
+    baselines = {}
+    for name, test in BASELINES.items():
+        verdict, details = test(op, pv, sp)
+        baselines[name] = (bool(verdict), details if isinstance(details, dict) else {"index": details})
+    return LoopReport(result, baselines)
+
+
+__all__ = ["BASELINES", "HammersteinResult", "LoopReport", "analyse_loop", "fit_valve"]

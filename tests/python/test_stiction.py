@@ -1,0 +1,208 @@
+"""Stiction analysis: valve models, baselines and the Hammerstein fit against independent
+references (plain NumPy/Python implementations of the published equations, analytic results)."""
+import numpy as np
+import pytest
+from mpmpp._core import Valve, ValveKind
+from mpmpp.stiction import analyse_loop, fit_valve
+from mpmpp.stiction.bicoherence import apparent_stiction, ngi_nli, squared_bicoherence
+from mpmpp.stiction.curve_fit import stiction_index
+from mpmpp.stiction.horch import horch_index
+from mpmpp.stiction.kano import kano_index
+from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
+from scipy.signal import lfilter
+from valve_reference import choudhury_reference, he_reference
+
+
+def test_stick_slip_matches_the_published_flowchart_on_hysteresis_and_random_inputs():
+    t = np.arange(2000)
+    rng = np.random.default_rng(3)
+    inputs = [10 * np.sin(2 * np.pi * t / 200),                       # classic hysteresis test
+              np.cumsum(rng.standard_normal(2000)),                   # random walk
+              10 * np.sin(2 * np.pi * t / 50) + rng.standard_normal(2000)]
+    for x in inputs:
+        for S, J in [(3.0, 1.0), (3.0, 0.0), (3.0, 3.0), (0.5, 0.2)]:
+            np.testing.assert_allclose(Valve(ValveKind.stick_slip, S, J).apply(x),
+                                       choudhury_reference(x, S, J), atol=1e-12)
+        np.testing.assert_allclose(Valve(ValveKind.backlash, 2.0).apply(x),
+                                   choudhury_reference(x, 2.0, 0.0), atol=1e-12)
+        np.testing.assert_allclose(Valve(ValveKind.he, 2.0, 0.7).apply(x),
+                                   he_reference(x, 2.0, 0.7), atol=1e-12)
+
+
+def test_hysteresis_loop_of_a_sine_has_the_analytic_shape():
+    x = 10 * np.sin(2 * np.pi * np.arange(3000) / 500)
+    y = Valve(ValveKind.stick_slip, 4.0, 1.0).apply(x)[1000:]
+    assert y.max() == pytest.approx(10 - 1.5, abs=1e-3)
+    # after the top reversal the valve stays put until the OP has dropped by S
+    top = np.argmax(x[1000:1500]) + 1000
+    held = np.flatnonzero(np.diff(y[top - 1000:top - 1000 + 250]) != 0)[0]
+    assert x[top] - x[top + held + 1] == pytest.approx(4.0, abs=0.15)
+
+
+def test_static_valves():
+    x = np.linspace(-5, 5, 11)
+    np.testing.assert_allclose(Valve(ValveKind.saturation, -2, 3).apply(x), np.clip(x, -2, 3))
+    dz = Valve(ValveKind.deadband, 1.0, 0.0).apply(x)
+    np.testing.assert_allclose(dz, np.where(np.abs(x) <= 1, 0, x - np.sign(x)))
+    with pytest.raises(ValueError, match="J <= S"):
+        Valve(ValveKind.stick_slip, 1.0, 2.0)
+
+
+def bicoherence_reference(x, nfft, f1, f2):
+    """Direct method with explicit loops over segments."""
+    step = nfft // 2
+    w = np.hanning(nfft)
+    num, p12, p3 = 0j, 0.0, 0.0
+    for s in range(0, len(x) - nfft + 1, step):
+        seg = x[s:s + nfft]
+        X = np.fft.fft((seg - seg.mean()) * w)
+        num += X[f1] * X[f2] * np.conj(X[f1 + f2])
+        p12 += abs(X[f1] * X[f2]) ** 2
+        p3 += abs(X[f1 + f2]) ** 2
+    return abs(num) ** 2 / (p12 * p3)
+
+
+def qpc_signal(coupled: bool, seed=0, nseg=60, nfft=64):
+    """Segments with random phases; the third harmonic's phase is phi1 + phi2 when coupled."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(nfft)
+    parts = []
+    for _ in range(nseg):
+        p1, p2 = rng.uniform(0, 2 * np.pi, 2)
+        p3 = p1 + p2 if coupled else rng.uniform(0, 2 * np.pi)
+        parts.append(np.cos(2 * np.pi * 10 * t / nfft + p1) + np.cos(2 * np.pi * 6 * t / nfft + p2)
+                     + np.cos(2 * np.pi * 16 * t / nfft + p3) + 0.1 * rng.standard_normal(nfft))
+    return np.concatenate(parts)
+
+
+def test_bicoherence_of_quadratic_phase_coupling():
+    nfft = 64
+    coupled, independent = qpc_signal(True), qpc_signal(False)
+    bic_c, k = squared_bicoherence(coupled, nfft=nfft, overlap=0.0)
+    bic_i, _ = squared_bicoherence(independent, nfft=nfft, overlap=0.0)
+    assert k == 60
+    assert bic_c[10, 6] > 0.9           # analytic value 1 for a noiseless coupled triad
+    assert bic_i[10, 6] < 0.15          # about 1/K for independent phases
+    assert np.isnan(bic_c[6, 10])       # outside the principal domain
+    bic_h, _ = squared_bicoherence(coupled, nfft=nfft, overlap=0.5)
+    for f1, f2 in [(10, 6), (12, 3), (20, 5)]:
+        assert bic_h[f1, f2] == pytest.approx(bicoherence_reference(coupled, nfft, f1, f2), rel=1e-9)
+
+
+def test_nonlinearity_indices_separate_gaussian_and_coupled_signals():
+    rng = np.random.default_rng(1)
+    gaussian = lfilter([1], [1, -0.6], rng.standard_normal(4000))
+    ngi_g, _ = ngi_nli(gaussian)
+    ngi_c, nli_c = ngi_nli(qpc_signal(True, nseg=60))
+    _, k = squared_bicoherence(gaussian)
+    # under Gaussianity bic^2 is about chi2(2)/(2K), so the mean excess of the significant
+    # values over the critical one is of order 1/K
+    assert ngi_g < 1.0 / k
+    assert ngi_c > 0.1 and nli_c > 0.01
+
+
+def test_ellipse_chord_is_twice_the_op_semi_axis():
+    th = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    assert apparent_stiction(3.0 * np.cos(th), 1.5 * np.sin(th)) == pytest.approx(6.0, rel=1e-6)
+
+
+def test_horch_index_is_zero_for_even_and_one_for_odd_correlation():
+    t = np.arange(1000)
+    w = 2 * np.pi * t / 40
+    assert horch_index(np.sin(w), -np.sin(w)) < 0.05       # even: extremum at lag 0
+    assert horch_index(np.sin(w), np.cos(w)) > 0.9         # odd: zero at lag 0
+
+
+def test_curve_fit_index_triangle_vs_sine():
+    t = np.arange(1200)
+    tri = 2 * np.abs(2 * ((t / 60) % 1) - 1) - 1
+    assert stiction_index(tri) > 0.8
+    assert stiction_index(np.sin(2 * np.pi * t / 60)) < 0.2
+
+
+def test_kano_finds_stick_sections():
+    t = np.arange(1200)
+    op = 5 * (2 * np.abs(2 * ((t / 80) % 1) - 1) - 1)           # OP ramps up and down
+    pv = Valve(ValveKind.stick_slip, 3.0, 3.0).apply(op)         # the valve moves in jumps
+    sticky, _ = kano_index(op, pv)
+    smooth, _ = kano_index(op, op)
+    assert sticky > 0.2 and smooth < 0.05
+
+
+FLOW = Process(b=(1 - np.exp(-10 / 15),), a=(1.0, -np.exp(-10 / 15)), delay=1)
+
+
+def test_loop_simulator_matches_lfilter_and_removes_offset():
+    rng = np.random.default_rng(2)
+    d = coloured_noise(rng, 751, 0.3, 0.8)
+    sp = np.where(np.arange(751) > 300, 2.0, 0.0)
+    rec = simulate_pi_loop(FLOW, 0.7, 1.5, 751, disturbance=d, setpoint=sp)
+    x = lfilter(np.r_[0.0, FLOW.b], FLOW.a, rec["position"] - 50.0)
+    np.testing.assert_allclose(rec["pv"] - d, x, atol=1e-10)
+    quiet = simulate_pi_loop(FLOW, 0.7, 1.5, 751, setpoint=sp)
+    assert quiet["pv"][-1] == pytest.approx(2.0, abs=1e-6)
+
+
+def loop(seed, valve=None, n=751):
+    rng = np.random.default_rng(seed)
+    d = coloured_noise(rng, n, 0.3, 0.8) + 0.05 * rng.standard_normal(n)
+    return simulate_pi_loop(FLOW, 0.7, 1.5, n, valve=valve, disturbance=d)
+
+
+def test_hammerstein_fit_finds_and_sizes_stiction():
+    rec = loop(11, Valve(ValveKind.stick_slip, 4.0, 2.0))
+    res = fit_valve(rec["op"], rec["pv"])
+    assert res.verdict and res.kind in ("stick_slip", "he", "backlash")
+    assert 2.0 < res.params["S"] < 8.0
+    assert res.confidence > 0.95
+
+
+def test_hammerstein_fit_clears_linear_valves():
+    for seed in (21, 22):
+        res = fit_valve(*(loop(seed)[k] for k in ("op", "pv")))
+        assert not res.verdict and res.gain_per_sample < 0.02
+
+
+def test_analyse_loop_reports_every_baseline():
+    rec = loop(5, Valve(ValveKind.stick_slip, 4.0, 2.0))
+    report = analyse_loop(rec["op"], rec["pv"], rec["sp"])
+    assert set(report.baselines) == {"horch", "bicoherence", "kano", "curve_fit"}
+
+
+@pytest.mark.parametrize("op, pv, message", [
+    (np.ones(751), np.arange(751.0), "constant"),
+    (np.arange(50.0), np.arange(50.0), "too short"),
+    (np.r_[np.nan, np.arange(750.0)], np.arange(751.0), "missing"),
+    (np.arange(751.0), np.arange(750.0), "equal length"),
+])
+def test_bad_input_is_one_clear_error(op, pv, message):
+    with pytest.raises(ValueError, match=message):
+        fit_valve(op, pv)
+
+
+def test_regularity_of_a_sine_and_of_noise():
+    from mpmpp.stiction.oscillation import regularity
+    t = np.arange(751)
+    rng = np.random.default_rng(4)
+    r, period = regularity(np.sin(2 * np.pi * t / 37) + 0.2 * rng.standard_normal(751))
+    assert r > 1 and period == pytest.approx(37, rel=0.05)
+    assert regularity(rng.standard_normal(751))[0] < 1
+
+
+def test_valve_regressors_start_at_lag_one():
+    """A PI controller moves the OP within the sample, so no lag-0 valve term may enter."""
+    from mpmpp.stiction import hammerstein as hm
+    y = np.arange(100.0)
+    v = 1000.0 + np.arange(100.0)
+    phi, target = hm._lagged(y, v)
+    start = max(hm.N_Y, hm.N_U)
+    np.testing.assert_array_equal(target, y[start:])
+    np.testing.assert_array_equal(phi[:, hm.N_Y], v[start - 1:-1])
+    assert not np.any(phi[:, :-1] == v[start:, None])
+
+
+def test_coloured_noise_is_the_ar1_filter():
+    rng_a, rng_b = np.random.default_rng(9), np.random.default_rng(9)
+    x = coloured_noise(rng_a, 500, 2.0, 0.8)
+    ref = lfilter([1.0], [1.0, -0.8], rng_b.standard_normal(700))[200:]
+    np.testing.assert_allclose(x, 2.0 * ref / np.std(ref), rtol=1e-12)

@@ -1,0 +1,44 @@
+"""``mpmpp stiction`` on a 751-row, 10 s PI-loop record, and its one-line errors."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from mpmpp._core import Valve, ValveKind
+from mpmpp.cli import main
+from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
+
+
+def write_loop(path, n=751, valve=None, seed=3):
+    p = np.exp(-10 / 15)
+    rng = np.random.default_rng(seed)
+    rec = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p)), 0.7, 1.5, n, valve=valve,
+                           disturbance=coloured_noise(rng, n, 0.3, 0.8))
+    pd.DataFrame({"time": 10.0 * np.arange(n), "FIC101.OP": rec["op"], "FIC101.PV": rec["pv"],
+                  "FIC101.SP": rec["sp"]}).to_csv(path, index=False)
+
+
+def test_stiction_command_on_a_sticky_loop(tmp_path, capsys):
+    data = tmp_path / "loop.csv"
+    write_loop(data, valve=Valve(ValveKind.stick_slip, 4.0, 2.0))
+    code = main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--sp", "FIC101.SP"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "751 samples" in out and "mpmpp: STICTION" in out and "S=" in out
+    for name in ("horch", "bicoherence", "kano", "curve_fit"):
+        assert name in out
+    main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["mpmpp"]["stiction"] is True and 2.0 < doc["mpmpp"]["size"]["S"] < 8.0
+
+
+@pytest.mark.parametrize("args, n, message", [
+    (["--op", "OP", "--pv", "FIC101.PV"], 751, "no column 'OP'"),
+    (["--op", "FIC101.OP", "--pv", "FIC101.PV"], 60, "too short: 60 rows"),
+])
+def test_stiction_command_errors(tmp_path, capsys, args, n, message):
+    data = tmp_path / "loop.csv"
+    write_loop(data, n=n)
+    assert main(["stiction", str(data), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and str(data) in err and len(err.splitlines()) == 1

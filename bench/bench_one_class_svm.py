@@ -62,7 +62,8 @@ def main():
                       f"{dec_sk:8.3f} {dec_mp:8.3f} {dec_ratios[-1]:6.2f} | "
                       f"{wfit_sk / wfit_mp:8.2f} {wdec_sk / wdec_mp:8.2f} | "
                       f"{np.max(np.abs(dsk - dmp)) / scale:.1e}", flush=True)
-    geo = lambda r: float(np.exp(np.mean(np.log(r))))
+    def geo(r):
+        return float(np.exp(np.mean(np.log(r))))
     print(f"fit speed-up (CPU time): min {min(fit_ratios):.2f}, geometric mean {geo(fit_ratios):.2f}"
           f"  (target >= 2)")
     print(f"decision_function speed-up (CPU time): min {min(dec_ratios):.2f}, geometric mean "

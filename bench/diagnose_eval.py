@@ -182,7 +182,7 @@ def main(argv=None) -> int:
     global SIZE
     SIZE = WEAK if args.weak else STRONG
     rows, timings = evaluate(args.effects.split(","), args.seeds, args.quiet)
-    print(f"\n| case | hits | misses | false findings |\n| --- | --- | --- | --- |")
+    print("\n| case | hits | misses | false findings |\n| --- | --- | --- | --- |")
     total_h = total_n = 0
     for effect, (h, m, f) in rows.items():
         print(f"| {effect} | {h}/{h + m} | {m} | {f} |")

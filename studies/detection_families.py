@@ -4,7 +4,7 @@ families next to the tuning families (docs/families.md).
     python studies/detection_families.py [--seeds N] [--first-seed S] [--families A,B]
                                          [--workers K] [--json OUT.json]
 
-Runs on all local cores by default (mpmpp.evaluate.run_parallel), or on a Dask cluster
+Runs on all local cores by default (mpmpp.parallel.run_tasks), or on a Dask cluster
 (--scheduler ADDRESS). Equivalent: ``mpmpp evaluate --families --seeds N``.
 """
 from __future__ import annotations

@@ -85,6 +85,13 @@ def truth_onsets(scenario: dict) -> dict:
     return {"process": process, "noise": noise}
 
 
+def _label(key) -> str:
+    """The channel label of a truth key: (output, input) for a process channel, output for noise."""
+    if isinstance(key, tuple):
+        return channel_label({"kind": "process", "output": key[0], "input": key[1]})
+    return channel_label({"kind": "noise", "output": key})
+
+
 def run_seed(spec, seed: int, config_json: str | None = None) -> dict:
     """One Monte Carlo run: simulate, detect, baselines. Returns plain data (picklable)."""
     t_start = time.perf_counter()
@@ -180,17 +187,17 @@ def summarise(runs: list, onsets: dict, model) -> dict:
     any_false_noise = 0
     for kind in ("process", "noise"):
         for key, onset in onsets[kind].items():
-            label = f"G[{key[0]} <- {key[1]}]" if kind == "process" else f"H[{key}]"
+            label = _label(key)
             rates = _Rates(delays=[])
             for r in runs:
                 _score(r["alarms"].get(label, []), onset, rates)
             rows.append(_row(label, "MPM" if kind == "process" else "noise", onset, rates, n, "svm"))
     for r in runs:
         any_false_mpm += any(any(s < (onsets["process"][k] if onsets["process"][k] is not None else np.inf)
-                                 for s in r["alarms"].get(f"G[{k[0]} <- {k[1]}]", []))
+                                 for s in r["alarms"].get(_label(k), []))
                              for k in onsets["process"])
         any_false_noise += any(any(s < (onsets["noise"][k] if onsets["noise"][k] is not None else np.inf)
-                                   for s in r["alarms"].get(f"H[{k}]", []))
+                                   for s in r["alarms"].get(_label(k), []))
                                for k in onsets["noise"])
     baseline_confusion = {}
     noise_onsets = [t for t in onsets["noise"].values() if t is not None]
@@ -200,7 +207,7 @@ def summarise(runs: list, onsets: dict, model) -> dict:
             rates = _Rates(delays=[])
             for r in runs:
                 _score(r["baselines"][name].get(key[0], []), onset, rates)
-            rows.append(_row(f"G[{key[0]} <- {key[1]}]", "MPM", onset, rates, n, name))
+            rows.append(_row(_label(key), "MPM", onset, rates, n, name))
         # Confusion: an alarm on an output whose noise changed, after that change and before
         # any process change of that output.
         confused = 0
@@ -221,12 +228,12 @@ def summarise(runs: list, onsets: dict, model) -> dict:
     confused = 0
     for r in runs:
         hit = False
-        for out, t_noise in onsets["noise"].items():
+        for t_noise in onsets["noise"].values():
             if t_noise is None:
                 continue
             for (o, i), t in onsets["process"].items():
                 t_proc = t if t is not None else np.inf
-                hit |= any(t_noise <= s < t_proc for s in r["alarms"].get(f"G[{o} <- {i}]", []))
+                hit |= any(t_noise <= s < t_proc for s in r["alarms"].get(_label((o, i)), []))
         confused += hit
     seconds = np.array([r["seconds"]["total"] for r in runs])
     return {"rows": rows,

@@ -41,9 +41,9 @@ def score(alarms: dict, expect: dict) -> dict:
     out = {"false_mpm": bool(false_mpm), "detected": None, "delay_s": None, "mislocated": None}
     if control:
         return out
-    hits = [f"G[{o} <- {i}]" for o, i in expect["channels"]]
+    hits = [channel_label({"kind": "process", "output": o, "input": i}) for o, i in expect["channels"]]
     if expect["kind"] == "any":
-        hits.append(f"H[{expect['output']}]")
+        hits.append(channel_label({"kind": "noise", "output": expect["output"]}))
     after = [s for k in hits for s in alarms.get(k, []) if s >= onset]
     out["detected"] = bool(after)
     out["delay_s"] = min(after) - onset if after else None

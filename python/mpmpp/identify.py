@@ -17,7 +17,7 @@ from . import _core
 IntOrList = Union[int, Sequence[int]]
 
 __all__ = ["arx", "oe", "arx_oe", "arx_oe_windows", "arx_oe_model", "channel_inputs", "channels",
-           "fir_length_to_one_percent", "model_from_data"]
+           "fir_length_to_one_percent", "model_from_data"]  # noqa: F822 (module __getattr__)
 
 fir_length_to_one_percent = _core.fir_length_to_one_percent
 

@@ -119,7 +119,7 @@ def plot_alarm_timeline(result, origin=None) -> bytes:
     fig, ax = plt.subplots(figsize=(11, 0.45 * n + 1.4))
     shade_training(ax, start, start + result.train_end_s, convert)
     step = float(np.median(np.diff(end_s))) if len(end_s) > 1 else 0.0
-    for row, c in enumerate(result.channels):
+    for row in range(len(result.channels)):
         y = n - 1 - row
         on = result.indicator[:, row] >= result.threshold
         for k in np.flatnonzero(on):

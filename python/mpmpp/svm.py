@@ -142,7 +142,7 @@ class OneClassSVM(OutlierMixin, BaseEstimator):
         self._paper_scale = float(self.nu) * X.shape[0]
         if not model.converged:
             warnings.warn(f"OneClassSVM: max_iter={self.max_iter} reached before tol={self.tol}",
-                          ConvergenceWarning)
+                          ConvergenceWarning, stacklevel=2)
         if self.outlier_fraction > 0:
             self.offset_ = outlier_offset(self._expansion(Z), float(self.outlier_fraction))
         else:

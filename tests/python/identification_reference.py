@@ -139,7 +139,7 @@ def arx_oe(y, u, na, nb, delays, chans, fir_length, detrend="constant", start_le
     uf = ss.lfilter(a, [1.0], u, axis=0)
     theta0, k = [], na
     impulse = np.r_[1.0, np.zeros(start_length - 1)]
-    for j, (cnb, cnf, d) in enumerate(chans):
+    for j, (cnb, cnf, _d) in enumerate(chans):
         g = ss.lfilter(theta_arx[k:k + nb[j]], a, impulse)
         k += nb[j]
         theta0.append(prony(g, cnb, cnf))

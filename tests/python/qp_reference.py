@@ -157,7 +157,8 @@ def mpc_like_sequence(n_mv, n_moves, n_steps, seed, horizon=20):
     gain[np.diag_indices(n_cv)] = np.abs(gain[np.diag_indices(n_cv)]) + 1.0  # dominant diagonal
     pole = rng.uniform(0.7, 0.95, (n_cv, n_mv))
     # Step response of channel (i, j) after k+1 samples: gain (1 - pole^(k+1)).
-    step = lambda k: gain * (1.0 - pole ** (k + 1))
+    def step(k):
+        return gain * (1.0 - pole ** (k + 1))
     n = n_mv * n_moves
     # Y (horizon x n_cv, stacked by time) = free + S dU, dU stacked as [input j, move k].
     S = np.zeros((horizon * n_cv, n))

@@ -93,7 +93,7 @@ class NumpyMpc:
         self.P = 2 * H
 
     def free_response(self, y):
-        ny, nu, hp = self.ny, self.nu, self.hp
+        ny, hp = self.ny, self.hp
         x = self.u_prev - self.u0
         f = np.zeros(ny * hp)
         self.dist = np.zeros(ny)
@@ -136,12 +136,16 @@ class NumpyMpc:
         eye = np.eye(self.nu * self.hc)
         for k in range(self.nu * self.hc):
             if np.isfinite(lo[k]):
-                rows.append(self.C[k]); rhs.append(lo[k])
+                rows.append(self.C[k])
+                rhs.append(lo[k])
             if np.isfinite(hi[k]):
-                rows.append(-self.C[k]); rhs.append(-hi[k])
+                rows.append(-self.C[k])
+                rhs.append(-hi[k])
             if np.isfinite(mm[k]):
-                rows.append(eye[k]); rhs.append(-mm[k])
-                rows.append(-eye[k]); rhs.append(-mm[k])
+                rows.append(eye[k])
+                rhs.append(-mm[k])
+                rows.append(-eye[k])
+                rhs.append(-mm[k])
         return q, np.array(rows).reshape(-1, self.nu * self.hc), np.array(rhs)
 
     def step(self, y, constrained=True):

@@ -69,7 +69,7 @@ def test_lazy_package_names_are_the_functions():
     assert callable(mpmpp.simulate) and mpmpp.simulate.__name__ == "simulate"
     assert mpmpp.detect.__name__ == "detect" and mpmpp.scenarios.paper_siso()["name"]
     with pytest.raises(AttributeError, match="no_such_name"):
-        mpmpp.no_such_name
+        _ = mpmpp.no_such_name
 
 
 @pytest.mark.parametrize("gain, tau, dead", [(0.9, 68.9, 65.0), (-2.5, 300.0, 72.5), (1.3, 0.0, 20.0),

@@ -1,7 +1,6 @@
 """Detector: indicator/alarms against a plain NumPy eq. 23, file round trip, JSON shape,
 a short end-to-end run on a simulated SISO loop, and the Monte Carlo on a Dask LocalCluster."""
 import json
-import os
 import subprocess
 import sys
 

@@ -3,7 +3,6 @@
 normal operation raise MPM alarms. Runs are deterministic (family, seed); the bounds leave a
 binomial margin over the measured counts, so they fail on a real regression, not on luck:
 for a detector with a 5 % false MPM alarm rate, P(3 or more of 12) = 2 %."""
-import pytest
 
 from mpmpp.family_study import run_family_seed
 

@@ -2,7 +2,6 @@
 resampling), repeated fits (SVM, ARX-OE) and thread counts (the SVM's kernel expansion is the
 engine's only multi-threaded loop; OMP/OpenBLAS thread counts must not matter either)."""
 import hashlib
-import os
 import subprocess
 import sys
 import textwrap

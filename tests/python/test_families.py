@@ -43,8 +43,9 @@ def test_split_and_coverage():
     tuning = [f for f in families.FAMILIES if f.split == families.TUNING]
     held = [f for f in families.FAMILIES if f.split == families.HELD_OUT]
     assert tuning and held
-    seen = lambda fs, attr: {v for f in fs for v in (getattr(f, attr) if isinstance(getattr(f, attr), tuple)
-                                                     else (getattr(f, attr),))}  # noqa: E731
+    def seen(fs, attr):
+        return {v for f in fs for v in (getattr(f, attr) if isinstance(getattr(f, attr), tuple)
+                                        else (getattr(f, attr),))}
     for attr in ("controller", "size", "sample_times_s", "noise_colours"):
         assert seen(held, attr) - seen(tuning, attr), attr
     effects = seen(families.FAMILIES, "effects")

@@ -11,7 +11,6 @@ in the C++ engine therefore fails that row with the signal instead of killing py
 rows after it run in a fresh child.
 """
 import json
-import os
 import subprocess
 import sys
 import textwrap

@@ -125,7 +125,7 @@ def test_delay_beyond_horizon_is_measured_from_smallest_delay():
     sc = parse_scenario(scen.paper_mimo())
     mpc = _core.Mpc(sc.model, sc.tuning, sc.tuning.mv_target)
     assert list(mpc.prediction_start) == [15, 19, 7]
-    theta, hp, hc = mpc.dynamic_matrix, 20, 2
+    theta, hp = mpc.dynamic_matrix, 20
     steam4 = theta[hp:2 * hp, 1::3]  # press_moisture rows, steam_4 columns: G22 (delay 23) is seen
     assert np.count_nonzero(steam4) > 0 and np.all(steam4[:23 - 19, 0] == 0)
 

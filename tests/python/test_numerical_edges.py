@@ -13,7 +13,8 @@ from mpmpp import identify, scenarios
 TF = mpmpp.TransferFunction
 
 
-def siso_data(n, seed, g=TF([0.5, 0.25], [1.0, -0.6], 2), sigma=0.05):
+def siso_data(n, seed, g=None, sigma=0.05):
+    g = g if g is not None else TF([0.5, 0.25], [1.0, -0.6], 2)
     rng = np.random.default_rng(seed)
     u = rng.normal(size=n)
     return g.filter(u) + sigma * rng.normal(size=n), u

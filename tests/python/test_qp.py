@@ -187,7 +187,8 @@ MAROS_MESZAROS_PSD = ["GENHS28", "HS51", "HS52", "HS53", "LOTSCHD", "QAFIRO", "Q
 
 def load_maros_meszaros(name):
     d = scipy.io.loadmat(str(require_qp_set("maros_meszaros") / f"{name}.mat"))
-    dense = lambda M: M.toarray() if hasattr(M, "toarray") else np.asarray(M, float)
+    def dense(M):
+        return M.toarray() if hasattr(M, "toarray") else np.asarray(M, float)
     return dict(P=dense(d["P"]), q=d["q"].ravel().astype(float), A=dense(d["A"]),
                 l=d["l"].ravel().astype(float), u=d["u"].ravel().astype(float), r=float(d["r"].ravel()[0]))
 

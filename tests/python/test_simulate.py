@@ -1,7 +1,6 @@
 """Closed-loop simulator: against a NumPy closed loop, SciPy filtering of the recorded
 signals (plant, events, noise), NumPy actuator rules, and the paper's scenarios' limits
 and stability."""
-import copy
 
 import numpy as np
 import pytest

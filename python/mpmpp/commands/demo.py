@@ -51,8 +51,7 @@ def run(args) -> int:
     plot_detection(result, os.path.join(out, "noise_detection.png"), kinds=("noise",), events=events,
                    title="Disturbance changes, per output")
     save_data(os.path.join(out, "data.csv"), data)
-    with open(os.path.join(out, "detect.json"), "w", encoding="utf-8") as f:
-        json.dump(result.to_dict(), f, indent=1)
+    result.save_json(os.path.join(out, "detect.json"))
     detector.save(os.path.join(out, "detector.json"))
     _step("done", started)
     return 0

@@ -3,7 +3,7 @@
 Not collected by pytest directly: test_fuzz.py runs this file in a child pytest so that a
 segfault or abort in C++ is reported as a failing test (with faulthandler's traceback)
 instead of killing the test session. MPMPP_FUZZ_EXAMPLES scales every property
-(default 40: CI-sized; `python bench/fuzz_long.py` runs 2000). Each example has a deadline,
+(default 40: CI-sized; `python studies/fuzz_long.py` runs 2000). Each example has a deadline,
 and the child a wall-clock limit, so a hang is a failure too.
 
 Every property says what a correct outcome is, not only "no crash":

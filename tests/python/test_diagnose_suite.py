@@ -1,11 +1,11 @@
-"""A fast subset of the hidden-effect suite (bench/diagnose_eval.py): MPC closed-loop data from
+"""A fast subset of the hidden-effect suite (studies/diagnose_eval.py): MPC closed-loop data from
 mpmpp.simulate with an effect the model does not know."""
 import sys
 from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 
 import mpmpp  # noqa: E402
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose  # noqa: E402

@@ -15,7 +15,7 @@
 // The covariance is the sandwich (Z'Z)^-1 (sum_t w_t w_t') (Z'Z)^-1, times
 // N_eq / (N_eq - p) as the OE noise variance's degrees of freedom. (Phi'Phi)^-1 comes from
 // the ARX step's own factorisation, so a ridge it added (ArxOptions::delta) is included.
-// Measured on the paper MIMO example (bench/arx_step_uncertainty.py): output 3's
+// Measured on the paper MIMO example (studies/arx_step_uncertainty.py): output 3's
 // G32 coefficients spread with sd 0.0047 over seeds; this covariance gives 0.0052, the
 // OE step's own 0.0026.
 #include <Eigen/Dense>

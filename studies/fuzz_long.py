@@ -1,5 +1,5 @@
 """The long fuzz run: every property of tests/python/fuzz_properties.py with many examples
-(default 2000 each; `python bench/fuzz_long.py 10000` for more), randomised (not the CI's
+(default 2000 each; `python studies/fuzz_long.py 10000` for more), randomised (not the CI's
 derandomised examples). Prints hypothesis statistics; exit code 0 when nothing failed."""
 import os
 import subprocess

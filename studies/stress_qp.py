@@ -1,6 +1,6 @@
 """Long correctness study of mpmpp.solve_qp (kept out of the test suite for time):
 
-    python bench/stress_qp.py [--count 3000] [--seed 1] [--family small|large]
+    python studies/stress_qp.py [--count 3000] [--seed 1] [--family small|large]
 
 small: the generator of tests/python/test_qp.py (n <= 12; equalities, duplicated and redundant
 rows, infinite bounds, infeasible cases). large: n up to 40, m up to 3n, P with condition number

@@ -7,7 +7,7 @@ own covariance sigma^2 (J'J)^-1 (which treats A(q) as exact) and ARX-OE's two-st
 covariance (two_step_covariance.hpp: A(q)'s uncertainty carried through). docs/detection.md
 uses it.
 
-    python bench/arx_step_uncertainty.py [--seeds 60] [--end-h 15]
+    python studies/arx_step_uncertainty.py [--seeds 60] [--end-h 15]
 """
 from __future__ import annotations
 

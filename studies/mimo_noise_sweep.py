@@ -6,7 +6,7 @@ stock-flow moves (driven by the feedback on every output's noise) to the reel-mo
 This sweep runs the Monte Carlo of ``mpmpp.evaluate`` on the paper_mimo scenario for several
 per-output sigmas and prints one row per setting.
 
-    python bench/mimo_noise_sweep.py --seeds 24 [--preset mimo] [--set alpha=5 ...]
+    python studies/mimo_noise_sweep.py --seeds 24 [--preset mimo] [--set alpha=5 ...]
                                      [--sigmas 0.05,0.05,0.05 0.05,0.05,0.02]
 """
 import argparse

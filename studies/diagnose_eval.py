@@ -2,7 +2,7 @@
 with one effect the model does not know, per effect of the FORMATS.md vocabulary, plus a
 no-change control and a noise-level-only case, several seeds each.
 
-    python bench/diagnose_eval.py [--seeds N] [--effects gain,delay,...] [--quiet]
+    python studies/diagnose_eval.py [--seeds N] [--effects gain,delay,...] [--quiet]
 
 Prints per case the top finding and, per effect, hits (top finding = effect, output, input,
 onset within 1 h), misses and false findings (findings that do not match the hidden effect;

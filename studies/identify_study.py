@@ -12,7 +12,7 @@ and tau, in seconds for theta; "cover" is the share of seeds whose 95 % interval
 truth; seeds refused as "not identified" are counted and left out of the statistics; "flagged
 uncertain" counts identified seeds whose summary warns that the model is loosely determined.
 
-    PYTHONPATH=python python bench/identify_study.py --seeds 20
+    PYTHONPATH=python python studies/identify_study.py --seeds 20
 """
 from __future__ import annotations
 

@@ -32,7 +32,7 @@ from mpmpp import _core  # noqa: E402
 from mpmpp.diagnose import diagnose  # noqa: E402
 from mpmpp.diagnose.trend import trend_fit  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 from diagnose_eval import model_of  # noqa: E402
 
 UNITS = {"h": 3600.0, "d": 86400.0}

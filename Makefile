@@ -9,7 +9,14 @@ OUT ?= out
 # The example cases are in examples/. The QP problem sets in ../shared (CI lays it out beside
 # the checkout; MPMPP_SHARED_DIR points elsewhere) are optional: their tests skip without them.
 
-.PHONY: all demo test test-cpp test-python install system-deps venv sanitize clean
+.PHONY: all demo test lint test-cpp test-python install system-deps venv sanitize clean
+
+# ccache (a system dependency) lets the package build (build/<wheel tag>) and the test build
+# (build/cpp) share their compiled objects: both sit two levels below the checkout, so with
+# CCACHE_BASEDIR their compile commands are the same and each source compiles once, not twice.
+# Read when a recipe runs (after system-deps), not when make starts.
+export CMAKE_CXX_COMPILER_LAUNCHER = $(shell command -v ccache 2>/dev/null)
+export CCACHE_BASEDIR = $(CURDIR)
 
 all: test
 
@@ -43,7 +50,12 @@ test-cpp: install
 test-python: test-cpp
 	PYTHONPATH=python MPMPP_BUILD_DIR=$(abspath $(BUILD)) $(PY) -m pytest -q tests/python || [ $$? -eq 5 ]
 
-test: test-cpp test-python
+test: lint test-cpp test-python
+
+# ruff (config in pyproject.toml) and clang-format (.clang-format) over every source file.
+lint: install
+	$(VENV)/bin/ruff check python tests bench studies scripts
+	clang-format --dry-run --Werror $$(find cpp tests/cpp -name '*.cpp' -o -name '*.hpp' | sort)
 
 demo: install
 	$(VENV)/bin/mpmpp demo siso --out $(OUT)/demo-siso

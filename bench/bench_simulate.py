@@ -9,7 +9,6 @@ support; the events cost nothing per sample in mpmpp) for the full 10,800 sample
 """
 import argparse
 import sys
-import time
 from pathlib import Path
 
 
@@ -20,15 +19,7 @@ import mpmpp  # noqa: E402
 from mpmpp import _core, scenarios  # noqa: E402
 from mpmpp.scenario import parse_scenario  # noqa: E402
 from reference_mpc import NumpyMpc, closed_loop  # noqa: E402
-
-
-def best_of(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), out
+from timing import best_of  # noqa: E402
 
 
 def main():

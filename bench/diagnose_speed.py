@@ -33,7 +33,10 @@ from mpmpp.diagnose import diagnose  # noqa: E402
 from mpmpp.diagnose.trend import trend_fit  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
 from diagnose_eval import model_of  # noqa: E402
+from timing import best_of  # noqa: E402
+from trend_reference import brute_trend  # noqa: E402
 
 UNITS = {"h": 3600.0, "d": 86400.0}
 
@@ -77,15 +80,6 @@ def cost_table(lengths: list[str]) -> None:
               f"{r['base_mb']:.0f} |", flush=True)
 
 
-def best_of(fn, repeat=3):
-    times = []
-    for _ in range(repeat):
-        t0 = time.process_time()
-        fn()
-        times.append(time.process_time() - t0)
-    return min(times)
-
-
 def numpy_cross_validated_scan(r, r_without, psi, weight, folds, min_segment, step):
     """The peer: suffix sums per weighting with NumPy, then the held-out drops."""
     def suffix(w):
@@ -113,20 +107,6 @@ def numpy_cross_validated_scan(r, r_without, psi, weight, folds, min_segment, st
     return full, heldout
 
 
-def per_onset_trend(e, ok, hinv, grid, earliest):
-    """The peer: one least-squares fit of e on H^-1 [1, step, ramp] per onset."""
-    n = len(e)
-    step0, ramp0 = hinv.filter(np.ones(n)), hinv.filter(np.arange(n) / n)
-    rss0 = np.sum((e[ok] - e[ok].mean()) ** 2)
-    best = (0, 0.0)
-    for k in range(earliest, n - 2 * grid, grid):
-        x = np.column_stack([np.ones(n), np.r_[np.zeros(k), step0[: n - k]], np.r_[np.zeros(k), ramp0[: n - k]]])
-        coef = np.linalg.lstsq(x[ok], e[ok], rcond=None)[0]
-        drop = rss0 - np.sum((e[ok] - x[ok] @ coef) ** 2)
-        if drop > best[1]:
-            best = (k, drop)
-    return best
-
 
 def kernel_ratios(n: int) -> None:
     rng = np.random.default_rng(0)
@@ -134,8 +114,8 @@ def kernel_ratios(n: int) -> None:
     w = np.ones(n)
     parity = (np.arange(n) // 720) % 2
     folds = [w * (parity == 0), w * (parity == 1)]
-    t_cpp = best_of(lambda: _core.scan_onset_cross_validated(r, rw, psi, w, folds[1], 720, 12), 20)
-    t_np = best_of(lambda: numpy_cross_validated_scan(r, rw, psi, w, folds, 720, 12), 20)
+    t_cpp = best_of(lambda: _core.scan_onset_cross_validated(r, rw, psi, w, folds[1], 720, 12), 20, time.process_time)[0]
+    t_np = best_of(lambda: numpy_cross_validated_scan(r, rw, psi, w, folds, 720, 12), 20, time.process_time)[0]
     cv = _core.scan_onset_cross_validated(r, rw, psi, w, folds[1], 720, 12)
     assert numpy_cross_validated_scan(r, rw, psi, w, folds, 720, 12)[0][0] == cv.full.onset
     print(f"cross-validated onset scan, {n} samples: C++ {1e3 * t_cpp:.2f} ms, NumPy suffix sums "
@@ -144,16 +124,16 @@ def kernel_ratios(n: int) -> None:
     e = rng.standard_normal(n) + 1e-4 * np.maximum(np.arange(n) - n // 2, 0)
     ok = np.ones(n, bool)
     hinv = mpmpp.TransferFunction([1.0, 0.5], [1.0, -0.3])
-    t_fft = best_of(lambda: trend_fit(e, ok, hinv, 0, 120, 120), 3)
-    t_ls = best_of(lambda: per_onset_trend(e, ok, hinv, 120, 120), 1)
-    assert per_onset_trend(e, ok, hinv, 120, 120)[0] == trend_fit(e, ok, hinv, 0, 120, 120).onset
+    t_fft = best_of(lambda: trend_fit(e, ok, hinv, 0, 120, 120), 3, time.process_time)[0]
+    t_ls = best_of(lambda: brute_trend(e, ok, hinv, 0, 120, 120), 1, time.process_time)[0]
+    assert brute_trend(e, ok, hinv, 0, 120, 120)[0] == trend_fit(e, ok, hinv, 0, 120, 120).onset
     print(f"trend fit over {len(range(120, n - 240, 120))} onsets, {n} samples: FFT {1e3 * t_fft:.1f} ms, "
           f"least squares per onset {1e3 * t_ls:.0f} ms -> {t_ls / t_fft:.0f}x faster")
 
     g = mpmpp.TransferFunction([0.0763], [1.0, -0.0723], 15)
     h = mpmpp.TransferFunction([1.0, -0.5], [1.0, 0.5])
     u, y = rng.standard_normal((n, 1)), rng.standard_normal(n)
-    t_pred = best_of(lambda: _core.predict_output([g], h, y, u, 10), 20)
+    t_pred = best_of(lambda: _core.predict_output([g], h, y, u, 10), 20, time.process_time)[0]
 
     def scipy_pred():
         v = y - lfilter(np.r_[np.zeros(15), 0.0763], [1.0, -0.0723], u[:, 0])
@@ -161,7 +141,7 @@ def kernel_ratios(n: int) -> None:
         hk = lfilter([1.0, -0.5], [1.0, 0.5], np.r_[1.0, np.zeros(9)])
         return y - lfilter(hk, [1.0], e)
 
-    t_sp = best_of(scipy_pred, 20)
+    t_sp = best_of(scipy_pred, 20, time.process_time)[0]
     print(f"10-step prediction, {n} samples: C++ {1e3 * t_pred:.2f} ms, scipy lfilter {1e3 * t_sp:.2f} ms "
           f"-> ratio C++/scipy {t_pred / t_sp:.2f}")
 

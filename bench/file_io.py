@@ -10,22 +10,13 @@ A ratio > 1 means mpmpp is slower than the peer. Best of 5 repeats each.
 import argparse
 import os
 import tempfile
-import time
 
 import numpy as np
 import pandas as pd
 from scipy import signal
 
 import mpmpp
-
-
-def best_of(fn, repeats=5):
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
+from timing import best_of
 
 
 def main():
@@ -43,19 +34,19 @@ def main():
 
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "data.csv")
-        ours = best_of(lambda: mpmpp.save_data(path, df))
-        peer = best_of(lambda: df.to_csv(path, index=False))
+        ours = best_of(lambda: mpmpp.save_data(path, df), 5)[0]
+        peer = best_of(lambda: df.to_csv(path, index=False), 5)[0]
         rows = [("write CSV", "DataFrame.to_csv", ours, peer)]
         mpmpp.save_data(path, df)
-        ours = best_of(lambda: mpmpp.load_data(path, model))
-        peer = best_of(lambda: pd.read_csv(path))
+        ours = best_of(lambda: mpmpp.load_data(path, model), 5)[0]
+        peer = best_of(lambda: pd.read_csv(path), 5)[0]
         rows.insert(0, ("read + validate CSV", "pandas.read_csv", ours, peer))
 
     g = mpmpp.TransferFunction([0.063, 0.01], [1.0, -0.93, 0.1], 14)
     x = rng.standard_normal(1_000_000)
     b = np.r_[np.zeros(g.delay), g.num]
-    ours = best_of(lambda: g.filter(x))
-    peer = best_of(lambda: signal.lfilter(b, g.den, x))
+    ours = best_of(lambda: g.filter(x), 5)[0]
+    peer = best_of(lambda: signal.lfilter(b, g.den, x), 5)[0]
     rows.append(("filter 1e6 samples", "scipy.signal.lfilter", ours, peer))
 
     print(f"{args.rows} rows x 6 columns; best of 5")

@@ -13,6 +13,7 @@ from mpmpp.diagnose.trend import trend_fit
 from mpmpp.diagnose.whitening import output_residual
 
 import closed_loop_case as loop
+from trend_reference import brute_trend
 
 
 def brute_scan(r, r_without, psi, weight, min_segment, step):
@@ -57,20 +58,6 @@ def test_cross_validated_scan_matches_numpy(late_start):
         test = (weight * folds[1 - k])[on:]
         heldout = np.sum(test * (r[on:] ** 2 - (r_without[on:] - theta * psi[on:]) ** 2))
         assert cv.heldout[k] == pytest.approx(heldout, rel=1e-9, abs=1e-9)
-
-
-def brute_trend(e, ok, hinv, first_onset, grid, earliest):
-    n = len(e)
-    step0, ramp0 = hinv.filter(np.ones(n)), hinv.filter(np.arange(n) / n)
-    rss0 = np.sum((e[ok] - e[ok].mean()) ** 2)
-    best = (first_onset, 0.0)
-    for k in range(earliest, n - 2 * grid, grid):
-        x = np.column_stack([np.ones(n), np.r_[np.zeros(k), step0[: n - k]], np.r_[np.zeros(k), ramp0[: n - k]]])
-        coef = np.linalg.lstsq(x[ok], e[ok], rcond=None)[0]
-        drop = rss0 - np.sum((e[ok] - x[ok] @ coef) ** 2)
-        if drop > best[1]:
-            best = (k, drop)
-    return best
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -1,7 +1,5 @@
 """`mpmpp monitor FLEET`: a fleet of 100 small loops gives one table, the same on local
 processes and on a Dask LocalCluster, and each row is what monitoring that loop alone gives."""
-import contextlib
-import io
 import json
 import os
 import shutil
@@ -9,22 +7,15 @@ import shutil
 import pandas as pd
 import pytest
 
-from mpmpp import cli
 from mpmpp.fleet import format_fleet_table, load_fleet, monitor_fleet
 from mpmpp.monitor import monitor
+from cli_run import run_cli
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 STREAM = os.path.join(HERE, "..", "data", "stream")
 DETECTOR, DATA = os.path.join(STREAM, "detector.json"), os.path.join(STREAM, "data.csv")
 N_LOOPS = 100
 HOURS = 6  # 3 h of the detector's training period, then 3 h monitored
-
-
-def run_cli(*argv):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = cli.main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture(scope="module")

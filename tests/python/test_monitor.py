@@ -1,7 +1,5 @@
 """`mpmpp monitor DETECTOR DATA`: the CLI plant path gives `detect`'s alarms, resumes from a
 checkpoint exactly, speaks the data's own time, and refuses bad input in one line."""
-import contextlib
-import io
 import json
 import os
 
@@ -10,18 +8,11 @@ import pandas as pd
 import pytest
 
 import mpmpp
-from mpmpp import cli
+from cli_run import run_cli
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 STREAM = os.path.join(HERE, "..", "data", "stream")
 MODEL, DATA = os.path.join(STREAM, "model.json"), os.path.join(STREAM, "data.csv")
-
-
-def run_cli(*argv):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = cli.main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 def alarm_keys(alarms):

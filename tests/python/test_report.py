@@ -1,28 +1,18 @@
 """`mpmpp report MODEL DATA -o report.html`: one self-contained page, opened in a real
 headless browser (Chromium): it loads with no console message, every embedded figure
 decodes, nothing is fetched from a network, and the screenshot is not blank."""
-import contextlib
-import io
 import os
 import re
 
 import pytest
 
-from mpmpp import cli
-
 from browser import chromium, ink, open_page
+from cli_run import run_cli
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 STREAM = os.path.join(HERE, "..", "data", "stream")
 MODEL, DATA = os.path.join(STREAM, "model.json"), os.path.join(STREAM, "data.csv")
 needs_browser = pytest.mark.skipif(chromium() is None, reason="Chromium is not installed (scripts/system-deps.sh)")
-
-
-def run_cli(*argv):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = cli.main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture(scope="module")

@@ -37,8 +37,6 @@ install: venv
 
 # The C++ build also puts _core next to python/mpmpp, and pytest imports that build
 # (PYTHONPATH=python); MPMPP_BUILD_DIR lets the streaming test run the stream_csv example.
-# (A full pytest run against the installed wheel showed flaky child-process tests in session 1;
-# not reinvestigated, see the issue notes.)
 test-cpp: install
 	cmake -S . -B $(BUILD) -DMPMPP_BUILD_TESTS=ON -DMPMPP_BUILD_PYTHON=ON -DMPMPP_INPLACE=ON \
 	      -DPython_EXECUTABLE=$(abspath $(PY)) -DCMAKE_BUILD_TYPE=Release

@@ -3,7 +3,7 @@ implementation of the same detector (bench/reference_detect.py) on the same simu
 
     python bench/bench_detect.py [--seeds N]
 
-Targets (issue 6): SISO demo < 1 s of compute, MIMO < 3 s. Prints medians over the seeds.
+Targets: SISO demo < 1 s of compute, MIMO < 3 s. Prints medians over the seeds.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Streaming detector (C++, issue 9) against the batch Python path on the same data.
+"""Streaming detector (C++) against the batch Python path on the same data.
 
     python bench/bench_streaming.py [--repeats N]
 

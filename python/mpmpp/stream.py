@@ -1,4 +1,4 @@
-"""Sample-by-sample monitoring with a trained detector (the C++ StreamingDetector, issue 9).
+"""Sample-by-sample monitoring with a trained detector (the C++ StreamingDetector).
 
 Plant software links the C++ library (streaming_detector.hpp); this wrapper gives the same
 object to Python users and tests::

@@ -85,6 +85,12 @@ DataTable regularize(const DataTable& rows, const GridOptions& options, const st
   DataRepairs& repairs = out.repairs;
   const std::vector<Eigen::Index> kept = ordered_rows(rows, repairs, source);
   const Eigen::VectorXd& t = rows.time_s;
+  // A file sampled slower than the model would put a missing row between every two samples:
+  // a silent half-empty record. Gaps are occasional; a slower rate is a mismatch to fix.
+  if (const double step = median_step(rows); step >= 1.5 * ts)
+    throw InputError(source + ": column time: samples are " + format_number(step) +
+                     " s apart (median), slower than the model's sample time of " + format_number(ts) +
+                     " s; use a model with that sample time or export the data at " + format_number(ts) + " s");
 
   // Segments: a step longer than max_gap_s (and than a missed sample) starts a new one.
   std::vector<std::vector<Eigen::Index>> segments{{kept.front()}};

@@ -162,6 +162,17 @@ def test_resample_block_averages_faster_data(tmp_path):
         mpmpp.load_data(tmp_path / "d.csv", model())
 
 
+def test_data_slower_than_the_model_is_an_error_not_a_half_empty_record(tmp_path):
+    slow = clean()
+    path = write(tmp_path / "slow.csv", slow, times=2 * TS * np.arange(len(slow)))
+    with pytest.raises(ValueError, match=r"slow.csv: column time: samples are 10 s apart \(median\), slower than "
+                                         r"the model's sample time of 5 s"):
+        mpmpp.load_data(path, model())
+    # One outage in regularly sampled data stays a gap, not this error.
+    gappy = write(tmp_path / "gap.csv", slow, times=TS * np.r_[np.arange(100), np.arange(103, 203)])
+    assert mpmpp.load_data(gappy, model())["u"].isna().sum() == 3
+
+
 def test_past_the_data_names_its_span(tmp_path):
     df = clean()
     back = mpmpp.load_data(write(tmp_path / "d.csv", df, iso(df["time"])), model())

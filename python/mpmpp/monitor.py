@@ -19,7 +19,8 @@ import numpy as np
 
 from . import _core
 from .detect import _arrays, _channel_dicts, channel_label
-from .timeaxis import absolute_seconds, format_moment, origin_of
+from .clock import Clock
+from .timeaxis import absolute_seconds, origin_of
 
 __all__ = ["MonitorResult", "monitor", "monitor_loop"]
 
@@ -31,7 +32,7 @@ class MonitorResult:
     detector: str
     data: str
     channels: list                 # dicts: kind, output[, input]
-    alarms: list                   # dicts: kind, output[, input], channel, start_s, time
+    alarms: list                   # dicts: kind, output[, input], channel, start_s
     active: list                   # per channel: alarm on after the last window
     windows: int                   # windows completed in this run
     skipped_windows: list          # dicts: start_s, end_s, reason
@@ -39,17 +40,25 @@ class MonitorResult:
     passed_over: int               # rows already taken by an earlier run (checkpoint)
     total_samples: int             # since the stream's first sample
     last_time_s: Optional[float]   # the last sample taken (data seconds), None if none yet
-    origin: object = None          # first timestamp of the data (datetime64) or None
+    clock: Optional[Clock] = None  # the data's own time (timestamps in results, as every command)
     last_window: Optional[dict] = field(default=None)  # end_s, scores, indicator of the last window
 
+    def stamp(self, t: float) -> str:
+        return self.clock.stamp(t) if self.clock is not None else f"t = {t:g} s"
+
     def to_dict(self) -> dict:
-        last = None if self.last_time_s is None else format_moment(self.last_time_s, self.origin)
-        return {"detector": self.detector, "data": self.data, "channels": self.channels,
+        """The ``monitor --json`` document: times in the data's own time, as every command
+        writes them (a ``time`` block, a timestamp beside each ``*_s`` point)."""
+        last = None if self.last_time_s is None else self.stamp(self.last_time_s)
+        doc = {"detector": self.detector, "data": self.data, "channels": self.channels,
                 "alarms": [{k: v for k, v in a.items() if k != "channel"} for a in self.alarms],
                 "alarm_active": [{**c, "active": bool(on)} for c, on in zip(self.channels, self.active)],
                 "windows": self.windows, "skipped_windows": self.skipped_windows,
                 "new_samples": self.new_samples, "passed_over": self.passed_over,
                 "total_samples": self.total_samples, "last_sample": last}
+        if self.clock is None:
+            return doc
+        return {**self.clock.stamp_fields(doc), "time": self.clock.to_dict()}
 
     def summary(self) -> str:
         lines = [f"{self.data}: {self.new_samples} new samples"
@@ -61,7 +70,7 @@ class MonitorResult:
             lines.append("alarms that started:")
             for a in self.alarms:
                 kind = "model-plant mismatch" if a["kind"] == "process" else "noise change"
-                lines.append(f"  {channel_label(a):<{width}}  {kind:<20}  {a['time']}")
+                lines.append(f"  {channel_label(a):<{width}}  {kind:<20}  {self.stamp(a['start_s'])}")
         else:
             lines.append("no alarm started")
         on = [channel_label(c) for c, a in zip(self.channels, self.active) if a]
@@ -115,8 +124,7 @@ def monitor(detector, data, checkpoint: Optional[str] = None) -> MonitorResult:
         if w.skipped:
             skipped.append({"start_s": w.start_s - shift, "end_s": w.end_s - shift, "reason": w.skip_reason})
         for k in w.alarm_starts:
-            alarms.append({**channels[k], "channel": int(k), "start_s": w.end_s - shift,
-                           "time": format_moment(w.end_s - shift, origin, float(time_s[0]))})
+            alarms.append({**channels[k], "channel": int(k), "start_s": w.end_s - shift})
     if checkpoint is not None:
         stream.save_checkpoint(checkpoint)
     last = windows[-1] if windows else None
@@ -124,7 +132,8 @@ def monitor(detector, data, checkpoint: Optional[str] = None) -> MonitorResult:
         detector=os.fspath(detector), data=data_name, channels=channels, alarms=alarms,
         active=list(stream.alarm), windows=len(windows), skipped_windows=skipped,
         new_samples=max(len(abs_time) - first, 0), passed_over=first, total_samples=int(stream.samples),
-        last_time_s=float(time_s[-1]) if len(time_s) else None, origin=origin,
+        last_time_s=float(time_s[-1]) if len(time_s) else None,
+        clock=Clock.of(data, model.sample_time_s) if len(time_s) else None,
         last_window=None if last is None else {"end_s": last.end_s - shift, "scores": [float(v) for v in last.scores],
                                                 "indicator": [float(v) for v in last.indicator]})
 
@@ -140,6 +149,6 @@ def monitor_loop(name: str, detector: str, data: str, checkpoint: Optional[str] 
     first = r.alarms[0] if r.alarms else None
     return {"loop": name, "status": "ALARM" if active else "ok", "active": active,
             "alarms": len(r.alarms),
-            "first_alarm": None if first is None else f"{channel_label(first)} {first['time']}",
+            "first_alarm": None if first is None else f"{channel_label(first)} {r.stamp(first['start_s'])}",
             "windows": r.windows, "skipped": len(r.skipped_windows), "samples": r.new_samples,
             "last_sample": r.to_dict()["last_sample"], "message": ""}

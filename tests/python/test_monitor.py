@@ -108,8 +108,10 @@ def test_alarms_are_reported_in_the_data_s_own_timestamps(detected, tmp_path):
     assert code == 0, err
     got = json.loads(out)["alarms"]
     assert alarm_keys(got) == alarm_keys(alarms)
-    expected = [(origin + pd.Timedelta(seconds=a["start_s"])).strftime("%Y-%m-%d %H:%M:%S UTC") for a in alarms]
-    assert [a["time"] for a in got] == expected
+    # Stamped as every command stamps times: ISO-8601 in the file's own offset beside start_s.
+    expected = [(origin + pd.Timedelta(seconds=a["start_s"])).strftime("%Y-%m-%dT%H:%M:%SZ") for a in alarms]
+    assert [a["start"] for a in got] == expected
+    assert json.loads(out)["time"]["kind"] == "calendar"
 
 
 def test_bad_input_is_one_line_and_exit_2(detected, tmp_path):

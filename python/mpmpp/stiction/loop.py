@@ -1,8 +1,11 @@
 """A small PI-loop simulator for stiction studies: PI controller -> valve -> process -> PV.
 
 The controller reads PV(t) and sets OP(t) in the same sample (velocity-form PI), the valve
-maps OP to position, and the discrete process responds from the next sample on; the
-disturbance is added at the PV.
+(mpmpp's actuator model, at rest at the OP bias before the record) maps OP to position, and
+the discrete process responds from the next sample on; the disturbance is added at the PV.
+The closed-loop simulator (closed_loop.cpp) draws its disturbances from its own seeded noise
+models, whereas stiction studies need given disturbance and valve-noise sequences, so this
+loop stays a small Python one.
 """
 from __future__ import annotations
 
@@ -10,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._core import Valve, ValveKind
+from .._core import Actuator, ActuatorNonlinearity
 
 
 @dataclass(frozen=True)
@@ -26,18 +29,18 @@ class Process:
 
 
 def simulate_pi_loop(process: Process, kc: float, ti_samples: float, n: int, *,
-                     valve: Valve | None = None, disturbance=None, setpoint=None,
+                     valve: ActuatorNonlinearity | None = None, disturbance=None, setpoint=None,
                      valve_noise=None, op_bias: float = 50.0) -> dict:
     """Closed-loop run of n samples; returns op, pv, sp, position arrays.
 
-    disturbance: additive at the PV (length n); valve_noise: added to the valve position
-    (a noisy but linear valve); OP is in % around op_bias.
+    valve: the valve's nonlinearity (default linear); disturbance: additive at the PV
+    (length n); valve_noise: added to the valve position (a noisy but linear valve); OP is in %
+    around op_bias.
     """
     d = np.zeros(n) if disturbance is None else np.asarray(disturbance, float)
     sp = np.zeros(n) if setpoint is None else np.asarray(setpoint, float)
     w = np.zeros(n) if valve_noise is None else np.asarray(valve_noise, float)
-    valve = valve if valve is not None else Valve(ValveKind.linear, 0.0, 0.0)
-    valve.reset()
+    actuator = Actuator(valve if valve is not None else ActuatorNonlinearity(), op_bias)
     b = np.asarray(process.b, float)
     a = np.asarray(process.a, float)
     nb, na = len(b), len(a) - 1
@@ -62,7 +65,7 @@ def simulate_pi_loop(process: Process, kc: float, ti_samples: float, n: int, *,
         u += kc * (e - e_prev + e / ti_samples)
         e_prev = e
         op[t] = u
-        pos[t] = valve.step(u) - op_bias + w[t]
+        pos[t] = actuator.move(u) - op_bias + w[t]
     return {"op": op, "pv": pv, "sp": sp, "position": pos + op_bias}
 
 

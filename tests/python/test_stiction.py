@@ -161,6 +161,19 @@ def test_loop_simulator_matches_lfilter_and_removes_offset():
     assert quiet["pv"][-1] == pytest.approx(2.0, abs=1e-6)
 
 
+def test_loop_valve_is_the_actuator_at_rest_at_the_bias_plus_noise():
+    rng = np.random.default_rng(6)
+    d, w = coloured_noise(rng, 500, 0.3, 0.8), 0.5 * rng.standard_normal(500)
+    sticky = ActuatorNonlinearity(stiction_s=3.0, stiction_j=1.0)
+    rec = simulate_pi_loop(FLOW, 0.7, 1.5, 500, valve=sticky, disturbance=d, valve_noise=w)
+    np.testing.assert_allclose(rec["position"] - w, actuator_positions(rec["op"], sticky, 50.0),
+                               atol=1e-12)
+    x = lfilter(np.r_[0.0, FLOW.b], FLOW.a, rec["position"] - 50.0)
+    np.testing.assert_allclose(rec["pv"] - d, x, atol=1e-10)
+    with pytest.raises(ValueError, match="output_disturbance must be finite"):
+        simulate_pi_loop(FLOW, 0.7, 1.5, 500, disturbance=np.r_[np.nan, d[1:]])
+
+
 def loop(seed, sticky=None, n=751):
     rng = np.random.default_rng(seed)
     d = coloured_noise(rng, n, 0.3, 0.8) + 0.05 * rng.standard_normal(n)

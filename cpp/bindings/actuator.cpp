@@ -42,8 +42,7 @@ void bind_actuator(py::module_& m) {
             if (!std::isfinite(command)) throw InputError("actuator command must be finite");
             return a.move(command);
           },
-          py::arg("command"), "position for the next command sample")
-      .def_property_readonly("nonlinearity", &Actuator::nonlinearity);
+          py::arg("command"), "position for the next command sample");
   m.def("actuator_positions", &actuator_positions, py::arg("commands"), py::arg("nonlinearity"),
         py::arg("u0"), "actuator positions for a command sequence, starting at rest at u0");
 }

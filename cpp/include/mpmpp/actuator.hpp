@@ -48,7 +48,6 @@ class Actuator {
   // Checked parameters, at rest at u0.
   Actuator(const ActuatorNonlinearity& nl, double u0);
   void set(const ActuatorNonlinearity& nl) { nl_ = nl; }
-  const ActuatorNonlinearity& nonlinearity() const { return nl_; }
   // Position and command history start at u0, at rest.
   void start(double u0);
   // Command -> position, one sample.

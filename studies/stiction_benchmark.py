@@ -15,7 +15,7 @@ import sys
 from dataclasses import dataclass
 
 import numpy as np
-from mpmpp._core import Valve, ValveKind
+from mpmpp._core import ActuatorNonlinearity, StictionLaw
 from mpmpp.io import atomic_output
 from mpmpp.stiction import (
     analyse_loop,
@@ -77,10 +77,9 @@ def disturbance(family: str, rng, n: int) -> np.ndarray:
     return 0.25 * drift / np.std(drift) + 0.1 * rng.standard_normal(n)
 
 
-def stiction_valve(family: str, s: float, j: float) -> Valve:
-    if family == "tuning":
-        return Valve(ValveKind.stick_slip, s, j)
-    return Valve(ValveKind.he, (s + j) / 2, (s - j) / 2)
+def stiction_valve(family: str, s: float, j: float) -> ActuatorNonlinearity:
+    law = StictionLaw.choudhury if family == "tuning" else StictionLaw.he
+    return ActuatorNonlinearity(stiction_law=law, stiction_s=s, stiction_j=j)
 
 
 def make_record(family: str, dyn: Dynamics, case: str, s: float, j: float, seed: int) -> dict:

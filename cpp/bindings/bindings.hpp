@@ -26,7 +26,6 @@ void bind_detector_io(pybind11::module_& m);
 void bind_streaming_detector(pybind11::module_& m);
 
 // The solver options from the keyword arguments the SVM functions share.
-OneClassSvmOptions svm_options(double nu, double kernel_scale, double tol, double cache_mb, bool shrinking,
-                               std::int64_t max_iter);
-void bind_valve(pybind11::module_& m);
+OneClassSvmOptions svm_options(double nu, double kernel_scale, double tol, double cache_mb,
+                               bool shrinking, std::int64_t max_iter);
 }  // namespace mpmpp::bindings

@@ -17,7 +17,8 @@ void bind_closed_loop(py::module_& m) {
       .def_readwrite("sigma", &ExtraVariable::sigma)
       .def_readwrite("noise", &ExtraVariable::noise);
 
-  py::class_<Plant>(m, "Plant", "the true plant: Box-Jenkins per output, extra variables, actuators")
+  py::class_<Plant>(m, "Plant",
+                    "the true plant: Box-Jenkins per output, extra variables, actuators")
       .def(py::init<>())
       .def_readwrite("process", &Plant::process)
       .def_readwrite("noise", &Plant::noise)
@@ -53,14 +54,19 @@ void bind_closed_loop(py::module_& m) {
       .def(py::init<>())
       .def_readwrite("model", &ClosedLoopConfig::model, "the nominal model the MPC uses")
       .def_readwrite("tuning", &ClosedLoopConfig::tuning)
-      .def_readwrite("pid_loops", &ClosedLoopConfig::pid_loops, "non-empty: multi-loop PID instead of the MPC")
+      .def_readwrite("pid_loops", &ClosedLoopConfig::pid_loops,
+                     "non-empty: multi-loop PID instead of the MPC")
       .def_readwrite("plant", &ClosedLoopConfig::plant)
       .def_readwrite("u_operating", &ClosedLoopConfig::u_operating)
       .def_readwrite("y_operating", &ClosedLoopConfig::y_operating)
       .def_readwrite("num_samples", &ClosedLoopConfig::num_samples)
       .def_readwrite("seed", &ClosedLoopConfig::seed)
       .def_readwrite("events", &ClosedLoopConfig::events)
-      .def_readwrite("record_qps", &ClosedLoopConfig::record_qps);
+      .def_readwrite("record_qps", &ClosedLoopConfig::record_qps)
+      .def_readwrite("output_disturbance", &ClosedLoopConfig::output_disturbance,
+                     "[samples x outputs] added to y; empty = none")
+      .def_readwrite("position_noise", &ClosedLoopConfig::position_noise,
+                     "[samples x inputs] added to the actuator position; empty = none");
 
   py::class_<SimulationResult>(m, "SimulationResult")
       .def_readonly("u", &SimulationResult::u)
@@ -76,7 +82,8 @@ void bind_closed_loop(py::module_& m) {
       .def_readonly("qp_u", &SimulationResult::qp_u);
 
   m.def("simulate_closed_loop", &simulate_closed_loop, py::arg("config"),
-        py::call_guard<py::gil_scoped_release>(), "run a closed-loop simulation (see closed_loop.hpp)");
+        py::call_guard<py::gil_scoped_release>(),
+        "run a closed-loop simulation (see closed_loop.hpp)");
 }
 
 }  // namespace mpmpp::bindings

@@ -20,5 +20,4 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_detector_training(m);
   mpmpp::bindings::bind_detector_io(m);
   mpmpp::bindings::bind_streaming_detector(m);
-  mpmpp::bindings::bind_valve(m);
 }

@@ -13,7 +13,8 @@ double sign(double x) { return (x > 0.0) - (x < 0.0); }
 
 void check_actuator(const ActuatorNonlinearity& a, const std::string& at) {
   auto nonnegative = [&](double v, const char* what) {
-    if (!(v >= 0.0) || !std::isfinite(v)) throw InputError(at + " " + what + " must be a finite value >= 0");
+    if (!(v >= 0.0) || !std::isfinite(v))
+      throw InputError(at + " " + what + " must be a finite value >= 0");
   };
   nonnegative(a.stiction_s, "stiction S");
   nonnegative(a.stiction_j, "stiction J");
@@ -23,13 +24,19 @@ void check_actuator(const ActuatorNonlinearity& a, const std::string& at) {
   if (!(a.min <= a.max)) throw InputError(at + " saturation min must be <= max");
 }
 
+Actuator::Actuator(const ActuatorNonlinearity& nl, double u0) : nl_(nl) {
+  check_actuator(nl, "actuator");
+  if (!std::isfinite(u0)) throw InputError("actuator start position u0 must be finite");
+  start(u0);
+}
+
 void Actuator::start(double u0) {
   previous_command_ = stuck_command_ = stiction_out_ = deadband_out_ = play_ = u0;
-  direction_ = stuck_direction_ = 0.0;
+  direction_ = stuck_direction_ = force_ = 0.0;
   stuck_ = true;
 }
 
-double Actuator::stick_slip(double x) {
+double Actuator::choudhury(double x) {
   const double velocity = sign(x - previous_command_);
   if (!stuck_ && velocity != direction_) {
     // The command stopped or reversed: the valve sticks at x_ss, the last command it followed.
@@ -51,21 +58,35 @@ double Actuator::stick_slip(double x) {
   return stiction_out_;
 }
 
+double Actuator::he(double x) {
+  const double fs = 0.5 * (nl_.stiction_s + nl_.stiction_j);
+  const double fd = 0.5 * (nl_.stiction_s - nl_.stiction_j);
+  force_ += x - previous_command_;
+  previous_command_ = x;
+  if (std::abs(force_) > fs) {
+    const double d = sign(force_);
+    stiction_out_ = x - d * fd;
+    force_ = d * fd;
+  }
+  return stiction_out_;
+}
+
 double Actuator::move(double command) {
-  const double x = stick_slip(command);  // the identity when S = 0
+  // Both laws are the identity when S = 0.
+  const double x = nl_.stiction_law == StictionLaw::He ? he(command) : choudhury(command);
   if (std::abs(x - deadband_out_) > nl_.deadband) deadband_out_ = x;
   const double half = 0.5 * nl_.backlash;
-  if (deadband_out_ > play_ + half) play_ = deadband_out_ - half;
-  else if (deadband_out_ < play_ - half) play_ = deadband_out_ + half;
+  if (deadband_out_ > play_ + half)
+    play_ = deadband_out_ - half;
+  else if (deadband_out_ < play_ - half)
+    play_ = deadband_out_ + half;
   return std::clamp(play_, nl_.min, nl_.max);
 }
 
 Eigen::VectorXd actuator_positions(const Eigen::Ref<const Eigen::VectorXd>& commands,
                                    const ActuatorNonlinearity& nl, double u0) {
-  check_actuator(nl, "actuator");
-  Actuator a;
-  a.set(nl);
-  a.start(u0);
+  if (!commands.allFinite()) throw InputError("actuator commands must be finite");
+  Actuator a(nl, u0);
   Eigen::VectorXd out(commands.size());
   for (Eigen::Index t = 0; t < commands.size(); ++t) out[t] = a.move(commands[t]);
   return out;

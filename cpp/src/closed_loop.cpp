@@ -44,8 +44,8 @@ void check_noise(const TransferFunction& h, const std::string& at) {
 
 // Filter a channel's replacement over the recorded history (column `col` of `history`,
 // samples 0..t-1 shifted by one: sample tau uses x(tau-1), zero before the start).
-IncrementalFilter replayed(const TransferFunction& advanced, const Eigen::MatrixXd& history, int col,
-                           int t) {
+IncrementalFilter replayed(const TransferFunction& advanced, const Eigen::MatrixXd& history,
+                           int col, int t) {
   IncrementalFilter f(advanced);
   for (int tau = 0; tau < t; ++tau) f.step(tau == 0 ? 0.0 : history(tau - 1, col));
   return f;
@@ -83,7 +83,8 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
   }
   for (const ExtraVariable& x : plant.extra) {
     if (!(x.sigma >= 0.0) || !std::isfinite(x.sigma) || !std::isfinite(x.operating_point))
-      throw InputError("extra variable " + x.name + ": sigma >= 0 and operating_point must be finite");
+      throw InputError("extra variable " + x.name +
+                       ": sigma >= 0 and operating_point must be finite");
     check_noise(x.noise, "extra variable " + x.name);
   }
   if (!plant.actuators.empty() && static_cast<int>(plant.actuators.size()) != nu)
@@ -92,9 +93,11 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
     check_actuator(plant.actuators[j], "actuator of " + model.inputs[j]);
 
   Eigen::VectorXd u0 = cfg.u_operating.size() ? cfg.u_operating : cfg.tuning.mv_target;
-  if (u0.size() != nu) throw InputError("operating inputs (MV targets) must have one value per input");
+  if (u0.size() != nu)
+    throw InputError("operating inputs (MV targets) must have one value per input");
   Eigen::VectorXd y0 = cfg.y_operating.size() ? cfg.y_operating : cfg.tuning.cv_target;
-  if (y0.size() != ny) throw InputError("operating outputs (CV targets) must have one value per output");
+  if (y0.size() != ny)
+    throw InputError("operating outputs (CV targets) must have one value per output");
   if (!u0.allFinite() || !y0.allFinite()) throw InputError("operating point must be finite");
 
   std::vector<Event> events = cfg.events;
@@ -105,8 +108,10 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
     const bool needs_output = ev.kind != EventKind::Actuator && ev.kind != EventKind::MvTarget;
     const bool needs_input = ev.kind == EventKind::Process || ev.kind == EventKind::Actuator ||
                              ev.kind == EventKind::MvTarget;
-    if (needs_output && (ev.output < 0 || ev.output >= ny)) throw InputError("event output index out of range");
-    if (needs_input && (ev.input < 0 || ev.input >= nu)) throw InputError("event input index out of range");
+    if (needs_output && (ev.output < 0 || ev.output >= ny))
+      throw InputError("event output index out of range");
+    if (needs_input && (ev.input < 0 || ev.input >= nu))
+      throw InputError("event input index out of range");
     if (ev.kind == EventKind::ExtraProcess && (ev.input < 0 || ev.input >= nx))
       throw InputError("event extra variable index out of range");
     if (ev.kind == EventKind::Noise) {
@@ -115,42 +120,60 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
     }
     if (ev.kind == EventKind::Sigma && (!(ev.value >= 0.0) || !std::isfinite(ev.value)))
       throw InputError("sigma event value must be a finite value >= 0");
-    if (!std::isfinite(ev.value) || !std::isfinite(ev.rate)) throw InputError("event values must be finite");
+    if (!std::isfinite(ev.value) || !std::isfinite(ev.rate))
+      throw InputError("event values must be finite");
     if (ev.kind == EventKind::Actuator) check_actuator(ev.actuator, "event actuator");
   }
 
   if (!(plant.outlier_probability >= 0.0 && plant.outlier_probability <= 1.0))
     throw InputError("truth outlier probability must lie in [0, 1]");
-  if (plant.outlier_probability > 0.0 && (plant.outlier_size.size() != ny || !plant.outlier_size.allFinite()))
+  if (plant.outlier_probability > 0.0 &&
+      (plant.outlier_size.size() != ny || !plant.outlier_size.allFinite()))
     throw InputError("truth outlier sizes must be finite, one per output");
 
+  auto check_sequence = [n](const Eigen::MatrixXd& m, int cols, const std::string& what,
+                            const std::string& per) {
+    if (m.size() != 0 && (m.rows() != n || m.cols() != cols || !m.allFinite()))
+      throw InputError(what + " must be finite, one row per sample and one column per " + per);
+  };
+  check_sequence(cfg.output_disturbance, ny, "output_disturbance", "output");
+  check_sequence(cfg.position_noise, nu, "position_noise", "input");
+
   const bool pid_control = !cfg.pid_loops.empty();
-  if (pid_control && cfg.record_qps) throw InputError("record_qps needs the MPC (no QPs under PID control)");
+  if (pid_control && cfg.record_qps)
+    throw InputError("record_qps needs the MPC (no QPs under PID control)");
   for (const Event& ev : events)
-    if (pid_control && ev.kind == EventKind::MvTarget) throw InputError("mv_target events need the MPC");
+    if (pid_control && ev.kind == EventKind::MvTarget)
+      throw InputError("mv_target events need the MPC");
   std::optional<Mpc> mpc;
   std::optional<PidController> pid;
-  if (pid_control) pid.emplace(cfg.pid_loops, ny, model.sample_time_s, u0, y0);
-  else mpc.emplace(model, cfg.tuning, u0, cfg.qp_settings);
+  if (pid_control)
+    pid.emplace(cfg.pid_loops, ny, model.sample_time_s, u0, y0);
+  else
+    mpc.emplace(model, cfg.tuning, u0, cfg.qp_settings);
 
   // Truth filters, all advanced one sample: y(t) is formed from inputs up to t-1.
   auto channel = [](const std::optional<TransferFunction>& g, const std::string& what) {
-    return g ? std::optional<IncrementalFilter>(IncrementalFilter(detail::advanced_one_sample(*g, what)))
+    return g ? std::optional<IncrementalFilter>(
+                   IncrementalFilter(detail::advanced_one_sample(*g, what)))
              : std::nullopt;
   };
-  std::vector<std::optional<IncrementalFilter>> g0(static_cast<size_t>(ny) * nu), gx(static_cast<size_t>(ny) * nx);
+  std::vector<std::optional<IncrementalFilter>> g0(static_cast<size_t>(ny) * nu),
+      gx(static_cast<size_t>(ny) * nx);
   for (int i = 0; i < ny; ++i) {
     for (int j = 0; j < nu; ++j)
-      g0[i * nu + j] = channel(plant.process[i][j], "truth channel " + model.outputs[i] + " <- " + model.inputs[j]);
+      g0[i * nu + j] = channel(plant.process[i][j],
+                               "truth channel " + model.outputs[i] + " <- " + model.inputs[j]);
     if (has_extra_channels)
       for (int k = 0; k < nx; ++k)
-        gx[i * nx + k] = channel(plant.extra_process[i][k],
-                                 "truth channel " + model.outputs[i] + " <- " + plant.extra[k].name);
+        gx[i * nx + k] = channel(plant.extra_process[i][k], "truth channel " + model.outputs[i] +
+                                                                " <- " + plant.extra[k].name);
   }
   std::vector<IncrementalFilter> h0, hx;
   for (int i = 0; i < ny; ++i) h0.emplace_back(plant.noise[i]);
   for (int k = 0; k < nx; ++k) hx.emplace_back(plant.extra[k].noise);
-  Eigen::VectorXd sigma = plant.sigma, drift = Eigen::VectorXd::Zero(ny), slope = Eigen::VectorXd::Zero(ny);
+  Eigen::VectorXd sigma = plant.sigma, drift = Eigen::VectorXd::Zero(ny),
+                  slope = Eigen::VectorXd::Zero(ny);
   std::vector<Actuator> actuators(nu);
   for (int j = 0; j < nu; ++j) {
     if (!plant.actuators.empty()) actuators[j].set(plant.actuators[j]);
@@ -183,16 +206,19 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
       switch (ev.kind) {
         case EventKind::Process: {
           const std::string what = "event channel " + model.outputs[i] + " <- " + model.inputs[j];
-          g0[i * nu + j] = ev.model ? std::optional<IncrementalFilter>(replayed(
-                                          detail::advanced_one_sample(*ev.model, what), ua_dev, j, t))
-                                    : std::nullopt;
+          g0[i * nu + j] = ev.model
+                               ? std::optional<IncrementalFilter>(replayed(
+                                     detail::advanced_one_sample(*ev.model, what), ua_dev, j, t))
+                               : std::nullopt;
           break;
         }
         case EventKind::ExtraProcess: {
-          const std::string what = "event channel " + model.outputs[i] + " <- " + plant.extra[j].name;
-          gx[i * nx + j] = ev.model ? std::optional<IncrementalFilter>(replayed(
-                                          detail::advanced_one_sample(*ev.model, what), x_dev, j, t))
-                                    : std::nullopt;
+          const std::string what =
+              "event channel " + model.outputs[i] + " <- " + plant.extra[j].name;
+          gx[i * nx + j] = ev.model
+                               ? std::optional<IncrementalFilter>(replayed(
+                                     detail::advanced_one_sample(*ev.model, what), x_dev, j, t))
+                               : std::nullopt;
           break;
         }
         case EventKind::Noise: {
@@ -202,18 +228,26 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
           h0[i] = h;
           break;
         }
-        case EventKind::Sigma: sigma[i] = ev.value; break;
+        case EventKind::Sigma:
+          sigma[i] = ev.value;
+          break;
         case EventKind::Drift:
           drift[i] += ev.value;
           slope[i] = ev.rate;
           break;
-        case EventKind::Actuator: actuators[j].set(ev.actuator); break;
+        case EventKind::Actuator:
+          actuators[j].set(ev.actuator);
+          break;
         case EventKind::CvTarget:
           cv_target[i] = ev.value;
-          if (pid) pid->set_setpoint(i, ev.value);
-          else mpc->set_cv_target(i, ev.value);
+          if (pid)
+            pid->set_setpoint(i, ev.value);
+          else
+            mpc->set_cv_target(i, ev.value);
           break;
-        case EventKind::MvTarget: mpc->set_mv_target(j, ev.value); break;
+        case EventKind::MvTarget:
+          mpc->set_mv_target(j, ev.value);
+          break;
       }
     }
     // Draw order per sample is fixed: the outputs' innovations, then the extra variables'.
@@ -225,11 +259,12 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
     }
     for (int i = 0; i < ny; ++i) {
       double yi = y0[i] + h0[i].step(innovation(t, i)) + drift[i];
+      if (cfg.output_disturbance.size() != 0) yi += cfg.output_disturbance(t, i);
       drift[i] += slope[i];
       for (int j = 0; j < nu; ++j)
         if (auto& g = g0[i * nu + j]) yi += g->step(t == 0 ? 0.0 : ua_dev(t - 1, j));
       for (int k = 0; k < nx; ++k)
-          if (auto& g = gx[i * nx + k]) yi += g->step(t == 0 ? 0.0 : x_dev(t - 1, k));
+        if (auto& g = gx[i * nx + k]) yi += g->step(t == 0 ? 0.0 : x_dev(t - 1, k));
       y[i] = yi;
     }
     if (plant.outlier_probability > 0.0)
@@ -249,6 +284,7 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
     res.setpoint.row(t) = cv_target.transpose();
     for (int j = 0; j < nu; ++j) {
       res.u_actual(t, j) = actuators[j].move(u[j]);
+      if (cfg.position_noise.size() != 0) res.u_actual(t, j) += cfg.position_noise(t, j);
       ua_dev(t, j) = res.u_actual(t, j) - u0[j];
     }
   }

@@ -1,7 +1,6 @@
-#include "mpmpp/closed_loop.hpp"
-
 #include <gtest/gtest.h>
 
+#include "mpmpp/closed_loop.hpp"
 #include "mpmpp/detail/incremental_filter.hpp"
 #include "mpmpp/error.hpp"
 
@@ -10,7 +9,9 @@ namespace {
 using mpmpp::TransferFunction;
 using Vec = Eigen::VectorXd;
 
-Vec vec(std::initializer_list<double> v) { return Eigen::Map<const Vec>(v.begin(), static_cast<Eigen::Index>(v.size())); }
+Vec vec(std::initializer_list<double> v) {
+  return Eigen::Map<const Vec>(v.begin(), static_cast<Eigen::Index>(v.size()));
+}
 
 // The paper's SISO loop: G0 = 0.1003 q^-17 / (1 - 0.9048 q^-1), Table 2's limits.
 mpmpp::ClosedLoopConfig siso(int samples, double sigma) {
@@ -188,6 +189,22 @@ TEST(ClosedLoop, PidLoopsReplaceTheMpcAndFollowTheirLaw) {
   EXPECT_GE(res.u.minCoeff(), 120.0);
   EXPECT_NEAR(res.y.bottomRows(500).mean(), 24.5, 0.05);  // integral action: no offset
   EXPECT_EQ(res.failed_solves, 0);
+}
+
+// Given sequences add to y and to the actuator position: without noise, y - y0 - d is the
+// truth channel filtered over the recorded positions (TransferFunction::filter as reference).
+TEST(ClosedLoop, GivenDisturbanceAndPositionNoiseAdd) {
+  auto c = pi_siso(800, mpmpp::EventKind::CvTarget, 300, 24.5);
+  c.plant.sigma = vec({0.0});
+  c.output_disturbance = 0.3 * Eigen::MatrixXd::Random(800, 1);
+  c.position_noise = 0.5 * Eigen::MatrixXd::Random(800, 1);
+  const auto res = mpmpp::simulate_closed_loop(c);
+  EXPECT_LT((res.u_actual - res.u - c.position_noise).cwiseAbs().maxCoeff(), 1e-12);
+  const Vec ua_dev = res.u_actual.col(0).array() - 131.0;
+  const Vec y = c.plant.process[0][0]->filter(ua_dev).array() + 23.75;
+  EXPECT_LT((res.y.col(0) - c.output_disturbance.col(0) - y).cwiseAbs().maxCoeff(), 1e-9);
+  c.position_noise.resize(799, 1);
+  EXPECT_THROW(mpmpp::simulate_closed_loop(c), mpmpp::InputError);
 }
 
 TEST(ClosedLoop, MvTargetEventsNeedTheMpc) {

@@ -1,7 +1,9 @@
 """The actuator model (cpp/src/actuator.cpp) against a plain NumPy implementation of the same
-equations: Choudhury et al.'s two-parameter stiction (S, J), deadband, backlash, saturation."""
+equations: Choudhury et al.'s or He et al.'s two-parameter stiction (S, J), deadband, backlash,
+saturation."""
 import numpy as np
 import pytest
+from valve_reference import he_reference
 
 from mpmpp import _core
 
@@ -31,8 +33,12 @@ def numpy_stiction(x, s, j, u0):
     return y
 
 
-def numpy_actuator(x, u0, s=0.0, j=0.0, deadband=0.0, backlash=0.0, lo=-np.inf, hi=np.inf):
-    stick = numpy_stiction(x, s, j, u0)
+def numpy_actuator(x, u0, s=0.0, j=0.0, deadband=0.0, backlash=0.0, lo=-np.inf, hi=np.inf,
+                   law="choudhury"):
+    if law == "he":   # fs = (S + J)/2, fd = (S - J)/2; the reference starts at its first input
+        stick = he_reference(np.r_[u0, x], (s + j) / 2, (s - j) / 2)[1:]
+    else:
+        stick = numpy_stiction(x, s, j, u0)
     held, play, out = u0, u0, []
     for c in stick:
         if abs(c - held) > deadband:
@@ -60,12 +66,17 @@ def commands(seed, n=3000):
 @pytest.mark.parametrize("params", [
     dict(stiction_s=1.0, stiction_j=0.0), dict(stiction_s=1.0, stiction_j=0.5),
     dict(stiction_s=2.0, stiction_j=2.0), dict(deadband=0.7), dict(backlash=0.8),
-    dict(min=49.0, max=52.0), dict(stiction_s=1.5, stiction_j=0.4, backlash=0.3, min=45.0, max=55.0)])
+    dict(min=49.0, max=52.0), dict(stiction_s=1.5, stiction_j=0.4, backlash=0.3, min=45.0, max=55.0),
+    dict(stiction_law="he", stiction_s=1.5, stiction_j=0.5),
+    dict(stiction_law="he", stiction_s=1.0, stiction_j=0.0, deadband=0.2, max=52.0)])
 def test_matches_numpy(seed, params):
     x = commands(seed)
     ref = numpy_actuator(x, 50.0, params.get("stiction_s", 0.0), params.get("stiction_j", 0.0),
                          params.get("deadband", 0.0), params.get("backlash", 0.0),
-                         params.get("min", -np.inf), params.get("max", np.inf))
+                         params.get("min", -np.inf), params.get("max", np.inf),
+                         params.get("stiction_law", "choudhury"))
+    if "stiction_law" in params:
+        params = dict(params, stiction_law=getattr(_core.StictionLaw, params["stiction_law"]))
     got = _core.actuator_positions(x, nonlinearity(**params), 50.0)
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12)
     assert np.mean(got != x) > 0.1  # the nonlinearity did act
@@ -87,6 +98,15 @@ def test_stiction_analytic_ramp_and_reversal():
     assert held[0] == pytest.approx(4.0 - (s - j) / 2)
     assert 4.0 - down[moved] > s and 4.0 - down[moved - 1] <= s + 1e-12
     np.testing.assert_allclose(held[moved:], down[moved:] + (s - j) / 2)
+
+
+def test_stepping_is_the_sequence():
+    x = commands(5)
+    nl = nonlinearity(stiction_law=_core.StictionLaw.he, stiction_s=1.2, stiction_j=0.3, backlash=0.2)
+    a = _core.Actuator(nl, 50.0)
+    np.testing.assert_array_equal([a.move(c) for c in x], _core.actuator_positions(x, nl, 50.0))
+    with pytest.raises(ValueError, match="command must be finite"):
+        a.move(np.nan)
 
 
 def test_no_stiction_is_the_identity():

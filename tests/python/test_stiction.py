@@ -1,8 +1,9 @@
-"""Stiction analysis: valve models, baselines and the Hammerstein fit against independent
-references (plain NumPy/Python implementations of the published equations, analytic results)."""
+"""Stiction analysis: the actuator model's stick-slip laws, baselines and the Hammerstein fit
+against independent references (plain NumPy/Python implementations of the published equations,
+analytic results)."""
 import numpy as np
 import pytest
-from mpmpp._core import Valve, ValveKind
+from mpmpp._core import ActuatorNonlinearity, StictionLaw, actuator_positions
 from mpmpp.stiction import analyse_loop, fit_valve
 from mpmpp.stiction.bicoherence import apparent_stiction, ngi_nli, squared_bicoherence
 from mpmpp.stiction.curve_fit import stiction_index
@@ -13,6 +14,11 @@ from scipy.signal import lfilter
 from valve_reference import choudhury_reference, he_reference
 
 
+def valve(x, **fields):
+    """Positions of a valve at rest at the first OP (as the Hammerstein fit takes it)."""
+    return actuator_positions(x, ActuatorNonlinearity(**fields), x[0])
+
+
 def test_stick_slip_matches_the_published_flowchart_on_hysteresis_and_random_inputs():
     t = np.arange(2000)
     rng = np.random.default_rng(3)
@@ -21,17 +27,29 @@ def test_stick_slip_matches_the_published_flowchart_on_hysteresis_and_random_inp
               10 * np.sin(2 * np.pi * t / 50) + rng.standard_normal(2000)]
     for x in inputs:
         for S, J in [(3.0, 1.0), (3.0, 0.0), (3.0, 3.0), (0.5, 0.2)]:
-            np.testing.assert_allclose(Valve(ValveKind.stick_slip, S, J).apply(x),
+            np.testing.assert_allclose(valve(x, stiction_s=S, stiction_j=J),
                                        choudhury_reference(x, S, J), atol=1e-12)
-        np.testing.assert_allclose(Valve(ValveKind.backlash, 2.0).apply(x),
-                                   choudhury_reference(x, 2.0, 0.0), atol=1e-12)
-        np.testing.assert_allclose(Valve(ValveKind.he, 2.0, 0.7).apply(x),
-                                   he_reference(x, 2.0, 0.7), atol=1e-12)
+        fs, fd = 2.0, 0.75
+        np.testing.assert_allclose(
+            valve(x, stiction_law=StictionLaw.he, stiction_s=fs + fd, stiction_j=fs - fd),
+            he_reference(x, fs, fd), atol=1e-12)
+
+
+def test_backlash_is_choudhury_without_slip_once_moving():
+    """The play operator and Choudhury's model with J = 0 agree once the valve has moved; from
+    rest Choudhury's valve needs the full width S and slips by S/2, the centred play only S/2."""
+    rng = np.random.default_rng(8)
+    for x in (np.cumsum(rng.standard_normal(2000)), 10 * np.sin(2 * np.pi * np.arange(2000) / 77)):
+        play = valve(x, backlash=2.0)
+        ref = choudhury_reference(x, 2.0, 0.0)
+        moved = np.argmax(ref != ref[0])
+        assert moved > 0
+        np.testing.assert_allclose(play[moved:], ref[moved:], atol=1e-12)
 
 
 def test_hysteresis_loop_of_a_sine_has_the_analytic_shape():
     x = 10 * np.sin(2 * np.pi * np.arange(3000) / 500)
-    y = Valve(ValveKind.stick_slip, 4.0, 1.0).apply(x)[1000:]
+    y = valve(x, stiction_s=4.0, stiction_j=1.0)[1000:]
     assert y.max() == pytest.approx(10 - 1.5, abs=1e-3)
     # after the top reversal the valve stays put until the OP has dropped by S
     top = np.argmax(x[1000:1500]) + 1000
@@ -39,13 +57,13 @@ def test_hysteresis_loop_of_a_sine_has_the_analytic_shape():
     assert x[top] - x[top + held + 1] == pytest.approx(4.0, abs=0.15)
 
 
-def test_static_valves():
+def test_static_valves_and_deadband():
     x = np.linspace(-5, 5, 11)
-    np.testing.assert_allclose(Valve(ValveKind.saturation, -2, 3).apply(x), np.clip(x, -2, 3))
-    dz = Valve(ValveKind.deadband, 1.0, 0.0).apply(x)
-    np.testing.assert_allclose(dz, np.where(np.abs(x) <= 1, 0, x - np.sign(x)))
-    with pytest.raises(ValueError, match="J <= S"):
-        Valve(ValveKind.stick_slip, 1.0, 2.0)
+    np.testing.assert_allclose(valve(x, min=-2, max=3), np.clip(x, -2, 3))
+    # a positioner deadband of 1.5 on a ramp of unit steps: it moves every second step
+    np.testing.assert_allclose(valve(x, deadband=1.5), [-5, -5, -3, -3, -1, -1, 1, 1, 3, 3, 5])
+    with pytest.raises(ValueError, match="J must be <= S"):
+        valve(x, stiction_s=1.0, stiction_j=2.0)
 
 
 def bicoherence_reference(x, nfft, f1, f2):
@@ -123,7 +141,7 @@ def test_curve_fit_index_triangle_vs_sine():
 def test_kano_finds_stick_sections():
     t = np.arange(1200)
     op = 5 * (2 * np.abs(2 * ((t / 80) % 1) - 1) - 1)           # OP ramps up and down
-    pv = Valve(ValveKind.stick_slip, 3.0, 3.0).apply(op)         # the valve moves in jumps
+    pv = valve(op, stiction_s=3.0, stiction_j=3.0)                # the valve moves in jumps
     sticky, _ = kano_index(op, pv)
     smooth, _ = kano_index(op, op)
     assert sticky > 0.2 and smooth < 0.05
@@ -143,14 +161,27 @@ def test_loop_simulator_matches_lfilter_and_removes_offset():
     assert quiet["pv"][-1] == pytest.approx(2.0, abs=1e-6)
 
 
-def loop(seed, valve=None, n=751):
+def test_loop_valve_is_the_actuator_at_rest_at_the_bias_plus_noise():
+    rng = np.random.default_rng(6)
+    d, w = coloured_noise(rng, 500, 0.3, 0.8), 0.5 * rng.standard_normal(500)
+    sticky = ActuatorNonlinearity(stiction_s=3.0, stiction_j=1.0)
+    rec = simulate_pi_loop(FLOW, 0.7, 1.5, 500, valve=sticky, disturbance=d, valve_noise=w)
+    np.testing.assert_allclose(rec["position"] - w, actuator_positions(rec["op"], sticky, 50.0),
+                               atol=1e-12)
+    x = lfilter(np.r_[0.0, FLOW.b], FLOW.a, rec["position"] - 50.0)
+    np.testing.assert_allclose(rec["pv"] - d, x, atol=1e-10)
+    with pytest.raises(ValueError, match="output_disturbance must be finite"):
+        simulate_pi_loop(FLOW, 0.7, 1.5, 500, disturbance=np.r_[np.nan, d[1:]])
+
+
+def loop(seed, sticky=None, n=751):
     rng = np.random.default_rng(seed)
     d = coloured_noise(rng, n, 0.3, 0.8) + 0.05 * rng.standard_normal(n)
-    return simulate_pi_loop(FLOW, 0.7, 1.5, n, valve=valve, disturbance=d)
+    return simulate_pi_loop(FLOW, 0.7, 1.5, n, valve=sticky, disturbance=d)
 
 
 def test_hammerstein_fit_finds_and_sizes_stiction():
-    rec = loop(11, Valve(ValveKind.stick_slip, 4.0, 2.0))
+    rec = loop(11, ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
     res = fit_valve(rec["op"], rec["pv"])
     assert res.verdict and res.kind in ("stick_slip", "he", "backlash")
     assert 2.0 < res.params["S"] < 8.0
@@ -164,7 +195,7 @@ def test_hammerstein_fit_clears_linear_valves():
 
 
 def test_analyse_loop_reports_every_baseline():
-    rec = loop(5, Valve(ValveKind.stick_slip, 4.0, 2.0))
+    rec = loop(5, ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
     report = analyse_loop(rec["op"], rec["pv"], rec["sp"])
     assert set(report.baselines) == {"horch", "bicoherence", "kano", "curve_fit"}
 

@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from mpmpp._core import Valve, ValveKind
+from mpmpp._core import ActuatorNonlinearity
 from mpmpp.cli import main
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
 
@@ -20,7 +20,7 @@ def write_loop(path, n=751, valve=None, seed=3):
 
 def test_stiction_command_on_a_sticky_loop(tmp_path, capsys):
     data = tmp_path / "loop.csv"
-    write_loop(data, valve=Valve(ValveKind.stick_slip, 4.0, 2.0))
+    write_loop(data, valve=ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
     code = main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--sp", "FIC101.SP"])
     out = capsys.readouterr().out
     assert code == 0

@@ -1,24 +1,25 @@
 #pragma once
 // Closed-loop simulation: true plant = MIMO Box-Jenkins
-//   y_i(t) = y0_i + sum_j G0_ij (ua_j - u0_j)(t) + sum_k X_ik (x_k - x0_k)(t) + H0_i (sigma_i e_i)(t) + drift_i(t)
+//   y_i(t) = y0_i + sum_j G0_ij (ua_j - u0_j)(t) + sum_k X_ik (x_k - x0_k)(t) + H0_i (sigma_i
+//   e_i)(t) + drift_i(t)
 // (e white Gaussian, unit variance, from a seeded generator), controlled by the MPC on the
-// nominal model or, when pid_loops is given, by decentralised PID loops (pid_controller.hpp). ua is the actuators' actual position: the commanded MV after the optional
-// actuator nonlinearity. x_k are measured extra variables (x_k = x0_k + Hx_k (sigma_k e)),
-// entering outputs through channels X_ik the model lacks. Every filter keeps incremental state,
-// so a run costs O(samples * channels * order) plus one QP per sample.
+// nominal model or, when pid_loops is given, by decentralised PID loops (pid_controller.hpp). ua is
+// the actuators' actual position: the commanded MV after the optional actuator nonlinearity. x_k
+// are measured extra variables (x_k = x0_k + Hx_k (sigma_k e)), entering outputs through channels
+// X_ik the model lacks. Every filter keeps incremental state, so a run costs O(samples * channels *
+// order) plus one QP per sample.
 //
 // Events change the truth or the controller's targets at a given sample (applied before
 // y(t) is formed). A replaced channel or noise model acts as if it had always been in place
 // on the recorded input (or innovation) history, in deviation units around the operating
 // point: it is replayed over that history once, so the change shows without an artificial
 // transient from a filter-state mismatch.
+#include <Eigen/Dense>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "mpmpp/actuator.hpp"
 #include "mpmpp/model.hpp"
@@ -38,17 +39,18 @@ struct ExtraVariable {
 };
 
 struct Plant {
-  std::vector<std::vector<std::optional<TransferFunction>>> process;        // [output][input]
-  std::vector<TransferFunction> noise;                                        // [output]
-  Eigen::VectorXd sigma;                                                      // [output]
-  std::vector<ExtraVariable> extra;                                           // measured, not in the model
-  std::vector<std::vector<std::optional<TransferFunction>>> extra_process;  // [output][extra]; empty = none
-  std::vector<ActuatorNonlinearity> actuators;                                // [input]; empty = linear
+  std::vector<std::vector<std::optional<TransferFunction>>> process;  // [output][input]
+  std::vector<TransferFunction> noise;                                // [output]
+  Eigen::VectorXd sigma;                                              // [output]
+  std::vector<ExtraVariable> extra;                                   // measured, not in the model
+  std::vector<std::vector<std::optional<TransferFunction>>>
+      extra_process;                            // [output][extra]; empty = none
+  std::vector<ActuatorNonlinearity> actuators;  // [input]; empty = linear
   // Measurement outliers (a historian's spikes; the controller sees them too): at each sample
   // and output, with probability outlier_probability, y is off by +-outlier_size[output].
   // Drawn from their own seeded stream, so they leave the noise sequence unchanged.
   double outlier_probability = 0.0;
-  Eigen::VectorXd outlier_size;                                               // [output]
+  Eigen::VectorXd outlier_size;  // [output]
 };
 
 enum class EventKind {
@@ -74,17 +76,22 @@ struct Event {
 };
 
 struct ClosedLoopConfig {
-  Model model;    // nominal: what the MPC uses
-  MpcTuning tuning;               // the MPC's; with pid_loops only cv_target / mv_target (start point)
+  Model model;       // nominal: what the MPC uses
+  MpcTuning tuning;  // the MPC's; with pid_loops only cv_target / mv_target (start point)
   std::vector<PidLoop> pid_loops;  // non-empty: multi-loop PID control instead of the MPC
-  Plant plant;    // truth
-  Eigen::VectorXd u_operating;  // u0 (start inputs); default: tuning.mv_target
-  Eigen::VectorXd y_operating;  // y0; default: tuning.cv_target
+  Plant plant;                     // truth
+  Eigen::VectorXd u_operating;     // u0 (start inputs); default: tuning.mv_target
+  Eigen::VectorXd y_operating;     // y0; default: tuning.cv_target
   int num_samples = 0;
   std::uint64_t seed = 0;
-  std::vector<Event> events;    // any order; applied in sample order, ties in list order
+  std::vector<Event> events;  // any order; applied in sample order, ties in list order
   bool record_qps = false;
   QpSettings qp_settings;
+  // Given sequences for studies whose disturbances the noise models cannot produce (a
+  // sinusoid, a recorded disturbance): added to y [samples x outputs] and to the actuator
+  // position after its nonlinearity [samples x inputs]. Empty = none.
+  Eigen::MatrixXd output_disturbance;
+  Eigen::MatrixXd position_noise;
 };
 
 struct SimulationResult {

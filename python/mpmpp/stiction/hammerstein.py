@@ -1,7 +1,8 @@
 """mpmpp's stiction test: a closed-loop Hammerstein fit from OP and PV.
 
 The PV is modelled as y(t) = B(q)/A(q) f(u)(t) + disturbance, with f a candidate valve
-nonlinearity (stick-slip S, J; He's fs, fd; backlash; deadband; saturation) driven by the
+nonlinearity (mpmpp's actuator model, cpp/include/mpmpp/actuator.hpp: Choudhury's or He's
+stick-slip law with S, J; backlash; a positioner deadband; saturation) driven by the
 controller output u. For every candidate the valve is simulated and an ARX predictor
 A(q) y = B(q) f(u) + c + e is refitted by least squares, so each candidate carries its own
 disturbance correction (the ARX 1/A noise model). Scoring a candidate with a noise model fitted
@@ -24,7 +25,7 @@ from math import exp
 
 import numpy as np
 
-from .._core import Valve, ValveKind
+from .._core import ActuatorNonlinearity, StictionLaw, actuator_positions
 
 # ARX orders shared by every candidate (so the valve parameters are the only difference):
 # y lags 1..N_Y carry the process poles and the disturbance colour, valve lags 1..N_U cover a
@@ -38,7 +39,7 @@ N_FOLDS = 5
 CAL_SLOPE = 95.0
 CAL_GAIN_AT_HALF = 0.0078
 
-HYSTERESIS_KINDS = ("stick_slip", "he", "backlash")
+HYSTERESIS_KINDS = ("stick_slip", "he", "backlash", "deadband")
 
 
 @dataclass
@@ -50,7 +51,7 @@ class Candidate:
 
 @dataclass
 class HammersteinResult:
-    verdict: bool            # a hysteresis-type valve fault (stiction / backlash)
+    verdict: bool            # a valve fault with memory (stiction, backlash, deadband)
     kind: str                # best candidate kind ("linear" when nothing beats the linear valve)
     params: dict             # its parameters in OP units (S, J for stick-slip kinds)
     gain_per_sample: float   # held-out log-likelihood gain of the best hysteresis candidate
@@ -82,8 +83,8 @@ def _held_out_losses(phi: np.ndarray, target: np.ndarray) -> np.ndarray:
     return out
 
 
-def _candidate_grid(u: np.ndarray) -> list[tuple[str, ValveKind, float, float, dict]]:
-    """(kind, core kind, a, b, reported params) over sizes relative to the OP's spread."""
+def _candidate_grid(u: np.ndarray) -> list[tuple[str, ActuatorNonlinearity, dict]]:
+    """(kind, actuator, reported params) over sizes relative to the OP's spread."""
     spread = float(np.percentile(u, 97.5) - np.percentile(u, 2.5))
     spread = spread if spread > 0 else 1.0
     # a band the OP crosses within a sample or two cannot make the valve visibly stick, and
@@ -92,21 +93,19 @@ def _candidate_grid(u: np.ndarray) -> list[tuple[str, ValveKind, float, float, d
     sizes = spread * np.array([0.03, 0.06, 0.1, 0.15, 0.2, 0.3, 0.4, 0.55, 0.7, 0.85, 1.0])
     grid = []
     for s in sizes[sizes >= floor]:
-        grid.append(("backlash", ValveKind.backlash, s, 0.0, {"S": s, "J": 0.0}))
+        grid.append(("backlash", ActuatorNonlinearity(backlash=s), {"S": s, "J": 0.0}))
         for ratio in (0.25, 0.5, 0.75, 1.0):
             j = ratio * s
-            grid.append(("stick_slip", ValveKind.stick_slip, s, j, {"S": s, "J": j}))
-            # He's fs, fd for the same S, J (S = fs + fd, J = fs - fd)
-            grid.append(("he", ValveKind.he, (s + j) / 2, (s - j) / 2, {"S": s, "J": j}))
-    centre = float(np.median(u))
-    for d in spread * np.array([0.02, 0.05, 0.1, 0.2]):
-        grid.append(("deadband", ValveKind.deadband, d, centre, {"half_width": d, "centre": centre}))
+            grid.append(("stick_slip", ActuatorNonlinearity(stiction_s=s, stiction_j=j), {"S": s, "J": j}))
+            grid.append(("he", ActuatorNonlinearity(stiction_law=StictionLaw.he, stiction_s=s, stiction_j=j),
+                         {"S": s, "J": j}))
+    widths = spread * np.array([0.02, 0.05, 0.1, 0.2])
+    for d in widths[widths >= floor]:
+        grid.append(("deadband", ActuatorNonlinearity(deadband=d), {"width": d}))
     for q in (0.5, 1.0, 2.5, 5.0, 10.0):
         lo, hi = np.percentile(u, q), np.percentile(u, 100 - q)
-        grid.append(("saturation_high", ValveKind.saturation, float(u.min()) - 1.0, float(hi),
-                     {"upper": float(hi)}))
-        grid.append(("saturation_low", ValveKind.saturation, float(lo), float(u.max()) + 1.0,
-                     {"lower": float(lo)}))
+        grid.append(("saturation_high", ActuatorNonlinearity(max=float(hi)), {"upper": float(hi)}))
+        grid.append(("saturation_low", ActuatorNonlinearity(min=float(lo)), {"lower": float(lo)}))
     return grid
 
 
@@ -130,19 +129,20 @@ def fit_valve(op, pv) -> HammersteinResult:
     scale = np.std(y)
     y_s = (y - y.mean()) / scale
 
-    def evaluate(kind, core_kind, a, b, params):
-        v = Valve(core_kind, a, b).apply(u)
+    def evaluate(kind, actuator, params):
+        # the valve is taken at rest at the first OP (what it did before the record is unknown)
+        v = actuator_positions(u, actuator, u[0])
         phi, target = _lagged(y_s, v)
         return Candidate(kind, params, float(_held_out_losses(phi, target).sum()))
 
-    linear = evaluate("linear", ValveKind.linear, 0.0, 0.0, {})
+    linear = evaluate("linear", ActuatorNonlinearity(), {})
     ranking = [linear] + [evaluate(*c) for c in _candidate_grid(u)]
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")
     hysteresis = next(c for c in ranking if c.kind in HYSTERESIS_KINDS)
     gain = 0.5 * np.log(linear.cv_sse / hysteresis.cv_sse)
     confidence = calibrated_confidence(gain)
-    # a static nonlinearity (saturation, deadband) that explains the data better wins
+    # a static nonlinearity (saturation) that explains the data better wins
     verdict = bool(confidence > 0.5 and best.kind in HYSTERESIS_KINDS)
     best_gain = 0.5 * np.log(linear.cv_sse / best.cv_sse)
     nonlinear = calibrated_confidence(best_gain) > 0.5

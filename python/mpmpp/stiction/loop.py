@@ -1,8 +1,11 @@
-"""A small PI-loop simulator for stiction studies: PI controller -> valve -> process -> PV.
+"""A PI loop for stiction studies: PI controller -> valve -> process -> PV, run by the C++
+closed-loop simulator (closed_loop.cpp with one PID loop, pid_controller.cpp, and the actuator
+model, actuator.cpp).
 
-The controller reads PV(t) and sets OP(t) in the same sample (velocity-form PI), the valve
-maps OP to position, and the discrete process responds from the next sample on; the
-disturbance is added at the PV.
+The controller reads PV(t) and sets OP(t) in the same sample (velocity-form PI), the valve maps
+OP to position, and the discrete process responds from the next sample on; the disturbance is
+added at the PV. Before the record the loop is at rest: PV = SP = 0, OP and valve at the bias,
+and the disturbance starts with the record (simulated as one lead-in sample that is dropped).
 """
 from __future__ import annotations
 
@@ -10,7 +13,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._core import Valve, ValveKind
+from .._core import (
+    ActuatorNonlinearity,
+    ClosedLoopConfig,
+    Event,
+    EventKind,
+    Model,
+    PidLoop,
+    Plant,
+    TransferFunction,
+    simulate_closed_loop,
+)
 
 
 @dataclass(frozen=True)
@@ -26,45 +39,46 @@ class Process:
 
 
 def simulate_pi_loop(process: Process, kc: float, ti_samples: float, n: int, *,
-                     valve: Valve | None = None, disturbance=None, setpoint=None,
+                     valve: ActuatorNonlinearity | None = None, disturbance=None, setpoint=None,
                      valve_noise=None, op_bias: float = 50.0) -> dict:
     """Closed-loop run of n samples; returns op, pv, sp, position arrays.
 
-    disturbance: additive at the PV (length n); valve_noise: added to the valve position
-    (a noisy but linear valve); OP is in % around op_bias.
+    valve: the valve's nonlinearity (default linear); disturbance: additive at the PV
+    (length n); valve_noise: added to the valve position (a noisy but linear valve); OP is in %
+    around op_bias.
     """
-    d = np.zeros(n) if disturbance is None else np.asarray(disturbance, float)
-    sp = np.zeros(n) if setpoint is None else np.asarray(setpoint, float)
-    w = np.zeros(n) if valve_noise is None else np.asarray(valve_noise, float)
-    valve = valve if valve is not None else Valve(ValveKind.linear, 0.0, 0.0)
-    valve.reset()
-    b = np.asarray(process.b, float)
-    a = np.asarray(process.a, float)
-    nb, na = len(b), len(a) - 1
-    x = np.zeros(n)               # process output deviation
-    pos = np.zeros(n)             # valve position deviation from the bias
-    op = np.zeros(n)
-    pv = np.zeros(n)
-    e_prev = 0.0
-    u = op_bias
-    for t in range(n):
-        acc = 0.0
-        for k in range(nb):
-            lag = t - process.delay - k
-            if lag >= 0:
-                acc += b[k] * pos[lag]
-        for k in range(1, na + 1):
-            if t - k >= 0:
-                acc -= a[k] * x[t - k]
-        x[t] = acc
-        pv[t] = x[t] + d[t]
-        e = sp[t] - pv[t]
-        u += kc * (e - e_prev + e / ti_samples)
-        e_prev = e
-        op[t] = u
-        pos[t] = valve.step(u) - op_bias + w[t]
-    return {"op": op, "pv": pv, "sp": sp, "position": pos + op_bias}
+    def lead_in(x):  # one sample at rest before the record
+        return np.r_[0.0, np.asarray(x, float)].reshape(n + 1, 1)
 
+    g = TransferFunction(np.asarray(process.b, float), np.asarray(process.a, float),
+                         process.delay)
+    cfg = ClosedLoopConfig()
+    cfg.model = Model("pi_loop", 1.0, ["OP"], ["PV"], {"PV": {"OP": g}})
+    plant = Plant()
+    plant.process = [[g]]
+    plant.noise = [TransferFunction()]
+    plant.sigma = np.zeros(1)
+    plant.actuators = [valve if valve is not None else ActuatorNonlinearity()]
+    cfg.plant = plant
+    loop = PidLoop()
+    loop.gain, loop.integral_time_s = kc, ti_samples   # sample time 1
+    cfg.pid_loops = [loop]
+    cfg.u_operating = np.array([op_bias])
+    cfg.y_operating = np.zeros(1)
+    cfg.num_samples = n + 1
+    sp = np.zeros(n) if setpoint is None else np.asarray(setpoint, float)
+    events = []
+    for t in np.flatnonzero(np.diff(np.r_[0.0, sp]) != 0):
+        ev = Event()
+        ev.sample, ev.kind, ev.output, ev.value = int(t) + 1, EventKind.cv_target, 0, float(sp[t])
+        events.append(ev)
+    cfg.events = events
+    if disturbance is not None:
+        cfg.output_disturbance = lead_in(disturbance)
+    if valve_noise is not None:
+        cfg.position_noise = lead_in(valve_noise)
+    res = simulate_closed_loop(cfg)
+    return {"op": res.u[1:, 0], "pv": res.y[1:, 0], "sp": sp, "position": res.u_actual[1:, 0]}
 
 def coloured_noise(rng: np.random.Generator, n: int, std: float, pole: float) -> np.ndarray:
     """AR(1) noise 1/(1 - pole q^-1) e scaled to the given standard deviation."""

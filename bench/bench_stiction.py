@@ -6,7 +6,6 @@ same equations (tests/python/valve_reference.py), and the whole Hammerstein fit 
 """
 import argparse
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -19,15 +18,8 @@ from mpmpp._core import ActuatorNonlinearity, actuator_positions  # noqa: E402
 from mpmpp.stiction import BASELINES, fit_valve  # noqa: E402
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop  # noqa: E402
 from valve_reference import choudhury_reference  # noqa: E402
+from timing import best_of  # noqa: E402
 
-
-def best_of(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def main() -> int:
@@ -37,18 +29,18 @@ def main() -> int:
     rng = np.random.default_rng(0)
     op = np.cumsum(rng.standard_normal(751))
     sticky = ActuatorNonlinearity(stiction_s=3.0, stiction_j=1.0)
-    t_cpp = best_of(lambda: actuator_positions(op, sticky, op[0]), args.repeat)
-    t_py = best_of(lambda: choudhury_reference(op, 3.0, 1.0), args.repeat)
+    t_cpp = best_of(lambda: actuator_positions(op, sticky, op[0]), args.repeat)[0]
+    t_py = best_of(lambda: choudhury_reference(op, 3.0, 1.0), args.repeat)[0]
     print(f"stick-slip valve, 751 samples: C++ {t_cpp * 1e6:.0f} us, Python reference "
           f"{t_py * 1e6:.0f} us, ratio {t_py / t_cpp:.0f}x")
     p = np.exp(-10 / 15)
     rec = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p)), 0.7, 1.5, 751,
                            valve=ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0),
                            disturbance=coloured_noise(rng, 751, 0.3, 0.8))
-    t_fit = best_of(lambda: fit_valve(rec["op"], rec["pv"]), args.repeat)
+    t_fit = best_of(lambda: fit_valve(rec["op"], rec["pv"]), args.repeat)[0]
     print(f"Hammerstein fit of one 751-sample record: {t_fit * 1e3:.0f} ms")
     for name, test in BASELINES.items():
-        t = best_of(lambda test=test: test(rec["op"], rec["pv"], rec["sp"]), args.repeat)
+        t = best_of(lambda test=test: test(rec["op"], rec["pv"], rec["sp"]), args.repeat)[0]
         print(f"  {name}: {t * 1e3:.1f} ms (Hammerstein fit / {name} time: {t_fit / t:.1f})")
     return 0
 

@@ -39,8 +39,8 @@ class DisturbanceOrder:
     output: str
     order: int
     estimated: bool                 # True: fitted to the training rows (no noise model in the file)
-    polynomial: np.ndarray = None   # A(q) = [1, a_1, ..., a_p] of the estimate (H = 1 / A)
-    rows: int = 0                   # rows the estimate used
+    polynomial: np.ndarray = None   # A(q) = [1, a_1, ..., a_p] of the estimate; None when not estimable
+    rows: int = 0                   # rows the estimate used (or had)
 
 
 def inverse_order(h, cap: int) -> int:
@@ -89,8 +89,8 @@ def _longest_complete_run(ok: np.ndarray) -> tuple[int, int]:
 def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, train_end_s: float,
                        window_samples: int) -> list[DisturbanceOrder]:
     """Per output, the AR order of its disturbance model: from the model file's H, or estimated
-    (BIC) on the longest complete stretch of the training rows. ValueError naming the output
-    when the training rows are too few to estimate it."""
+    (BIC) on the longest complete stretch of the training rows; order 0 without a polynomial
+    when fewer than 10 rows per coefficient remain after settling."""
     cap = max(1, min(MAX_ORDER, window_samples // WINDOW_ROWS_PER_COEFFICIENT))
     train = (time_s - time_s[0]) < train_end_s
     out = []
@@ -104,10 +104,9 @@ def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, 
         ok = train & np.isfinite(y[:, i]) & np.isfinite(u[:, used]).all(axis=1)
         a, b = _longest_complete_run(ok)
         begin = a + _settling_samples(row, b - a) + cap
-        if b - begin < 10 * cap:
-            raise ValueError(f"data: cannot estimate a disturbance model for '{name}' (no noise model in the "
-                             f"model file): {max(b - begin, 0)} complete training rows after settling, "
-                             f"need {10 * cap}")
+        if b - begin < 10 * cap:  # too short to estimate: the preset's order stands, and the note says why
+            out.append(DisturbanceOrder(name, 0, estimated=True, rows=max(b - begin, 0)))
+            continue
         # Deviations from the training operating point; G filters them from rest at row a.
         du = u[a:b] - u[a:b].mean(axis=0)
         dy = y[a:b, i] - y[a:b, i].mean()
@@ -118,7 +117,11 @@ def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, 
 
 
 def describe(d: DisturbanceOrder, arx_order: int) -> str:
-    """One note line for an estimated disturbance model."""
+    """One note line for an output without a noise model."""
+    if d.polynomial is None:
+        return (f"{d.output}: the model has no noise model, and the training period leaves {d.rows} complete "
+                f"rows after the process settles, too few to estimate one; the ARX order n_a = {arx_order} "
+                f"of the config stands")
     return (f"{d.output}: the model has no noise model; its disturbance model was estimated from "
             f"{d.rows} training rows as H = 1/A(q), A the BIC-chosen AR({d.order}) of y - G u; "
             f"the ARX order n_a = {arx_order} covers it")

@@ -7,12 +7,11 @@ import math
 
 import numpy as np
 import pandas as pd
-import pytest
 from scipy.signal import lfilter
 
 import mpmpp
 from mpmpp import scenarios
-from mpmpp.detect import _arrays, detect
+from mpmpp.detect import _arrays, _cover_disturbance, detect, make_config
 from mpmpp.disturbance import disturbance_orders, inverse_order
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
@@ -97,9 +96,15 @@ def test_detect_says_when_it_estimated_the_disturbance_model(tmp_path):
     assert given.notes == [] and given.to_dict()["notes"] == []
 
 
-def test_too_few_training_rows_is_a_clear_error():
-    with pytest.raises(ValueError, match="disturbance model for 'y'.*training rows"):
-        detect(model(), loop_data(n=4000), 100 * TS, "paper_siso")
+def test_too_few_training_rows_keep_the_config_order_and_say_so():
+    data = loop_data(n=4000)
+    t, u, y = _arrays(model(), data)
+    (d,) = disturbance_orders(model(), t, u, y, 100 * TS, 1440)
+    assert d.estimated and d.polynomial is None and d.order == 0
+    config, notes = _cover_disturbance(make_config("paper_siso"), model(), t, u, y, 100 * TS)
+    assert config.arx_order_a == 9
+    assert notes == ["y: the model has no noise model, and the training period leaves 46 complete rows after "
+                     "the process settles, too few to estimate one; the ARX order n_a = 9 of the config stands"]
 
 
 def test_paper_presets_keep_their_arx_orders():

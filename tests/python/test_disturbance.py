@@ -144,3 +144,15 @@ def test_no_noise_model_detects_like_the_noise_model_on_the_paper_siso_loop():
     assert with_h[:, 0].sum() >= 7 and without_h[:, 0].sum() >= 7
     # and neither raises a false MPM alarm in more than 2 of 10 (P(X >= 3) = 1.2 % at a 5 % rate).
     assert with_h[:, 1].sum() <= 2 and without_h[:, 1].sum() <= 2
+
+
+def test_cli_detect_prints_the_notes(tmp_path, capsys):
+    from mpmpp import cli
+
+    (tmp_path / "m.json").write_text(model().to_json())
+    mpmpp.save_data(tmp_path / "d.csv", loop_data(n=4000))
+    args = ["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "10800", "--config", "paper_siso"]
+    assert cli.main(args + ["--json"]) == 0
+    assert "no noise model" in json.loads(capsys.readouterr().out)["notes"][0]
+    assert cli.main(args) == 0
+    assert "note: y: the model has no noise model" in capsys.readouterr().out

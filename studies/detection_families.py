@@ -3,6 +3,11 @@ families next to the tuning families (docs/families.md).
 
     python studies/detection_families.py [--seeds N] [--first-seed S] [--families A,B]
                                          [--workers K] [--json OUT.json]
+                                         [--config LABEL=CONFIG ...]
+
+--config (repeatable) scores detector configs instead of the presets of each family's size:
+CONFIG is a preset name, a config file or inline JSON ({"preset": "siso", "window_s": 14400}).
+Configs are compared on tuning families and seeds 0-99 only (docs/families.md).
 
 Runs on all local cores by default (mpmpp.parallel.run_tasks), or on a Dask cluster
 (--scheduler ADDRESS). Equivalent: ``mpmpp evaluate --families --seeds N``.
@@ -25,13 +30,24 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int, help="local processes (default: all cores)")
     p.add_argument("--scheduler", help="Dask scheduler address instead of local processes")
     p.add_argument("--json", metavar="OUT.json", help="also write every run and row as JSON")
+    p.add_argument("--config", action="append", metavar="LABEL=CONFIG",
+                   help="score this detector config (preset name, file or inline JSON) under LABEL")
     args = p.parse_args(argv)
     if args.seeds < 1 or args.first_seed < 0:
         p.error("--seeds must be >= 1 and --first-seed >= 0")
     names = None if args.families is None else [n.strip() for n in args.families.split(",")]
+    configs = None
+    for item in args.config or []:
+        label, sep, given = item.partition("=")
+        if not sep or not label or not given:
+            p.error(f"--config {item!r}: expected LABEL=CONFIG")
+        try:
+            configs = {**(configs or {}), label: json.loads(given) if given.lstrip().startswith("{") else given}
+        except json.JSONDecodeError as exc:
+            p.error(f"--config {label}: not valid JSON ({exc})")
     try:
         study = run_study(names, range(args.first_seed, args.first_seed + args.seeds),
-                          scheduler=args.scheduler, workers=args.workers)
+                          scheduler=args.scheduler, workers=args.workers, configs=configs)
     except ValueError as exc:
         print(f"detection_families: error: {exc}", file=sys.stderr)
         return 2

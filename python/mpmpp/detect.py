@@ -22,6 +22,7 @@ import pandas as pd
 
 from . import _core
 from ._core import DetectorConfig
+from .disturbance import describe, disturbance_orders
 
 __all__ = ["DetectorConfig", "Detector", "DetectionResult", "detect", "make_config"]
 
@@ -92,6 +93,7 @@ class DetectionResult:
     indicator: np.ndarray     # windows x channels (eq. 23)
     alarms: list              # dicts: kind, output[, input], start_s, channel (index)
     training: list = field(default_factory=list)  # per channel: windows, outlier fraction, cv accuracy
+    notes: list = field(default_factory=list)     # what detect assumed or estimated on the user's behalf
     # The trained core detector and its core result: the C++ writer (detector_io) formats them.
     core: tuple = field(default=None, repr=False, compare=False)
 
@@ -99,12 +101,16 @@ class DetectionResult:
         return np.array([a["start_s"] for a in self.alarms if a["channel"] == channel])
 
     def to_dict(self) -> dict:
-        """FORMATS.md ``detect --json``; skipped windows are listed apart with the reason."""
-        return json.loads(_core.detection_json(*self.core))
+        """FORMATS.md ``detect --json``; skipped windows are listed apart with the reason;
+        ``notes``: what detect estimated on the user's behalf (e.g. a disturbance model)."""
+        return {**json.loads(_core.detection_json(*self.core)), "notes": list(self.notes)}
 
     def save_json(self, path) -> None:
         """The ``to_dict`` document as a file, written atomically."""
-        _core.save_detection_json(os.fspath(path), *self.core)
+        from .io import atomic_output
+
+        with atomic_output(path) as f:
+            json.dump(self.to_dict(), f)
 
     def alarm_table(self, stamp=None) -> str:
         """Human summary: one line per channel with its alarm start times, written by
@@ -119,6 +125,7 @@ class DetectionResult:
         n_skipped = int(self.windows["skipped"].sum())
         if n_skipped:
             lines.append(f"{n_skipped} window(s) skipped (missing values or not informative)")
+        lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 
 
@@ -126,8 +133,9 @@ class Detector:
     """A trained detector: ``Detector.train(model, data, train_end_s, config)``, then
     ``monitor(data)``; ``save(path)`` / ``Detector.load(path)``."""
 
-    def __init__(self, core: _core.Detector):
+    def __init__(self, core: _core.Detector, notes: Optional[list] = None):
         self._core = core
+        self.notes = list(notes or [])  # from training; a detector loaded from a file has none
 
     @property
     def model(self):
@@ -152,8 +160,9 @@ class Detector:
         if train_end_s is None:
             train_end_s = config.train_duration_s
         time_s, u, y = _arrays(model, data)
+        config, notes = _cover_disturbance(config, model, time_s, u, y, float(train_end_s))
         series = _core.WindowFeatures(model, config).extract_series(time_s, u, y)
-        return cls(_core.train_detector(model, config, series, float(train_end_s))), series
+        return cls(_core.train_detector(model, config, series, float(train_end_s)), notes), series
 
     def monitor(self, data: pd.DataFrame) -> DetectionResult:
         time_s, u, y = _arrays(self.model, data)
@@ -171,7 +180,7 @@ class Detector:
                      "cv_accuracy": None if s.cv_accuracy < 0 else s.cv_accuracy} for s in self._core.scorers]
         return DetectionResult(train_end_s=self.train_end_s, threshold=self.config.threshold, channels=channels,
                                windows=windows, scores=np.asarray(r.scores), indicator=np.asarray(r.indicator),
-                               alarms=alarms, training=training, core=(self._core, r))
+                               alarms=alarms, training=training, notes=self.notes, core=(self._core, r))
 
     def save(self, path) -> None:
         """Versioned JSON file (written atomically) that Python or C++ can load."""
@@ -180,6 +189,18 @@ class Detector:
     @classmethod
     def load(cls, path) -> "Detector":
         return cls(_core.Detector.load(os.fspath(path)))
+
+
+def _cover_disturbance(config: DetectorConfig, model, time_s, u, y, train_end_s: float):
+    """(config, notes): the config with the ARX order raised to the disturbance models' AR order
+    where it falls short (mpmpp.disturbance), and a note per output whose disturbance model
+    was estimated from the training rows because the model file has none."""
+    orders = disturbance_orders(model, time_s, u, y, train_end_s, config.window_samples(model.sample_time_s))
+    needed = max([config.arx_order_a] + [d.order for d in orders])
+    if needed != config.arx_order_a:
+        config = DetectorConfig.from_json(config.to_json())
+        config.arx_order_a = needed
+    return config, [describe(d, needed) for d in orders if d.estimated]
 
 
 def detect(model, data: pd.DataFrame, train_end_s: Optional[float] = None, config: ConfigLike = None,

@@ -1,0 +1,127 @@
+"""The disturbance model behind detection: the ARX order must cover it.
+
+The closed-loop ARX step of every window (paper eq. 12) stands in for 1/H_i with A_i(q) of
+order n_a. When n_a is shorter than 1/H_i's impulse response, the ARX residual is coloured and
+the process estimates of a closed loop are biased. So the order ``detect`` uses is at least the
+disturbance model's AR order:
+
+* an output whose model file gives H_i: the taps of 1/H_i's impulse response down to 1 % of
+  its first tap (the rule the FIR length uses for G, ``fir_length_to_one_percent``);
+* an output without one (H_i = 1 in the file, the normal case for hand-written models): H_i is
+  estimated from the training rows as 1/A(q), A the least-squares AR(p) of the output error
+  v = y_i - G_i u (``_core.fit_ar``). The model equals the plant in training, so v is the
+  disturbance itself, not a closed-loop estimate. p is chosen by BIC (Schwarz): AR(p) of a
+  finite ARMA is only an approximation, and AIC's lighter penalty keeps adding coefficients
+  on thousands of rows, each a feature of the noise channel that its SVM must then learn.
+
+Both are capped at ``MAX_ORDER`` and at one coefficient per ``WINDOW_ROWS_PER_COEFFICIENT``
+window samples, so a 2 h window at 60 s keeps the preset's order.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _core
+from .diagnose.whitening import has_noise_model
+
+MAX_ORDER = 30
+WINDOW_ROWS_PER_COEFFICIENT = 24
+IMPULSE_TOLERANCE = 0.01
+
+
+@dataclass
+class DisturbanceOrder:
+    """The AR order of one output's disturbance model and where it came from."""
+
+    output: str
+    order: int
+    estimated: bool                 # True: fitted to the training rows (no noise model in the file)
+    polynomial: np.ndarray = None   # A(q) = [1, a_1, ..., a_p] of the estimate; None when not estimable
+    rows: int = 0                   # rows the estimate used (or had)
+
+
+def inverse_order(h, cap: int) -> int:
+    """Taps k >= 1 of 1/H's impulse response until it stays below 1 % of its first tap (at most cap)."""
+    taps = np.abs(np.asarray(h.inverse().impulse(cap + 1), dtype=float).ravel())
+    above = np.flatnonzero(taps[1:] >= IMPULSE_TOLERANCE * taps[0])
+    return int(above[-1]) + 1 if above.size else 0
+
+
+def bic_ar(v: np.ndarray, begin: int, end: int, max_order: int) -> tuple[int, np.ndarray]:
+    """(p, A) minimising N log s2_p + p log N over p = 0..max_order, every order fitted on the
+    same rows [begin, end) (lags reach before begin, so begin >= max_order)."""
+    n = end - begin
+    best = (n * math.log(float(np.mean(v[begin:end] ** 2))), 0, np.array([1.0]))
+    for p in range(1, max_order + 1):
+        poly = np.asarray(_core.fit_ar(v, p, begin, end), dtype=float).ravel()
+        residual = np.convolve(v[begin - p:end], poly, mode="valid")
+        bic = n * math.log(float(np.mean(residual**2))) + p * math.log(n)
+        if bic < best[0]:
+            best = (bic, p, poly)
+    return best[1], best[2]
+
+
+def _settling_samples(row, length: int) -> int:
+    """Samples until every channel's impulse response has fallen below 1 % of its peak: the
+    output error is filtered from rest, so its first samples are not the disturbance yet."""
+    settle = 0
+    for g in row:
+        if g is None:
+            continue
+        h = np.abs(np.asarray(g.impulse(length), dtype=float).ravel())
+        above = np.flatnonzero(h >= IMPULSE_TOLERANCE * h.max()) if h.max() > 0 else np.array([0])
+        settle = max(settle, int(above[-1]) + 1)
+    return settle
+
+
+def _longest_complete_run(ok: np.ndarray) -> tuple[int, int]:
+    edges = np.diff(np.r_[0, ok.astype(np.int8), 0])
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    if starts.size == 0:
+        return 0, 0
+    k = int(np.argmax(stops - starts))
+    return int(starts[k]), int(stops[k])
+
+
+def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, train_end_s: float,
+                       window_samples: int) -> list[DisturbanceOrder]:
+    """Per output, the AR order of its disturbance model: from the model file's H, or estimated
+    (BIC) on the longest complete stretch of the training rows; order 0 without a polynomial
+    when fewer than 10 rows per coefficient remain after settling."""
+    cap = max(1, min(MAX_ORDER, window_samples // WINDOW_ROWS_PER_COEFFICIENT))
+    train = (time_s - time_s[0]) < train_end_s
+    out = []
+    for i, name in enumerate(model.outputs):
+        h = model.noise(name)
+        if has_noise_model(h):
+            out.append(DisturbanceOrder(name, inverse_order(h, cap), estimated=False))
+            continue
+        row = [model.process(name, j) for j in model.inputs]
+        used = [j for j, g in enumerate(row) if g is not None]
+        ok = train & np.isfinite(y[:, i]) & np.isfinite(u[:, used]).all(axis=1)
+        a, b = _longest_complete_run(ok)
+        begin = a + _settling_samples(row, b - a) + cap
+        if b - begin < 10 * cap:  # too short to estimate: the preset's order stands, and the note says why
+            out.append(DisturbanceOrder(name, 0, estimated=True, rows=max(b - begin, 0)))
+            continue
+        # Deviations from the training operating point; G filters them from rest at row a.
+        du = u[a:b] - u[a:b].mean(axis=0)
+        dy = y[a:b, i] - y[a:b, i].mean()
+        v = np.asarray(_core.output_error(row, np.ascontiguousarray(dy), np.asfortranarray(du)), dtype=float).ravel()
+        order, poly = bic_ar(v, begin - a, b - a, cap)
+        out.append(DisturbanceOrder(name, order, estimated=True, polynomial=poly, rows=b - begin))
+    return out
+
+
+def describe(d: DisturbanceOrder, arx_order: int) -> str:
+    """One note line for an output without a noise model."""
+    if d.polynomial is None:
+        return (f"{d.output}: the model has no noise model, and the training period leaves {d.rows} complete "
+                f"rows after the process settles, too few to estimate one; the ARX order n_a = {arx_order} "
+                f"of the config stands")
+    return (f"{d.output}: the model has no noise model; its disturbance model was estimated from "
+            f"{d.rows} training rows as H = 1/A(q), A the BIC-chosen AR({d.order}) of y - G u; "
+            f"the ARX order n_a = {arx_order} covers it")

@@ -1,0 +1,158 @@
+"""The disturbance model detect works with (mpmpp.disturbance): the estimate for an output
+without a noise model against a plain NumPy least-squares fit and BIC, the order of a given
+H against its analytic inverse, the notes detect writes, and detection with and without the
+noise model in the file on the paper's SISO loop (seeds never used for tuning)."""
+import json
+import math
+
+import numpy as np
+import pandas as pd
+from scipy.signal import lfilter
+
+import mpmpp
+from mpmpp import scenarios
+from mpmpp.detect import _arrays, _cover_disturbance, detect, make_config
+from mpmpp.disturbance import disturbance_orders, inverse_order
+from mpmpp.evaluate import nominal_model
+from mpmpp.simulate import simulate
+
+TS = 5.0
+G_NUM, G_DEN, G_DELAY = [0.5], [1.0, -0.8], 3
+AR_TRUE = np.array([1.0, -1.2, 0.5])   # v_t = 1.2 v_{t-1} - 0.5 v_{t-2} + e_t
+
+
+def model(noise=None):
+    doc = {"name": "t", "sample_time_s": TS, "inputs": ["u"], "outputs": ["y"],
+           "process": {"y": {"u": {"num": G_NUM, "den": G_DEN, "delay": G_DELAY}}}}
+    if noise:
+        doc["noise"] = {"y": noise}
+    return mpmpp.Model.from_json(json.dumps(doc), "test")
+
+
+def loop_data(n=6000, seed=1):
+    rng = np.random.default_rng(seed)
+    u = 3.0 + np.repeat(rng.normal(0, 1, n // 40 + 1), 40)[:n]
+    v = lfilter([1.0], AR_TRUE, rng.normal(0, 0.1, n))
+    g = lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, u - u.mean())
+    return pd.DataFrame({"time": TS * np.arange(n), "u": u, "y": 10.0 + g + v})
+
+
+def numpy_bic_ar(v, begin, end, cap):
+    """Plain least squares per order on rows [begin, end), BIC = N log s2 + p log N."""
+    n = end - begin
+    best = (n * math.log(np.mean(v[begin:end] ** 2)), 0, np.array([1.0]))
+    for p in range(1, cap + 1):
+        lags = np.column_stack([v[begin - k:end - k] for k in range(1, p + 1)])
+        a, *_ = np.linalg.lstsq(lags, v[begin:end], rcond=None)
+        s2 = np.mean((v[begin:end] - lags @ a) ** 2)
+        bic = n * math.log(s2) + p * math.log(n)
+        if bic < best[0]:
+            best = (bic, p, np.r_[1.0, -a])
+    return best[1], best[2]
+
+
+def test_estimate_matches_numpy_least_squares_and_bic():
+    data, train_end_s, window = loop_data(), 5000 * TS, 1440
+    t, u, y = _arrays(model(), data)
+    (d,) = disturbance_orders(model(), t, u, y, train_end_s, window)
+    # Reference: the output error of the nominal model from rest at the first row, on the
+    # training rows' deviations; rows from the settling time (G's impulse response below 1 %
+    # of its peak) plus the largest order.
+    rows = 5000
+    du, dy = u[:rows, 0] - u[:rows, 0].mean(), y[:rows, 0] - y[:rows, 0].mean()
+    b_full = np.r_[np.zeros(G_DELAY), G_NUM]
+    v = dy - lfilter(b_full, G_DEN, du)
+    impulse = np.abs(lfilter(b_full, G_DEN, np.r_[1.0, np.zeros(rows - 1)]))
+    settle = np.flatnonzero(impulse >= 0.01 * impulse.max())[-1] + 1
+    cap = min(30, window // 24)
+    p, poly = numpy_bic_ar(v, settle + cap, rows, cap)
+    assert d.estimated and d.rows == rows - settle - cap
+    assert d.order == p
+    np.testing.assert_allclose(d.polynomial, poly, rtol=1e-9, atol=1e-12)
+    # and the truth: AR(2), coefficients within 4 standard errors (~0.013 on ~4900 rows)
+    assert p == 2
+    np.testing.assert_allclose(poly, AR_TRUE, atol=0.06)
+
+
+def test_order_of_a_given_noise_model_is_its_inverse_impulse_length():
+    # 1/H = 1 - 0.5 q^-1: one tap after the first
+    assert inverse_order(model({"num": [1.0], "den": [1.0, -0.5]}).noise("y"), 30) == 1
+    # 1/H = 1/(1 + 0.5 q^-1): taps (-0.5)^k, the last >= 0.01 is k = 6
+    assert inverse_order(model({"num": [1.0, 0.5], "den": [1.0]}).noise("y"), 30) == 6
+    # 1/(1 - 0.95 q^-1): 0.95^k >= 0.01 up to k = 89, capped
+    assert inverse_order(model({"num": [1.0, -0.95], "den": [1.0]}).noise("y"), 30) == 30
+
+
+def test_detect_says_when_it_estimated_the_disturbance_model(tmp_path):
+    data = loop_data(n=4000)
+    plain = detect(model(), data, 3 * 3600.0, "paper_siso")
+    assert len(plain.notes) == 1 and "no noise model" in plain.notes[0] and "AR(2)" in plain.notes[0]
+    assert plain.to_dict()["notes"] == plain.notes
+    assert "note: y: the model has no noise model" in plain.alarm_table()
+    path = tmp_path / "detect.json"
+    plain.save_json(path)
+    assert json.loads(path.read_text())["notes"] == plain.notes
+    given = detect(model({"num": [1.0], "den": [1.0, -1.2, 0.5]}), data, 3 * 3600.0, "paper_siso")
+    assert given.notes == [] and given.to_dict()["notes"] == []
+
+
+def test_too_few_training_rows_keep_the_config_order_and_say_so():
+    data = loop_data(n=4000)
+    t, u, y = _arrays(model(), data)
+    (d,) = disturbance_orders(model(), t, u, y, 100 * TS, 1440)
+    assert d.estimated and d.polynomial is None and d.order == 0
+    config, notes = _cover_disturbance(make_config("paper_siso"), model(), t, u, y, 100 * TS)
+    assert config.arx_order_a == 9
+    assert notes == ["y: the model has no noise model, and the training period leaves 46 complete rows after "
+                     "the process settles, too few to estimate one; the ARX order n_a = 9 of the config stands"]
+
+
+def test_paper_presets_keep_their_arx_orders():
+    # Tables 1 and 3's n_a already cover the paper's noise models: the rule changes nothing there.
+    for sc, n_a in ((scenarios.paper_siso(), 9), (scenarios.paper_mimo(), 18)):
+        m = nominal_model(sc)
+        assert max(inverse_order(m.noise(o), 30) for o in m.outputs) < n_a
+
+
+def paper_siso_outcomes(noise_in_file: bool, seeds, config):
+    """(detected, false MPM alarm) per seed: the gain doubling at 11 h found by an MPM alarm at
+    or after it; an MPM alarm before it (the 7 h noise change included) is false."""
+    sc = scenarios.paper_siso()
+    m = nominal_model(sc if noise_in_file else {k: v for k, v in sc.items() if k != "noise"})
+    out = []
+    for seed in seeds:
+        data = simulate(sc, seed=seed)
+        r = detect(m, data, 6 * 3600.0, config)
+        starts = r.alarm_starts(0) - float(data["time"].iloc[0])
+        out.append((bool((starts >= 11 * 3600).any()), bool((starts < 11 * 3600).any())))
+        assert bool(r.notes) == (not noise_in_file)
+    return np.array(out)
+
+
+def test_no_noise_model_detects_like_the_noise_model_on_the_paper_siso_loop():
+    # n_a = 2 is below both disturbance orders (the file's H: 4; the BIC estimate: 3-4), so the
+    # rule sets n_a in both runs: this compares the estimated disturbance model with the true one.
+    seeds, config = range(200, 210), {"preset": "siso", "arx_order_a": 2}
+    with_h, without_h = paper_siso_outcomes(True, seeds, config), paper_siso_outcomes(False, seeds, config)
+    n = len(seeds)
+    # Binomial margin on the difference of the two detection counts: 2 sd of the difference of
+    # two independent binomials at the pooled rate p (sd = sqrt(2 n p (1 - p))), at least 1.
+    p = (with_h[:, 0].sum() + without_h[:, 0].sum()) / (2 * n)
+    margin = max(1, math.ceil(2 * math.sqrt(2 * n * p * (1 - p))))
+    assert abs(int(with_h[:, 0].sum()) - int(without_h[:, 0].sum())) <= margin
+    # Both detect the doubling in most runs: at a true rate of 0.9, P(X <= 6 of 10) = 1.3 %.
+    assert with_h[:, 0].sum() >= 7 and without_h[:, 0].sum() >= 7
+    # and neither raises a false MPM alarm in more than 2 of 10 (P(X >= 3) = 1.2 % at a 5 % rate).
+    assert with_h[:, 1].sum() <= 2 and without_h[:, 1].sum() <= 2
+
+
+def test_cli_detect_prints_the_notes(tmp_path, capsys):
+    from mpmpp import cli
+
+    (tmp_path / "m.json").write_text(model().to_json())
+    mpmpp.save_data(tmp_path / "d.csv", loop_data(n=4000))
+    args = ["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "10800", "--config", "paper_siso"]
+    assert cli.main(args + ["--json"]) == 0
+    assert "no noise model" in json.loads(capsys.readouterr().out)["notes"][0]
+    assert cli.main(args) == 0
+    assert "note: y: the model has no noise model" in capsys.readouterr().out

@@ -63,8 +63,8 @@ def test_tables_count_what_the_runs_say():
         top = {"effect": "gain"} if (right or false) else None
         return {"split": split, "effect": effect, "top_right": right, "false_process": false,
                 "refused": None, "top_process": top, "findings": findings, "update": update}
-    up = {"true_before": 1.0, "true_after": 0.4, "shown_before": 1.0, "shown_after": 0.9}
-    bad = {"true_before": 1.0, "true_after": 1.2, "shown_before": 1.0, "shown_after": 0.99}
+    up = {"true_before": 1.0, "true_after": 0.4, "shown_before": 1.0, "shown_after": 0.9, "process_before": 1.0, "process_after": 0.3}
+    bad = {"true_before": 1.0, "true_after": 1.2, "shown_before": 1.0, "shown_after": 0.99, "process_before": 1.0, "process_after": 0.9}
     runs = [run(fam.HELD_OUT, "gain", True, update=up), run(fam.HELD_OUT, "gain", False, update=bad, conf=0.7),
             run(fam.HELD_OUT, "none", False, True, conf=0.95),
             run(fam.TUNING, "none", False)]

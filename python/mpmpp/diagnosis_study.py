@@ -103,6 +103,7 @@ def _channel(model, output: str, column: str) -> TransferFunction | None:
 def _finding_record(f, effect: str, change: dict | None) -> dict:
     d = f.to_dict()
     d["score"] = float(f.score)
+    d["evidence_confidence"] = float(f.evidence_confidence)
     d["process"] = f.effect in PROCESS_EFFECTS
     d["right"] = finding_right(d, effect, change)
     return d
@@ -225,8 +226,9 @@ def update_rows(runs: list) -> list:
 def reliability_rows(runs: list, key: str = "confidence") -> list:
     """Findings binned by their reported confidence (``key``): count and fraction right."""
     rows = []
-    for split in (fam.TUNING, fam.HELD_OUT):
-        fs = [f for r in runs if r["split"] == split for f in r["findings"]]
+    for split in sorted({r["split"] for r in runs}, key=(fam.TUNING, fam.HELD_OUT).index):
+        fs = [f for r in runs if r["split"] == split for f in r["findings"]
+              if f.get(key) is not None and math.isfinite(f[key])]
         for lo, hi in zip(CONFIDENCE_BINS[:-1], CONFIDENCE_BINS[1:]):
             inside = [f for f in fs if lo <= f[key] < hi or (hi == 1.0 and f[key] == 1.0)]
             rows.append({"split": split, "bin": f"[{lo:g}, {hi:g}{']' if hi == 1.0 else ')'}",
@@ -243,7 +245,7 @@ def format_tables(study: dict) -> str:
         label = f"control: {r['effect']}" if r["control"] else r["effect"]
         misses = ", ".join(f"{k} {v}" for k, v in sorted(r["misses"].items())) or "-"
         out.append(f"| {r['split']} | {label} | {_frac(r['k'], r['n'])} | {r['refused']} | {misses} |")
-    for split in (fam.TUNING, fam.HELD_OUT):
+    for split in sorted({r["split"] for r in runs}, key=(fam.TUNING, fam.HELD_OUT).index):
         change = [r for r in runs if r["split"] == split and r["effect"] not in fam.CONTROL_EFFECTS]
         control = [r for r in runs if r["split"] == split and r["effect"] in fam.CONTROL_EFFECTS]
         out.append(f"| {split} | all changes / all controls | {_frac(sum(r['top_right'] for r in change), len(change))}"
@@ -256,10 +258,13 @@ def format_tables(study: dict) -> str:
     for r in update_rows(runs):
         out.append(f"| {r['split']} | {r['effect']} | {r['n']} | {r['shown']} | {r['process']} | {r['true']} | "
                    f"{_frac(r['halved'], r['n'])} | {r['misleading']} |")
-    out += ["", "Confidence reliability (every finding, binned by its reported confidence)", "",
-            "| split | confidence | findings | right |", "| --- | --- | --- | --- |"]
-    for r in reliability_rows(runs):
-        out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} |")
+    out += ["", "Confidence reliability (every finding, binned by its reported confidence: the calibrated "
+            "probability, and the chi-square CDF of its held-out gain)", "",
+            "| split | confidence | findings (calibrated) | right | findings (chi-square) | right |",
+            "| --- | --- | --- | --- | --- | --- |"]
+    for r, c in zip(reliability_rows(runs), reliability_rows(runs, "evidence_confidence")):
+        out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {c['n']} | "
+                   f"{_frac(c['right'], c['n'])} |")
     out.append(f"\n{len(runs)} runs, seeds {study['seeds'][0]}-{study['seeds'][-1]}, "
                f"{study['wall_seconds']:.0f} s wall on {study['where']}")
     return "\n".join(out)

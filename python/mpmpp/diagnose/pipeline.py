@@ -9,6 +9,7 @@ import numpy as np
 
 from ..signals import Signals, extract
 from .actuator import actuator_findings
+from .confidence import calibrated_confidence
 from .errors import one_step_errors
 from .noise import noise_finding
 from .process import process_findings
@@ -110,6 +111,10 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
         if f.output is not None:
             f.process_error_before, f.process_error_after = process_errors(
                 sig, sig.outputs.index(f.output), f.model_changes(), sig.seconds_to_index(f.onset_s), block)
+        f.evidence_confidence = f.confidence
+        calibrated = calibrated_confidence({**f.to_dict(), "score": f.score})
+        if calibrated is not None:
+            f.confidence = calibrated
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
                           notes=notes)

@@ -69,6 +69,9 @@ class Finding:
     # (diagnose/process_error.py); NaN when the blocks after the onset are too short
     process_error_before: float = float("nan")
     process_error_after: float = float("nan")
+    # the chi-square CDF of the held-out gain; ``confidence`` is the calibrated probability
+    # that the finding is right (diagnose/confidence.py)
+    evidence_confidence: float = field(repr=False, default=float("nan"))
     # An actuator drives several outputs: the channel changes of the outputs other than
     # ``output`` (the one the finding is reported on), and every output it drives.
     extra_changes: list[ModelChange] = field(repr=False, default_factory=list)

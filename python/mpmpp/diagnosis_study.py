@@ -13,7 +13,8 @@ process finding, ``update`` with the top one. Scoring per run, from the scenario
   true model error's fall: the step-response error of the changed channel against the
   scenario's true plant after the change, with the nominal model and with the updated one;
 * every finding (process or not) with its confidence and whether it is right, for the
-  reliability table.
+  reliability tables; an ``output_drift`` finding on an output the family gave a background
+  step/ramp disturbance also counts as right (the drift is real, only not the scheduled effect).
 """
 from __future__ import annotations
 
@@ -100,12 +101,17 @@ def _channel(model, output: str, column: str) -> TransferFunction | None:
     return model.process_dict().get(output, {}).get(column)
 
 
-def _finding_record(f, effect: str, change: dict | None) -> dict:
+def drifting_outputs(spec: dict) -> set:
+    """Outputs with a drift event (scheduled or a background step/ramp disturbance)."""
+    return {ev["output"] for ev in spec["events"] if ev["type"] == "drift"}
+
+
+def _finding_record(f, effect: str, change: dict | None, drifting: set = frozenset()) -> dict:
     d = f.to_dict()
     d["score"] = float(f.score)
     d["evidence_confidence"] = float(f.evidence_confidence)
     d["process"] = f.effect in PROCESS_EFFECTS
-    d["right"] = finding_right(d, effect, change)
+    d["right"] = finding_right(d, effect, change) or (f.effect == "output_drift" and f.output in drifting)
     return d
 
 
@@ -128,7 +134,7 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
         run["refused"] = str(exc)
         run["seconds"] = time.perf_counter() - t0
         return run
-    run["findings"] = [_finding_record(f, effect, change) for f in diagnosis.findings]
+    run["findings"] = [_finding_record(f, effect, change, drifting_outputs(spec)) for f in diagnosis.findings]
     process = [f for f in diagnosis.findings if f.effect in PROCESS_EFFECTS]
     top = process[0] if process else None
     if top is not None:
@@ -236,6 +242,19 @@ def reliability_rows(runs: list, key: str = "confidence") -> list:
     return rows
 
 
+def reliability_by_effect(runs: list, high: float = 0.9) -> list:
+    """Per split and reported effect: findings and how many right, all and at >= ``high``."""
+    rows = []
+    for split in sorted({r["split"] for r in runs}, key=(fam.TUNING, fam.HELD_OUT).index):
+        fs = [f for r in runs if r["split"] == split for f in r["findings"]]
+        for effect in [e for e in EFFECT_ORDER if any(f["effect"] == e for f in fs)]:
+            mine = [f for f in fs if f["effect"] == effect]
+            top = [f for f in mine if f["confidence"] >= high]
+            rows.append({"split": split, "effect": effect, "n": len(mine), "right": sum(f["right"] for f in mine),
+                         "n_high": len(top), "right_high": sum(f["right"] for f in top)})
+    return rows
+
+
 def format_tables(study: dict) -> str:
     runs = study["runs"]
     out = ["Top process finding (change runs: right / runs; controls: runs with a false process finding)", "",
@@ -265,6 +284,11 @@ def format_tables(study: dict) -> str:
     for r, c in zip(reliability_rows(runs), reliability_rows(runs, "evidence_confidence")):
         out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {c['n']} | "
                    f"{_frac(c['right'], c['n'])} |")
+    out += ["", "Reliability per reported effect (calibrated confidence)", "",
+            "| split | finding | findings | right | at >= 0.9 | right at >= 0.9 |", "| --- | --- | --- | --- | --- | --- |"]
+    for r in reliability_by_effect(runs):
+        out.append(f"| {r['split']} | {r['effect']} | {r['n']} | {_frac(r['right'], r['n'])} | {r['n_high']} | "
+                   f"{_frac(r['right_high'], r['n_high'])} |")
     out.append(f"\n{len(runs)} runs, seeds {study['seeds'][0]}-{study['seeds'][-1]}, "
                f"{study['wall_seconds']:.0f} s wall on {study['where']}")
     return "\n".join(out)

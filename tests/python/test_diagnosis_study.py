@@ -59,7 +59,7 @@ def test_true_change_reads_the_scheduled_event(effect):
 
 def test_tables_count_what_the_runs_say():
     def run(split, effect, right, false=False, update=None, conf=1.0):
-        findings = [{"confidence": conf, "right": right}] if right or false else []
+        findings = [{"effect": "gain", "confidence": conf, "right": right}] if right or false else []
         top = {"effect": "gain"} if (right or false) else None
         return {"split": split, "effect": effect, "top_right": right, "false_process": false,
                 "refused": None, "top_process": top, "findings": findings, "update": update}
@@ -76,6 +76,9 @@ def test_tables_count_what_the_runs_say():
     rel = {(r["split"], r["bin"]): r for r in ds.reliability_rows(runs)}
     assert rel[(fam.HELD_OUT, "[0.99, 1]")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.99, 1]")]["right"] == 1
     assert rel[(fam.HELD_OUT, "[0.9, 0.99)")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.9, 0.99)")]["right"] == 0
+    [held] = ds.reliability_by_effect(runs)   # the tuning run has no finding
+    assert (held["split"], held["effect"]) == (fam.HELD_OUT, "gain")
+    assert (held["n"], held["right"], held["n_high"], held["right_high"]) == (3, 1, 2, 1)
     assert "| held_out | gain | 1/2 (50%)" in ds.format_tables({"runs": runs, "seeds": [0], "where": "x",
                                                                "wall_seconds": 0.0})
 

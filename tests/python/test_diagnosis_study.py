@@ -78,7 +78,7 @@ def test_tables_count_what_the_runs_say():
     assert rel[(fam.HELD_OUT, "[0.9, 0.99)")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.9, 0.99)")]["right"] == 0
     [held] = ds.reliability_by_effect(runs)   # the tuning run has no finding
     assert (held["split"], held["effect"]) == (fam.HELD_OUT, "gain")
-    assert (held["n"], held["right"], held["n_high"], held["right_high"]) == (3, 1, 2, 1)
+    assert (held["n"], held["right"], held["n_high"], held["right_high"]) == (2, 1, 2, 1)
     assert "| held_out | gain | 1/2 (50%)" in ds.format_tables({"runs": runs, "seeds": [0], "where": "x",
                                                                "wall_seconds": 0.0})
 

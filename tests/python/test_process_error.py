@@ -52,7 +52,7 @@ def test_process_error_matches_numpy(gain_after):
     assert got == pytest.approx(want, rel=1e-8)
 
 
-def test_right_fix_shows_in_the_process_part():
+def test_right_fix_shows_in_the_process_part(tmp_path):
     """Gain x2 at 4000: the finding's process-part error falls by more than half while the
     one-step error falls by a few per cent; diagnose and update report the same numbers."""
     data = loop.simulate(n=8000, seed=1, onset=4000, gain=2.0)
@@ -65,6 +65,12 @@ def test_right_fix_shows_in_the_process_part():
     d = top.to_dict()
     assert d["process_error_before"] == pytest.approx(top.process_error_before, abs=1e-6)
     assert "process part" in res.summary()
+    before, after = res.process_parts[top.id]      # the series the figure draws
+    odd_after_onset = (np.arange(len(before)) // 720 % 2 == 1) & (data["time"].to_numpy() >= top.onset_s)
+    assert np.sqrt(np.mean(before[odd_after_onset] ** 2)) == pytest.approx(top.process_error_before, rel=1e-9)
+    assert np.isnan(after[data["time"].to_numpy() < top.onset_s]).all()
+    [figure] = res.plot(tmp_path)
+    assert figure.stat().st_size > 0
     up = update(loop.model(), data, top.id)
     [err] = up.errors
     assert err.process_error_after < 0.5 * err.process_error_before

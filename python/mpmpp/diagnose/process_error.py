@@ -67,10 +67,11 @@ def _chunks(rows: np.ndarray, size: int = 20000):
         yield rows[a:a + size]
 
 
-def process_error(sig: Signals, i: int, changes: list[ModelChange], onset: int, block: int,
-                  columns: np.ndarray, lags: int) -> float:
-    """RMS on the odd blocks after ``onset`` of the input-explained part of y_i - G_i u, G the
-    model after ``changes``; the FIR is fitted on the even blocks after ``onset``."""
+def process_part(sig: Signals, i: int, changes: list[ModelChange], onset: int, block: int,
+                 columns: np.ndarray, lags: int) -> np.ndarray:
+    """The input-explained part of y_i - G_i u (G the model after ``changes``) on every usable
+    row after ``onset``, NaN elsewhere (all NaN when the blocks after the onset are too short);
+    the FIR is fitted on the even blocks after ``onset`` only."""
     noise = sig.noise[i]
     for c in changes:
         if c.output == sig.outputs[i] and c.noise is not None:
@@ -85,10 +86,11 @@ def process_error(sig: Signals, i: int, changes: list[ModelChange], onset: int, 
     t = np.arange(len(e))
     usable = (t >= onset) & np.isfinite(e) & np.isfinite(columns).all(axis=1)
     odd = (t // block) % 2 == 1
-    fit, test = np.flatnonzero(usable & ~odd), np.flatnonzero(usable & odd)
+    fit = np.flatnonzero(usable & ~odd)
     m = columns.shape[1] * lags
-    if len(fit) < max(MIN_FIT_ROWS, 2 * m) or not len(test):
-        return float("nan")
+    series = np.full(len(e), np.nan)
+    if len(fit) < max(MIN_FIT_ROWS, 2 * m) or not (usable & odd).any():
+        return series
     # A level term (the whitened step from each segment's start) takes up an operating-point
     # offset: the record mean is the operating point of neither model when a gain changed.
     level = per_segment(sig, lambda ones: noise.inverse().filter(ones), np.ones(len(e)))
@@ -98,16 +100,37 @@ def process_error(sig: Signals, i: int, changes: list[ModelChange], onset: int, 
         gram += x.T @ x
         moment += x.T @ e[rows]
     b = np.linalg.lstsq(gram, moment, rcond=None)[0][:m]
-    square = sum(float(np.sum((lagged(raw, rows, segment_start, lags) @ b) ** 2)) for rows in _chunks(test))
-    return math.sqrt(square / len(test))
+    for rows in _chunks(np.flatnonzero(usable)):
+        series[rows] = lagged(raw, rows, segment_start, lags) @ b
+    return series
+
+
+def held_out_rms(series: np.ndarray, block: int) -> float:
+    """RMS of a process part on the odd blocks (the rows its FIR was not fitted on)."""
+    test = np.isfinite(series) & ((np.arange(len(series)) // block) % 2 == 1)
+    return float(np.sqrt(np.mean(series[test] ** 2))) if test.any() else float("nan")
+
+
+def process_error(sig: Signals, i: int, changes: list[ModelChange], onset: int, block: int,
+                  columns: np.ndarray, lags: int) -> float:
+    """RMS on the odd blocks after ``onset`` of the input-explained part of y_i - G_i u, G the
+    model after ``changes``; the FIR is fitted on the even blocks after ``onset``."""
+    return held_out_rms(process_part(sig, i, changes, onset, block, columns, lags), block)
+
+
+def process_parts(sig: Signals, i: int, changes: list[ModelChange], onset: int,
+                  block: int) -> tuple[np.ndarray, np.ndarray]:
+    """(before, after): the process part with the nominal model and with ``changes``, both with
+    the same explanatory columns and FIR length."""
+    _, columns = explanatory_columns(sig, changes)
+    lags = fir_lags(sig, i)
+    return (process_part(sig, i, [], onset, block, columns, lags),
+            process_part(sig, i, changes, onset, block, columns, lags))
 
 
 def process_errors(sig: Signals, i: int, changes: list[ModelChange], onset: int,
                    block: int) -> tuple[float, float]:
-    """(before, after): the process-part error with the nominal model and with ``changes``,
-    both with the same explanatory columns and FIR length (NaN when the held-out blocks after
-    the onset are too short for the fit)."""
-    _, columns = explanatory_columns(sig, changes)
-    lags = fir_lags(sig, i)
-    return (process_error(sig, i, [], onset, block, columns, lags),
-            process_error(sig, i, changes, onset, block, columns, lags))
+    """(before, after): the process-part error with the nominal model and with ``changes``
+    (NaN when the held-out blocks after the onset are too short for the fit)."""
+    before, after = process_parts(sig, i, changes, onset, block)
+    return held_out_rms(before, block), held_out_rms(after, block)

@@ -108,6 +108,9 @@ class DiagnoseResult:
     time_s: np.ndarray = field(repr=False, default=None)
     residuals: dict = field(repr=False, default_factory=dict)
     residuals_after: dict = field(repr=False, default_factory=dict)
+    # per finding id: the output's process part (input-explained part of y - G u) with the
+    # nominal model and with the updated one (diagnose/process_error.py)
+    process_parts: dict = field(repr=False, default_factory=dict)
     # what the user should know about how the data were read (estimated noise models, parts
     # of the search the data were too short for)
     notes: list[str] = field(default_factory=list)

@@ -73,5 +73,5 @@ def _plot_process_parts(ax, t, parts, name) -> None:
         ax.plot(t, after, lw=0.8, color=colour, label=f"after {f.id} (held-out RMS {f.process_error_after:.3g})")
     ax.axhline(0.0, color="0.6", lw=0.5)
     ax.set_ylabel(f"{name}, process part")
-    ax.set_title("input-explained part of y - G u (FIR fitted on the even 1 h blocks after the onset)")
+    ax.set_title("input-explained part of y - G u (fitted on the even 1 h blocks after the onset)")
     ax.legend(loc="lower left", fontsize=7)

@@ -17,8 +17,8 @@ PROCESS_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmode
 METRIC = ("RMS of the one-step prediction error of the output (deviation units) on "
           "held-out 1 h blocks after onset_s")
 PROCESS_METRIC = ("process part = RMS of the input-explained part of y - G u (the simulation error "
-                  "of the output's process part; whitened FIR of the inputs fitted on the even 1 h "
-                  "blocks after onset_s, RMS on the odd ones)")
+                  "of the output's process part; a whitened Laguerre-basis filter of the inputs "
+                  "fitted on the even 1 h blocks after onset_s, RMS on the odd ones)")
 
 
 class InsufficientData(Exception):

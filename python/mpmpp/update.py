@@ -27,6 +27,8 @@ import numpy as np
 
 from .diagnose import DiagnoseResult, ModelChange, diagnose, one_step_errors
 from .diagnose.pipeline import diagnosis_signals
+from .diagnose.process_error import process_errors
+from .diagnose.result import PROCESS_METRIC
 
 
 @dataclass
@@ -35,6 +37,8 @@ class OutputError:
     onset_s: float
     error_before: float
     error_after: float
+    process_error_before: float = float("nan")   # diagnose/process_error.py
+    process_error_after: float = float("nan")
 
 
 @dataclass
@@ -45,20 +49,27 @@ class UpdateResult:
     diagnosis: DiagnoseResult = field(repr=False, default=None)
     metric: str = ("RMS of the one-step prediction error (deviation units) on held-out 1 h blocks "
                    "after each finding's onset, not used for the refit")
+    process_metric: str = PROCESS_METRIC
 
     def to_dict(self) -> dict:
-        return {"applied": self.applied, "metric": self.metric,
+        return {"applied": self.applied, "metric": self.metric, "process_metric": self.process_metric,
                 "errors": [{"output": e.output, "onset_s": e.onset_s,
-                            "error_before": _f(e.error_before), "error_after": _f(e.error_after)}
+                            "error_before": _f(e.error_before), "error_after": _f(e.error_after),
+                            "process_error_before": _f(e.process_error_before),
+                            "process_error_after": _f(e.process_error_after)}
                            for e in self.errors]}
 
     def summary(self) -> str:
         lines = [f"update: applied {', '.join(self.applied)}"]
         for e in self.errors:
             change = 100.0 * (e.error_after / e.error_before - 1.0) if e.error_before else float("nan")
-            lines.append(f"  {e.output}: error {e.error_before:.4g} -> {e.error_after:.4g} ({change:+.1f} %) "
-                         f"after t={e.onset_s / 3600:.1f} h")
+            fall = (100.0 * (e.process_error_after / e.process_error_before - 1.0)
+                    if e.process_error_before else float("nan"))
+            lines.append(f"  {e.output}: error {e.error_before:.4g} -> {e.error_after:.4g} ({change:+.1f} %), "
+                         f"process part {e.process_error_before:.4g} -> {e.process_error_after:.4g} "
+                         f"({fall:+.1f} %) after t={e.onset_s / 3600:.1f} h")
         lines.append(f"  error = {self.metric}")
+        lines.append(f"  {self.process_metric}")
         if self.diagnosis is not None:
             lines += [f"  note: {n}" for n in self.diagnosis.notes]
         return "\n".join(lines)
@@ -97,7 +108,8 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
         after = one_step_errors(sig, i, changes)
         ok = rows & np.isfinite(before) & np.isfinite(after)
         ok[: 60] = False
-        errors.append(OutputError(out_name, onset_s, _rms(before[ok]), _rms(after[ok])))
+        process_before, process_after = process_errors(sig, i, changes, sig.seconds_to_index(onset_s), block)
+        errors.append(OutputError(out_name, onset_s, _rms(before[ok]), _rms(after[ok]), process_before, process_after))
     return UpdateResult(applied=ids, errors=errors, model=new_model, diagnosis=diagnosis)
 
 

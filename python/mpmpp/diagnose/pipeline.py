@@ -9,9 +9,11 @@ import numpy as np
 
 from ..signals import Signals, extract
 from .actuator import actuator_findings
+from .confidence import calibrated_confidence
 from .errors import one_step_errors
 from .noise import noise_finding
 from .process import process_findings
+from .process_error import held_out_rms, process_parts
 from .result import DiagnoseResult, Finding, InsufficientData
 from .whitening import AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual
 
@@ -105,6 +107,17 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
         f.id = f"F{k}"
     after = {f.id: one_step_errors(sig, sig.outputs.index(f.output), f.model_changes())
              for f in found if f.output is not None}
+    parts = {}
+    for f in found:
+        if f.output is not None:
+            parts[f.id] = process_parts(sig, sig.outputs.index(f.output), f.model_changes(),
+                                        sig.seconds_to_index(f.onset_s), block)
+            f.process_error_before, f.process_error_after = (held_out_rms(p, block) for p in parts[f.id])
+        f.evidence_confidence = f.confidence
+        calibrated = calibrated_confidence({**f.to_dict(), "score": f.score})
+        if calibrated is not None:
+            f.confidence = calibrated
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
+                          process_parts=parts,
                           notes=notes)

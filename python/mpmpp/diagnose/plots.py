@@ -1,5 +1,6 @@
 """Figures of a diagnosis: per output, the model's one-step error before and after each
-finding's update on the same axes, with the findings' onsets."""
+finding's update on the same axes, with the findings' onsets, and below it the output's process
+part (the input-explained part of y - G u) before and after, where a right fix shows."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -34,10 +35,13 @@ def plot_residuals(result, out_dir, origin=None) -> list[Path]:
     t, xlabel, convert = plot_axis(result.time_s, origin)
     width = max(int(round(3600.0 / np.median(np.diff(result.time_s)))), 1) if len(t) > 1 else 1
     for name, e in result.residuals.items():
-        fig, ax = plt.subplots(figsize=(11, 3.5))
+        mine = [f for f in result.findings if f.output == name]
+        parts = [(f, result.process_parts[f.id]) for f in mine if f.id in result.process_parts]
+        fig, axes = plt.subplots(2 if parts else 1, 1, figsize=(11, 6.5 if parts else 3.5), sharex=True,
+                                 squeeze=False)
+        ax = axes[0, 0]
         ax.plot(t, e, lw=0.4, color="0.6", label="one-step error, model")
         ax.plot(t, rolling_rms(e, width), lw=1.5, color="k", label="1 h RMS, model")
-        mine = [f for f in result.findings if f.output == name]
         for f, colour in zip(mine, COLOURS):
             after = result.residuals_after.get(f.id)
             if after is not None:
@@ -47,13 +51,27 @@ def plot_residuals(result, out_dir, origin=None) -> list[Path]:
                 onset = convert(f.onset_s)
                 ax.axvline(onset, color="r", ls="--")
                 ax.text(onset, ax.get_ylim()[1] * 0.9, f" {f.id} {f.effect}", color="r")
-        ax.set_xlabel(xlabel)
         ax.set_ylabel(name)
         ax.set_title(f"{name}: one-step prediction error before and after the findings' updates")
         ax.legend(loc="lower left", fontsize=7)
+        if parts:
+            _plot_process_parts(axes[1, 0], t, parts, name)
+        axes[-1, 0].set_xlabel(xlabel)
         fig.tight_layout()
         path = out / f"diagnose_{name}.png"
         fig.savefig(path, dpi=90)
         plt.close(fig)
         paths.append(path)
     return paths
+
+
+def _plot_process_parts(ax, t, parts, name) -> None:
+    """The process part after each finding's onset: nominal model (black) and updated model."""
+    before = parts[0][1][0]
+    ax.plot(t, before, lw=0.8, color="k", label=f"model (held-out RMS {parts[0][0].process_error_before:.3g})")
+    for (f, (_, after)), colour in zip(parts, COLOURS):
+        ax.plot(t, after, lw=0.8, color=colour, label=f"after {f.id} (held-out RMS {f.process_error_after:.3g})")
+    ax.axhline(0.0, color="0.6", lw=0.5)
+    ax.set_ylabel(f"{name}, process part")
+    ax.set_title("input-explained part of y - G u (fitted on the even 1 h blocks after the onset)")
+    ax.legend(loc="lower left", fontsize=7)

@@ -16,6 +16,9 @@ PROCESS_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmode
 
 METRIC = ("RMS of the one-step prediction error of the output (deviation units) on "
           "held-out 1 h blocks after onset_s")
+PROCESS_METRIC = ("process part = RMS of the input-explained part of y - G u (the simulation error "
+                  "of the output's process part; a whitened Laguerre-basis filter of the inputs "
+                  "fitted on the even 1 h blocks after onset_s, RMS on the odd ones)")
 
 
 class InsufficientData(Exception):
@@ -62,6 +65,13 @@ class Finding:
     explanation: str
     score: float = field(repr=False, default=0.0)
     change: ModelChange | None = field(repr=False, default=None)
+    # the simulation error of the output's process part, nominal model and updated model
+    # (diagnose/process_error.py); NaN when the blocks after the onset are too short
+    process_error_before: float = float("nan")
+    process_error_after: float = float("nan")
+    # the chi-square CDF of the held-out gain; ``confidence`` is the calibrated probability
+    # that the finding is right (diagnose/confidence.py)
+    evidence_confidence: float = field(repr=False, default=float("nan"))
     # An actuator drives several outputs: the channel changes of the outputs other than
     # ``output`` (the one the finding is reported on), and every output it drives.
     extra_changes: list[ModelChange] = field(repr=False, default_factory=list)
@@ -80,6 +90,8 @@ class Finding:
         d.update(onset_s=round(self.onset_s, 3), confidence=round(self.confidence, 4),
                  estimate={k: rounded(v) for k, v in self.estimate.items()},
                  error_before=rounded(self.error_before), error_after=rounded(self.error_after),
+                 process_error_before=rounded(self.process_error_before),
+                 process_error_after=rounded(self.process_error_after),
                  explanation=self.explanation)
         return d
 
@@ -90,11 +102,15 @@ class DiagnoseResult:
     train_end_s: float | None
     findings: list[Finding]
     metric: str = METRIC
+    process_metric: str = PROCESS_METRIC
     # per output: time and the nominal model's one-step error; per finding id: the one-step
     # error of its output with the model ``update`` writes (for the figures)
     time_s: np.ndarray = field(repr=False, default=None)
     residuals: dict = field(repr=False, default_factory=dict)
     residuals_after: dict = field(repr=False, default_factory=dict)
+    # per finding id: the output's process part (input-explained part of y - G u) with the
+    # nominal model and with the updated one (diagnose/process_error.py)
+    process_parts: dict = field(repr=False, default_factory=dict)
     # what the user should know about how the data were read (estimated noise models, parts
     # of the search the data were too short for)
     notes: list[str] = field(default_factory=list)
@@ -119,8 +135,10 @@ class DiagnoseResult:
         lines = [f"diagnose: model '{self.model}', {len(self.findings)} finding(s), most likely first"]
         for f in self.findings:
             lines.append(f"  {f.id} [{f.effect}] {f.explanation} (confidence {f.confidence:.2f}; "
-                         f"error {f.error_before:.4g} -> {f.error_after:.4g})")
+                         f"error {f.error_before:.4g} -> {f.error_after:.4g}; "
+                         f"process part {f.process_error_before:.4g} -> {f.process_error_after:.4g})")
         lines.append(f"  error = {self.metric}")
+        lines.append(f"  {self.process_metric}")
         return "\n".join(lines + notes)
 
     def plot(self, out_dir, origin=None) -> list[Path]:

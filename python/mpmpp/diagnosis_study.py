@@ -1,0 +1,294 @@
+"""Diagnosis on scenario families (studies/diagnosis_families.py): the held-out families next
+to the tuning families (docs/families.md, docs/diagnose.md).
+
+Each run draws one scenario of a family with one forced effect (every effect the family
+schedules, the controls included), simulates it once, runs ``diagnose`` and, when there is a
+process finding, ``update`` with the top one. Scoring per run, from the scenario's truth:
+
+* top process finding right: its effect is the scheduled effect, on the changed channel (the
+  changed input for an actuator nonlinearity, the changed output and the new column for an
+  unmodelled input);
+* false process finding: any process finding in a control run (no change, noise change, drift);
+* update quality: the shown error's fall (``update``'s held-out one-step error) next to the
+  true model error's fall: the step-response error of the changed channel against the
+  scenario's true plant after the change, with the nominal model and with the updated one;
+* every finding (process or not) with its confidence and whether it is right, for the
+  reliability tables; an ``output_drift`` finding on an output the family gave a background
+  step/ramp disturbance also counts as right (the drift is real, only not the scheduled effect).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import families as fam
+from ._core import TransferFunction
+from .diagnose import PROCESS_EFFECTS, diagnose
+from .evaluate import nominal_model
+from .parallel import run_tasks
+from .scenario import parse_scenario
+from .simulate import simulate
+from .update import update
+
+# Effects whose changed channel is linear, so a step response measures the model error.
+LINEAR_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input")
+CONFIDENCE_BINS = (0.0, 0.5, 0.9, 0.99, 1.0)
+EFFECT_ORDER = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input",
+                "input_nonlinearity") + fam.CONTROL_EFFECTS
+
+
+def true_change(spec: dict, expect: dict) -> dict | None:
+    """The scheduled change: {"output", "input" (an input or extra column, None for a noise
+    change or drift), "channel" (true transfer function after the change, None if not linear)}."""
+    onset = expect.get("onset_s")
+    if onset is None:
+        return None
+    sc = parse_scenario(spec)
+    ts = spec["sample_time_s"]
+    sample = int(round(onset / ts))
+    names = {"process": sc.inputs, "extra_process": sc.extra_names}
+    for ev, doc in zip(sc.events, sorted(spec["events"], key=lambda e: e["time_s"])):
+        if ev.sample != sample or doc["type"] in ("setpoint", "mv_target"):
+            continue
+        kind = ev.kind.name
+        output = sc.outputs[ev.output] if ev.output >= 0 else None
+        if kind in names:
+            return {"output": output, "input": names[kind][ev.input], "channel": ev.model}
+        if kind == "actuator":
+            return {"output": None, "input": sc.inputs[ev.input], "channel": None}
+        if doc["type"] in ("noise", "sigma", "drift"):
+            return {"output": output, "input": None, "channel": None}
+    raise ValueError(f"{spec['name']}: no event at the onset {onset} s")
+
+
+def finding_right(f: dict, effect: str, change: dict | None) -> bool:
+    """Whether a finding names the scheduled effect where it happened."""
+    if effect == "none" or change is None or f["effect"] != effect:
+        return False
+    if effect == "input_nonlinearity":
+        return f.get("input") == change["input"]
+    if effect in ("noise_change", "output_drift"):
+        return f.get("output") == change["output"]
+    return f.get("output") == change["output"] and f.get("input") == change["input"]
+
+
+def step_error(model_channel: TransferFunction | None, true_channel: TransferFunction) -> float:
+    """RMS over the settling horizon of the step-response difference, relative to the true
+    channel's steady-state gain (a missing channel has a zero response)."""
+    horizon = _settling_samples(true_channel, model_channel)
+    s_true = np.asarray(true_channel.step(horizon))
+    s_model = np.zeros(horizon) if model_channel is None else np.asarray(model_channel.step(horizon))
+    scale = max(abs(float(true_channel.dc_gain())), 1e-12)
+    return float(np.sqrt(np.mean((s_true - s_model) ** 2)) / scale)
+
+
+def _settling_samples(*channels) -> int:
+    """Longest delay plus 5 of the slowest time constant (in samples) of the channels."""
+    slowest, delay = 1.0, 0
+    for g in channels:
+        if g is None:
+            continue
+        delay = max(delay, int(g.delay))
+        for p in np.abs(np.asarray(g.poles())):
+            if 0.0 < p < 1.0:
+                slowest = max(slowest, -1.0 / math.log(p))
+    return int(min(delay + 5.0 * slowest + 10, 20000))
+
+
+def _channel(model, output: str, column: str) -> TransferFunction | None:
+    return model.process_dict().get(output, {}).get(column)
+
+
+def drifting_outputs(spec: dict) -> set:
+    """Outputs with a drift event (scheduled or a background step/ramp disturbance)."""
+    return {ev["output"] for ev in spec["events"] if ev["type"] == "drift"}
+
+
+def _finding_record(f, effect: str, change: dict | None, drifting: set = frozenset()) -> dict:
+    d = f.to_dict()
+    d["score"] = float(f.score)
+    d["evidence_confidence"] = float(f.evidence_confidence)
+    d["process"] = f.effect in PROCESS_EFFECTS
+    d["right"] = finding_right(d, effect, change) or (f.effect == "output_drift" and f.output in drifting)
+    return d
+
+
+def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None = None) -> dict:
+    """One draw of family ``name`` with ``effect`` forced: diagnose, update with the top
+    process finding, and score both against the truth."""
+    family = fam.family(name)
+    spec, expect = family.draw(seed, record_s, effect)
+    change = true_change(spec, expect)
+    model = nominal_model(spec)
+    t0 = time.perf_counter()
+    data = simulate(spec)
+    run = {"family": name, "split": family.split, "seed": int(seed), "effect": effect,
+           "size": expect.get("size"), "samples": len(data), "sample_time_s": spec["sample_time_s"],
+           "refused": None, "findings": [], "top_process": None, "top_right": False,
+           "false_process": False, "update": None}
+    try:
+        diagnosis = diagnose(model, data)
+    except ValueError as exc:  # diagnose refuses the data (too short): no finding, said plainly
+        run["refused"] = str(exc)
+        run["seconds"] = time.perf_counter() - t0
+        return run
+    run["findings"] = [_finding_record(f, effect, change, drifting_outputs(spec)) for f in diagnosis.findings]
+    process = [f for f in diagnosis.findings if f.effect in PROCESS_EFFECTS]
+    top = process[0] if process else None
+    if top is not None:
+        run["top_process"] = _finding_record(top, effect, change)
+        run["top_right"] = run["top_process"]["right"]
+    run["false_process"] = effect in fam.CONTROL_EFFECTS and top is not None
+    if effect in LINEAR_EFFECTS:
+        run["update"] = update_quality(model, data, top, change)
+    run["seconds"] = time.perf_counter() - t0
+    return run
+
+
+def update_quality(model, data, top, change: dict) -> dict:
+    """Shown error and true step-response error of the changed channel, before and after
+    applying the top process finding (no finding: nothing applied, nothing falls)."""
+    truth = change["channel"]
+    before = step_error(_channel(model, change["output"], change["input"]), truth)
+    if top is None:
+        return {"true_before": before, "true_after": before, "shown_before": None, "shown_after": None,
+                "process_before": None, "process_after": None}
+    up = update(model, data, top.id)
+    after = step_error(_channel(up.model, change["output"], change["input"]), truth)
+    shown = next((e for e in up.errors if e.output == top.output), up.errors[0])
+    return {"true_before": before, "true_after": after,
+            "shown_before": shown.error_before, "shown_after": shown.error_after,
+            "process_before": shown.process_error_before, "process_after": shown.process_error_after}
+
+
+def run_study(names=None, seeds=range(4), record_s=None, scheduler=None, workers=None,
+              progress: bool = True) -> dict:
+    """Every (family, effect, seed) run in parallel (``parallel.run_tasks``)."""
+    names = [f.name for f in fam.FAMILIES] if names is None else list(names)
+    tasks = [(n, s, e, record_s) for n in names for e in fam.family(n).effects for s in seeds]
+    started = time.perf_counter()
+    runs, where = run_tasks(run_diagnosis_seed, tasks, scheduler, workers, progress, unit="runs")
+    runs.sort(key=lambda r: (names.index(r["family"]), r["effect"], r["seed"]))
+    return {"runs": runs, "seeds": list(seeds), "where": where, "wall_seconds": time.perf_counter() - started}
+
+
+# ---- tables --------------------------------------------------------------------------------
+
+def _frac(k: int, n: int) -> str:
+    return f"{k}/{n} ({100.0 * k / n:.0f}%)" if n else "-"
+
+
+def _median(xs) -> str:
+    xs = [x for x in xs if x is not None and math.isfinite(x)]
+    return f"{np.median(xs):+.0f}%" if xs else "-"
+
+
+def accuracy_rows(runs: list) -> list:
+    """Per split and effect: right top process finding (change runs) or runs with a false
+    process finding (controls), and runs diagnose refused."""
+    rows = []
+    for split in (fam.TUNING, fam.HELD_OUT):
+        for effect in [e for e in EFFECT_ORDER if any(r["effect"] == e for r in runs)]:
+            rs = [r for r in runs if r["split"] == split and r["effect"] == effect]
+            if not rs:
+                continue
+            control = effect in fam.CONTROL_EFFECTS
+            k = sum(r["false_process"] if control else r["top_right"] for r in rs)
+            named = {}
+            for r in rs:
+                if control and r["false_process"] or not control and not r["top_right"]:
+                    label = r["top_process"]["effect"] if r["top_process"] else "no process finding"
+                    named[label] = named.get(label, 0) + 1
+            rows.append({"split": split, "effect": effect, "control": control, "k": k, "n": len(rs),
+                         "refused": sum(r["refused"] is not None for r in rs), "misses": named})
+    return rows
+
+
+def update_rows(runs: list) -> list:
+    """Per split and effect: over the runs with a process finding, the median fall of the shown
+    errors (one-step, process part) and of the true error; over all runs, the share of runs
+    whose true step-response error at least halved, and the share where the shown error fell
+    while the true one rose."""
+    rows = []
+    for split in (fam.TUNING, fam.HELD_OUT):
+        for effect in LINEAR_EFFECTS:
+            us = [r["update"] for r in runs if r["split"] == split and r["effect"] == effect and r["update"]]
+            if not us:
+                continue
+            shown = [100 * (u["shown_after"] / u["shown_before"] - 1) for u in us if u["shown_before"]]
+            process = [100 * (u["process_after"] / u["process_before"] - 1) for u in us if u["process_before"]]
+            true = [100 * (u["true_after"] / u["true_before"] - 1) for u in us if u["shown_before"]]
+            halved = sum(u["true_after"] <= 0.5 * u["true_before"] for u in us)
+            misleading = sum(u["shown_before"] is not None and u["shown_after"] < u["shown_before"]
+                             and u["true_after"] > u["true_before"] for u in us)
+            rows.append({"split": split, "effect": effect, "n": len(us), "updated": len(true), "shown": _median(shown),
+                         "process": _median(process),
+                         "true": _median(true), "halved": halved, "misleading": misleading})
+    return rows
+
+
+def reliability_rows(runs: list, key: str = "confidence") -> list:
+    """Findings binned by their reported confidence (``key``): count and fraction right."""
+    rows = []
+    for split in sorted({r["split"] for r in runs}, key=(fam.TUNING, fam.HELD_OUT).index):
+        fs = [f for r in runs if r["split"] == split for f in r["findings"]
+              if f.get(key) is not None and math.isfinite(f[key])]
+        for lo, hi in zip(CONFIDENCE_BINS[:-1], CONFIDENCE_BINS[1:]):
+            inside = [f for f in fs if lo <= f[key] < hi or (hi == 1.0 and f[key] == 1.0)]
+            rows.append({"split": split, "bin": f"[{lo:g}, {hi:g}{']' if hi == 1.0 else ')'}",
+                         "n": len(inside), "right": sum(f["right"] for f in inside)})
+    return rows
+
+
+def reliability_by_effect(runs: list, high: float = 0.9) -> list:
+    """Per split and reported effect: findings and how many right, all and at >= ``high``."""
+    rows = []
+    for split in sorted({r["split"] for r in runs}, key=(fam.TUNING, fam.HELD_OUT).index):
+        fs = [f for r in runs if r["split"] == split for f in r["findings"]]
+        for effect in [e for e in EFFECT_ORDER if any(f["effect"] == e for f in fs)]:
+            mine = [f for f in fs if f["effect"] == effect]
+            top = [f for f in mine if f["confidence"] >= high]
+            rows.append({"split": split, "effect": effect, "n": len(mine), "right": sum(f["right"] for f in mine),
+                         "n_high": len(top), "right_high": sum(f["right"] for f in top)})
+    return rows
+
+
+def format_tables(study: dict) -> str:
+    runs = study["runs"]
+    out = ["Top process finding (change runs: right / runs; controls: runs with a false process finding)", "",
+           "| split | effect | right or false | diagnose refused | what misses and false findings named |",
+           "| --- | --- | --- | --- | --- |"]
+    for r in accuracy_rows(runs):
+        label = f"control: {r['effect']}" if r["control"] else r["effect"]
+        misses = ", ".join(f"{k} {v}" for k, v in sorted(r["misses"].items())) or "-"
+        out.append(f"| {r['split']} | {label} | {_frac(r['k'], r['n'])} | {r['refused']} | {misses} |")
+    for split in sorted({r["split"] for r in runs}, key=(fam.TUNING, fam.HELD_OUT).index):
+        change = [r for r in runs if r["split"] == split and r["effect"] not in fam.CONTROL_EFFECTS]
+        control = [r for r in runs if r["split"] == split and r["effect"] in fam.CONTROL_EFFECTS]
+        out.append(f"| {split} | all changes / all controls | {_frac(sum(r['top_right'] for r in change), len(change))}"
+                   f" / {_frac(sum(r['false_process'] for r in control), len(control))} | | |")
+    out += ["", "Update with the top process finding (over the runs with one: median change of the shown "
+            "held-out errors, one-step and process part, and of the true step-response error of the changed "
+            "channel; 'true error halved' over all runs, a run without a process finding counts as not halved)", "",
+            "| split | effect | runs | updated | one-step error | process part | true error | true error halved "
+            "| one-step fell, true rose |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in update_rows(runs):
+        out.append(f"| {r['split']} | {r['effect']} | {r['n']} | {r['updated']} | {r['shown']} | {r['process']} | {r['true']} | "
+                   f"{_frac(r['halved'], r['n'])} | {r['misleading']} |")
+    out += ["", "Confidence reliability (every finding, binned by its reported confidence: the calibrated "
+            "probability, and the chi-square CDF of its held-out gain)", "",
+            "| split | confidence | findings (calibrated) | right | findings (chi-square) | right |",
+            "| --- | --- | --- | --- | --- | --- |"]
+    for r, c in zip(reliability_rows(runs), reliability_rows(runs, "evidence_confidence")):
+        out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {c['n']} | "
+                   f"{_frac(c['right'], c['n'])} |")
+    out += ["", "Reliability per reported effect (calibrated confidence)", "",
+            "| split | finding | findings | right | at >= 0.9 | right at >= 0.9 |", "| --- | --- | --- | --- | --- | --- |"]
+    for r in reliability_by_effect(runs):
+        out.append(f"| {r['split']} | {r['effect']} | {r['n']} | {_frac(r['right'], r['n'])} | {r['n_high']} | "
+                   f"{_frac(r['right_high'], r['n_high'])} |")
+    out.append(f"\n{len(runs)} runs, seeds {study['seeds'][0]}-{study['seeds'][-1]}, "
+               f"{study['wall_seconds']:.0f} s wall on {study['where']}")
+    return "\n".join(out)

@@ -1,0 +1,56 @@
+"""The confidence calibration map (diagnose/confidence.py): features, the logistic fit against
+scikit-learn's probabilities, the shipped map fitted on tuning families only."""
+import math
+
+import numpy as np
+import pytest
+from sklearn.linear_model import LogisticRegression
+
+from mpmpp import families as fam
+from mpmpp.diagnose import confidence as conf
+
+
+def finding(score, before, after, pb, pa, effect="gain"):
+    return {"effect": effect, "score": score, "error_before": before, "error_after": after,
+            "process_error_before": pb, "process_error_after": pa}
+
+
+def test_features():
+    x = conf.features(finding(99.0, 1.0, 0.9, 0.5, 0.1))
+    assert x == pytest.approx([math.log(100.0), 0.1, 0.8, math.log(0.5), 1.0])
+    # unknown process errors: no fall, the smallest share; a disturbance effect
+    y = conf.features(finding(-3.0, 1.0, 0.5, None, None, effect="noise_change"))
+    assert y == pytest.approx([0.0, 0.5, 0.0, math.log(1e-3), 0.0])
+
+
+def test_fitted_map_reproduces_sklearn_probabilities():
+    rng = np.random.default_rng(0)
+    fs, labels = [], []
+    for _ in range(300):
+        score = float(rng.exponential(50))
+        fall = float(rng.uniform(0, 0.9))
+        fs.append(finding(score, 1.0, 1.0 - 0.1 * fall, 0.5, 0.5 * (1 - fall)))
+        labels.append(bool(rng.uniform() < 1 / (1 + math.exp(-(4 * fall - 1.5)))))
+    cal = conf.fit_map(fs, labels)
+    x = np.array([conf.features(f) for f in fs])
+    mean, scale = x.mean(axis=0), x.std(axis=0)
+    scale[scale == 0] = 1.0
+    ref = LogisticRegression(C=1.0).fit((x - mean) / scale, labels)
+    want = ref.predict_proba((x - mean) / scale)[:, 1]
+    got = np.array([conf.probability(cal, f) for f in fs])
+    assert got == pytest.approx(want, abs=1e-9)
+    # the process-part fall carries the signal here: its coefficient is positive
+    assert cal["coef"][conf.FEATURES.index("process_fall")] > 0
+    with pytest.raises(ValueError, match="right and wrong"):
+        conf.fit_map(fs[:3], [True] * 3)
+
+
+def test_shipped_map_was_fitted_on_tuning_families_only():
+    cal = conf.shipped_map()
+    assert cal is not None and cal["features"] == list(conf.FEATURES)
+    tuning = {f.name for f in fam.FAMILIES if f.split == fam.TUNING}
+    assert set(cal["fitted_on"]["families"]) <= tuning
+    assert max(cal["fitted_on"]["seeds"]) < 100   # docs/families.md: seeds 0-99 are for choosing
+    p = conf.calibrated_confidence(finding(500.0, 1.0, 0.8, 0.6, 0.05))
+    q = conf.calibrated_confidence(finding(5.0, 1.0, 0.999, 0.05, 0.049))
+    assert 0.0 <= q < p <= 1.0

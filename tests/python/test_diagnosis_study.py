@@ -1,0 +1,89 @@
+"""The diagnosis study's scoring (python/mpmpp/diagnosis_study.py): the truth it reads from a
+scenario, the step-response error against a plain NumPy recursion, the tables' counts."""
+import numpy as np
+import pytest
+
+from mpmpp import _core
+from mpmpp import diagnosis_study as ds
+from mpmpp import families as fam
+from mpmpp.evaluate import nominal_model
+
+
+def numpy_step(b, a, delay, n):
+    """Step response of b / (1 - a q^-1) q^-delay by its difference equation."""
+    y, out = 0.0, np.zeros(n)
+    for k in range(n):
+        y = a * y + (b if k - delay >= 0 else 0.0)
+        out[k] = y
+    return out
+
+
+def test_step_error_matches_numpy():
+    true = _core.TransferFunction([0.2], [1.0, -0.8], 3)
+    model = _core.TransferFunction([0.1], [1.0, -0.8], 5)
+    n = ds._settling_samples(true, model)
+    assert n >= 5 + 5 * (-1 / np.log(0.8))
+    ref = numpy_step(0.2, 0.8, 3, n) - numpy_step(0.1, 0.8, 5, n)
+    assert ds.step_error(model, true) == pytest.approx(np.sqrt(np.mean(ref**2)) / 1.0, rel=1e-9)
+    assert ds.step_error(true, true) == 0.0
+    # a missing channel: the whole true response is the error
+    assert ds.step_error(None, true) == pytest.approx(np.sqrt(np.mean(numpy_step(0.2, 0.8, 3, ds._settling_samples(true)) ** 2)))
+
+
+@pytest.mark.parametrize("effect", ["gain", "delay", "missing_coupling", "input_nonlinearity", "output_drift", "none"])
+def test_true_change_reads_the_scheduled_event(effect):
+    spec, expect = fam.family("mpc_2x2").draw(3, effect=effect) if effect not in fam.CONTROL_EFFECTS \
+        else fam.family("mpc_2x2_controls").draw(3, effect=effect)
+    change = ds.true_change(spec, expect)
+    if effect == "none":
+        assert change is None
+        return
+    ev = next(e for e in spec["events"] if e["time_s"] == expect["onset_s"] and e["type"] not in ("setpoint",))
+    nominal = nominal_model(spec).process_dict()
+    if effect == "gain":
+        g0 = nominal[ev["output"]][ev["input"]]
+        assert change["channel"].dc_gain() == pytest.approx(ev["factor"] * g0.dc_gain())
+        assert ds.finding_right({"effect": "gain", "output": ev["output"], "input": ev["input"]}, effect, change)
+        assert not ds.finding_right({"effect": "delay", "output": ev["output"], "input": ev["input"]}, effect, change)
+    elif effect == "delay":
+        assert change["channel"].delay == ev["delay"]
+    elif effect == "missing_coupling":
+        assert ev["input"] not in nominal[ev["output"]]
+        assert change["channel"].dc_gain() == pytest.approx(expect["size"], rel=1e-9)
+    elif effect == "input_nonlinearity":
+        assert change["input"] == ev["input"] and change["channel"] is None
+    else:
+        assert change["output"] == ev["output"] and change["input"] is None
+        assert ds.finding_right({"effect": "output_drift", "output": ev["output"]}, effect, change)
+
+
+def test_tables_count_what_the_runs_say():
+    def run(split, effect, right, false=False, update=None, conf=1.0):
+        findings = [{"effect": "gain", "confidence": conf, "right": right}] if right or false else []
+        top = {"effect": "gain"} if (right or false) else None
+        return {"split": split, "effect": effect, "top_right": right, "false_process": false,
+                "refused": None, "top_process": top, "findings": findings, "update": update}
+    up = {"true_before": 1.0, "true_after": 0.4, "shown_before": 1.0, "shown_after": 0.9, "process_before": 1.0, "process_after": 0.3}
+    bad = {"true_before": 1.0, "true_after": 1.2, "shown_before": 1.0, "shown_after": 0.99, "process_before": 1.0, "process_after": 0.9}
+    runs = [run(fam.HELD_OUT, "gain", True, update=up), run(fam.HELD_OUT, "gain", False, update=bad, conf=0.7),
+            run(fam.HELD_OUT, "none", False, True, conf=0.95),
+            run(fam.TUNING, "none", False)]
+    acc = {(r["split"], r["effect"]): r for r in ds.accuracy_rows(runs)}
+    assert (acc[(fam.HELD_OUT, "gain")]["k"], acc[(fam.HELD_OUT, "gain")]["n"]) == (1, 2)
+    assert acc[(fam.HELD_OUT, "none")]["k"] == 1 and acc[(fam.TUNING, "none")]["k"] == 0
+    upd = ds.update_rows(runs)[0]
+    assert (upd["n"], upd["halved"], upd["misleading"]) == (2, 1, 1)   # the second: shown error fell, true rose
+    rel = {(r["split"], r["bin"]): r for r in ds.reliability_rows(runs)}
+    assert rel[(fam.HELD_OUT, "[0.99, 1]")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.99, 1]")]["right"] == 1
+    assert rel[(fam.HELD_OUT, "[0.9, 0.99)")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.9, 0.99)")]["right"] == 0
+    [held] = ds.reliability_by_effect(runs)   # the tuning run has no finding
+    assert (held["split"], held["effect"]) == (fam.HELD_OUT, "gain")
+    assert (held["n"], held["right"], held["n_high"], held["right_high"]) == (2, 1, 2, 1)
+    assert "| held_out | gain | 1/2 (50%)" in ds.format_tables({"runs": runs, "seeds": [0], "where": "x",
+                                                               "wall_seconds": 0.0})
+
+
+def test_one_run_end_to_end():
+    r = ds.run_diagnosis_seed("mpc_2x2", 1, "gain")
+    assert r["top_right"] and r["update"]["true_after"] < 0.5 * r["update"]["true_before"]
+    assert r["update"]["shown_after"] < r["update"]["shown_before"]

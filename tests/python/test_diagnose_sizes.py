@@ -3,7 +3,7 @@ of the search grids (diagnose/process.py): gain ratio (continuous theta), time c
 TIME_CONSTANT_FACTORS), dead time (integer grid, an uneven shift), coupling gain (continuous
 theta on a grid of poles, the true pole between two of them), and the example case's coupling.
 
-Data: the hidden-effect suite's MPC closed loop (bench/diagnose_eval.py, 2x2 MD plant, 16 h at
+Data: the hidden-effect suite's MPC closed loop (studies/diagnose_eval.py, 2x2 MD plant, 16 h at
 5 s, effect at 6 h), the channel alternating with the seed. Tolerances sit near what the method
 achieves; measured over seeds 0-7 with the label right (docs/diagnose.md, "Effect sizes"):
 gain ratio x1.7 within 4 %, x0.55 within 13 %; time constant x2.5 / x0.4 always one of the two
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 
 import mpmpp  # noqa: E402
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose  # noqa: E402

@@ -14,8 +14,9 @@ How each effect lands in FORMATS.md's fixed model format:
 - input_nonlinearity: the file has no actuator block, so the affected channels get the
   describing-function gain (the linear scale that best reproduces the backlash response).
 
-Every refit uses the even 1 h blocks after the finding's onset only; the error before and
-after is reported on the odd blocks, which the refit never saw.
+Every refit uses the even held-out blocks (1 h, shorter in a short record) after the
+finding's onset only; the error before and after is reported on the odd blocks, which the
+refit never saw.
 """
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from .diagnose import DiagnoseResult, ModelChange, diagnose, one_step_errors
-from .diagnose.pipeline import diagnosis_signals
+from .diagnose.pipeline import BLOCK_S, SEGMENT_S, diagnosis_signals, record_lengths
 
 
 @dataclass
@@ -43,7 +44,7 @@ class UpdateResult:
     errors: list[OutputError]
     model: object = field(repr=False)           # the new mpmpp.Model
     diagnosis: DiagnoseResult = field(repr=False, default=None)
-    metric: str = ("RMS of the one-step prediction error (deviation units) on held-out 1 h blocks "
+    metric: str = ("RMS of the one-step prediction error (deviation units) on held-out blocks "
                    "after each finding's onset, not used for the refit")
 
     def to_dict(self) -> dict:
@@ -72,12 +73,14 @@ class UpdateResult:
         return self.diagnosis.plot(out_dir) if self.diagnosis is not None else []
 
 
-def update(model, data, apply, train_end_s: float | None = None, name: str | None = None) -> UpdateResult:
-    """Re-diagnose, apply the findings named in ``apply`` (ids like "F1"), return the new model."""
+def update(model, data, apply, train_end_s: float | None = None, name: str | None = None,
+           min_segment_s: float = SEGMENT_S, block_s: float = BLOCK_S) -> UpdateResult:
+    """Re-diagnose, apply the findings named in ``apply`` (ids like "F1"), return the new model.
+    ``min_segment_s`` / ``block_s`` as for ``diagnose`` (the same findings are re-derived)."""
     ids = [a.strip() for a in (apply.split(",") if isinstance(apply, str) else apply) if a.strip()]
     if not ids:
         raise ValueError("--apply: give at least one finding id (e.g. F1)")
-    diagnosis = diagnose(model, data, train_end_s=train_end_s)
+    diagnosis = diagnose(model, data, train_end_s=train_end_s, min_segment_s=min_segment_s, block_s=block_s)
     findings = [diagnosis.finding(i) for i in ids]
     changes: list[ModelChange] = []
     for f in findings:
@@ -86,7 +89,7 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
 
     sig = diagnosis_signals(model, data, train_end_s).sig
     time_s = sig.time_s
-    block = max(int(round(3600.0 / sig.sample_time_s)), 10)
+    block = record_lengths(len(time_s), sig.sample_time_s, min_segment_s, block_s).block
     heldout = (np.arange(len(time_s)) // block) % 2 == 1
     errors = []
     for out_name in dict.fromkeys(c.output for c in changes):

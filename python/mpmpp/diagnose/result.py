@@ -15,7 +15,7 @@ PROCESS_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmode
                    "input_nonlinearity")
 
 METRIC = ("RMS of the one-step prediction error of the output (deviation units) on "
-          "held-out 1 h blocks after onset_s")
+          "held-out blocks after onset_s")
 
 
 class InsufficientData(Exception):

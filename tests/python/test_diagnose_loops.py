@@ -1,0 +1,82 @@
+"""diagnose on single PI loops as a historian gives them: 2 h at 10 s (751 rows), the model
+identified from the same data (`mpmpp identify`), or a hand-written one."""
+import json
+
+import numpy as np
+import pytest
+
+import mpmpp
+from mpmpp.cli import main
+from mpmpp.diagnose import diagnose
+from mpmpp.diagnose.pipeline import record_lengths
+from mpmpp.identify import model_from_data
+from mpmpp.record_length import scaled_rows
+
+import pi_loop
+
+
+def test_record_lengths_scale_with_a_short_record():
+    # 751 rows at 10 s: a third of the record per segment, an eighth per block
+    lengths = record_lengths(751, 10.0)
+    assert (lengths.min_segment, lengths.block) == (250, 93)
+    # a long record keeps the preferred 1 h
+    assert (record_lengths(6 * 360, 10.0).min_segment, record_lengths(8 * 360, 10.0).block) == (360, 360)
+    assert record_lengths(751, 10.0, min_segment_s=1200.0).min_segment == scaled_rows(751, 10.0, 1200.0, 3, 50)
+    with pytest.raises(ValueError, match=r"too short: 126 rows \(0.35 h\); need at least 150"):
+        record_lengths(126, 10.0)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_identify_then_diagnose_a_historian_record(tmp_path, capsys, seed):
+    """The user's path: `mpmpp identify` then `mpmpp diagnose` on a linear 2 h loop record.
+    The model was made from these data, so the honest answer is no finding."""
+    data = pi_loop.simulate(pi_loop.FLOW, seed, setpoint_steps=True)
+    csv, model = tmp_path / "loop.csv", tmp_path / "model.json"
+    data.to_csv(csv, index=False)
+    assert main(["identify", str(csv), "--inputs", "OP", "--outputs", "PV", "-o", str(model)]) == 0
+    capsys.readouterr()
+    assert main(["diagnose", str(model), str(csv), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["findings"] == []
+
+
+def test_wrong_hand_written_gain_is_found_on_a_2h_record():
+    """A hand-written FOPTD model with half the process gain: a gain finding with ratio near 2
+    present throughout, found with the scaled segments (the fixed 1 h ones refused 751 rows)."""
+    loop = pi_loop.FLOW
+    data = pi_loop.simulate(loop, 3, setpoint_steps=True)
+    a, b0, b1, d = pi_loop.foptd_coefficients(loop, 10.0)
+    half = mpmpp.Model("half gain", 10.0, ["OP"], ["PV"],
+                       {"PV": {"OP": mpmpp.TransferFunction([0.5 * b0, 0.5 * b1], [1.0, -a], d)}})
+    res = diagnose(half, data)
+    assert res.findings and res.findings[0].effect == "gain"
+    assert 1.6 < res.findings[0].estimate["gain_ratio"] < 2.5
+    assert res.findings[0].error_after < res.findings[0].error_before
+
+
+def test_short_record_says_too_short(tmp_path, capsys):
+    data = pi_loop.simulate(pi_loop.FLOW, 1, rows=126)
+    csv, model = tmp_path / "loop.csv", tmp_path / "model.json"
+    data.to_csv(csv, index=False)
+    mpmpp.save_model(mpmpp.Model("m", 10.0, ["OP"], ["PV"], {"PV": {"OP": mpmpp.TransferFunction([0.5], [1.0, -0.7], 2)}}),
+                     model)
+    assert main(["diagnose", str(model), str(csv)]) == 2
+    err = capsys.readouterr().err
+    assert "too short: 126 rows (0.35 h); need at least 150" in err
+    assert "missing" not in err
+
+
+def test_segment_and_block_options(tmp_path, capsys):
+    data = pi_loop.simulate(pi_loop.FLOW, 1, rows=1441, setpoint_steps=True)
+    csv, model = tmp_path / "loop.csv", tmp_path / "model.json"
+    data.to_csv(csv, index=False)
+    ident = model_from_data(data, ["OP"], ["PV"])
+    ident.save(model)
+    assert main(["diagnose", str(model), str(csv), "--segment", "20min", "--block", "15min", "--json"]) == 0
+    capsys.readouterr()
+    # --train-end must leave one segment of this record after it (20 min here, not a fixed 1 h)
+    assert main(["diagnose", str(model), str(csv), "--segment", "20min", "--train-end", "3.6h"]) == 0
+    capsys.readouterr()
+    assert main(["diagnose", str(model), str(csv), "--segment", "20min", "--train-end", "3.8h"]) == 2
+    assert "needs at least 0.333 h" in capsys.readouterr().err
+    assert main(["diagnose", str(model), str(csv), "--segment", "0"]) == 2

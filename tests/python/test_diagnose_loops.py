@@ -80,3 +80,64 @@ def test_segment_and_block_options(tmp_path, capsys):
     assert main(["diagnose", str(model), str(csv), "--segment", "20min", "--train-end", "3.8h"]) == 2
     assert "needs at least 0.333 h" in capsys.readouterr().err
     assert main(["diagnose", str(model), str(csv), "--segment", "0"]) == 2
+
+
+# ---- guards: no lag 0, no sign flip without overwhelming evidence ----------------------------
+
+def foptd_model(loop, scale=1.0, delay=None, name="hand-written"):
+    a, b0, b1, d = pi_loop.foptd_coefficients(loop, 10.0)
+    g = mpmpp.TransferFunction([scale * b0, scale * b1], [1.0, -a], d if delay is None else delay)
+    return mpmpp.Model(name, 10.0, ["OP"], ["PV"], {"PV": {"OP": g}})
+
+
+@pytest.mark.parametrize("delay, num", [(2, [0.3, 0.1]), (0, [0.0, 0.3]), (1, [0.0, 0.0, 0.3]), (1, [0.3])])
+def test_delay_search_never_reaches_lag_zero(delay, num):
+    from mpmpp.diagnose.pipeline import diagnosis_signals
+    from mpmpp.diagnose.process import first_lag, process_shapes
+
+    data = pi_loop.simulate(pi_loop.FLOW, 1)
+    model = mpmpp.Model("m", 10.0, ["OP"], ["PV"], {"PV": {"OP": mpmpp.TransferFunction(num, [1.0, -0.7], delay)}})
+    sig = diagnosis_signals(model, data).sig
+    shapes = [s.shape for s in process_shapes(sig, 0) if s.effect == "delay"]
+    lags = [first_lag(g) for g in shapes]
+    nominal = first_lag(sig.rows[0][0])
+    assert min(lags) == (1 if nominal > 1 else 2) and nominal not in lags
+    assert min(g.delay for g in shapes) >= 0
+
+
+@pytest.mark.parametrize("loop, action", [(pi_loop.FLOW, 1), (pi_loop.PRESSURE, -1)])
+def test_single_loop_controller_action_from_the_data(loop, action):
+    from mpmpp.diagnose.loops import single_loops
+    from mpmpp.diagnose.pipeline import diagnosis_signals
+
+    data = pi_loop.simulate(loop, 4, setpoint_steps=True)
+    loops = single_loops(diagnosis_signals(foptd_model(loop), data).sig, data)
+    assert [(lp.output, lp.input, lp.action) for lp in loops] == [(0, 0, action)]
+
+
+def _fit(effect, theta, se, gain=1.0):
+    from mpmpp.diagnose.process import Fit, Shape
+
+    g = mpmpp.TransferFunction([0.5 * gain], [1.0, -0.5], 1)
+    return Fit(Shape(effect, "OP", "input", g, g, 1.0, 1), 0, 0.0, 0.0, theta, se, [], 1.0)
+
+
+def test_sign_flip_needs_five_standard_errors_and_the_controller_action():
+    from mpmpp.diagnose.process import flips_sign_without_evidence as flips
+
+    assert not flips(_fit("gain", 1.5, 1.0))                 # same sign: no guard
+    assert flips(_fit("delay", -14.0, 3.0))                  # 4.7 se: not overwhelming
+    assert not flips(_fit("gain", -14.0, 2.0))               # 7 se, no loop action known
+    assert flips(_fit("gain", -14.0, 2.0), action=1)         # new gain -14 < 0, controller needs > 0
+    assert not flips(_fit("gain", -14.0, 2.0, gain=-1.0), action=1)   # new gain +14: agrees
+    assert not flips(_fit("missing_coupling", -3.0, 1.0))    # a new channel has no sign to flip
+
+
+def test_a_model_with_the_wrong_sign_is_corrected():
+    """The hand-written model has the process gain's sign wrong: the data's evidence is
+    overwhelming and the controller's action agrees, so the flip is reported."""
+    loop = pi_loop.FLOW
+    data = pi_loop.simulate(loop, 5, setpoint_steps=True)
+    res = diagnose(foptd_model(loop, scale=-1.0), data)
+    assert res.findings[0].effect == "gain"
+    assert -1.3 < res.findings[0].estimate["gain_ratio"] < -0.7

@@ -11,6 +11,7 @@ from ..record_length import minimum_rows, require_rows, scaled_rows
 from ..signals import Signals, extract
 from .actuator import actuator_findings
 from .errors import one_step_errors
+from .loops import single_loops
 from .noise import noise_finding
 from .process import process_findings
 from .result import DiagnoseResult, Finding, InsufficientData
@@ -118,9 +119,11 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
 
     outputs = [output_residual(sig, i, min_segment, first_onset, block, name in prepared.estimated_noise)
                for i, name in enumerate(sig.outputs)]
+    loops = single_loops(sig, data)
     found: list[Finding] = []
     for out in outputs:
-        found += process_findings(out, first_onset, min_segment, step, logn, min_effect)
+        actions = {sig.inputs[lp.input]: lp.action for lp in loops if lp.output == out.i}
+        found += process_findings(out, first_onset, min_segment, step, logn, min_effect, actions)
     # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels:
     # it replaces them when it explains more than they do together.
     for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect):

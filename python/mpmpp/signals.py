@@ -95,3 +95,14 @@ def per_segment(signals: Signals, fn, *arrays) -> np.ndarray:
             out = np.full((n,) + res.shape[1:], np.nan)
         out[a:b] = res
     return out
+
+
+def valve_input(signals: Signals, j: int, actuator: dict) -> np.ndarray:
+    """Input j's deviation after the valve ``actuator`` (the model file's actuator block): the
+    valve is simulated on the absolute OP of each segment (it starts at rest at each segment's
+    first row), and the position's mean over the segments is the operating point removed."""
+    from .stiction.valve import valve_position
+
+    op = signals.u[:, j] + signals.operating_point[signals.inputs[j]]
+    position = per_segment(signals, lambda x: valve_position(actuator, x), op)
+    return position - np.nanmean(position)

@@ -3,6 +3,7 @@ identified from the same data (`mpmpp identify`), or a hand-written one."""
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import mpmpp
@@ -141,3 +142,42 @@ def test_a_model_with_the_wrong_sign_is_corrected():
     res = diagnose(foptd_model(loop, scale=-1.0), data)
     assert res.findings[0].effect == "gain"
     assert -1.3 < res.findings[0].estimate["gain_ratio"] < -0.7
+
+
+# ---- valve stiction in a single loop ----------------------------------------------------------
+
+def stiction_study_loop(seed, valve=None, oscillation=0.0):
+    """A flow loop of the stiction study (first order 15 s, 1 sample dead time, PI), AR(1) plus
+    white disturbance, optionally an external sinusoid of ``oscillation`` PV units."""
+    from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
+
+    n = 751
+    rng = np.random.default_rng(seed)
+    p = np.exp(-10 / 15)
+    d = coloured_noise(rng, n, 0.3, 0.8) + 0.05 * rng.standard_normal(n)
+    d += oscillation * np.sin(2 * np.pi * np.arange(n) / rng.uniform(25, 60) + rng.uniform(0, 2 * np.pi))
+    rec = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p), delay=1), 0.7, 1.5, n, valve=valve, disturbance=d)
+    return pd.DataFrame({"time": 10.0 * np.arange(n), "OP": rec["op"], "PV": rec["pv"] + 20.0,
+                         "PV_sp": rec["sp"] + 20.0})
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+def test_sticking_valve_is_named_with_its_size(seed):
+    from mpmpp._core import Valve, ValveKind
+
+    data = stiction_study_loop(seed, Valve(ValveKind.stick_slip, 4.0, 2.0))
+    res = diagnose(model_from_data(data, ["OP"], ["PV"]).model, data)
+    top = res.findings[0]
+    assert top.effect == "input_nonlinearity" and top.onset_s == 0.0
+    assert top.estimate["kind"] in ("stick_slip", "he", "backlash") and 2.0 < top.estimate["S"] < 8.0
+    assert top.confidence > 0.9
+    assert top.error_after < 0.95 * top.error_before
+    # the linear stand-ins (a noise change, a changed gain) are not reported beside it
+    assert [f.effect for f in res.findings] == ["input_nonlinearity"]
+
+
+@pytest.mark.parametrize("seed", [11, 12, 13])
+def test_external_oscillation_through_a_linear_valve_is_not_stiction(seed):
+    data = stiction_study_loop(seed, oscillation=1.0)
+    res = diagnose(model_from_data(data, ["OP"], ["PV"]).model, data)
+    assert not any(f.effect == "input_nonlinearity" for f in res.findings)

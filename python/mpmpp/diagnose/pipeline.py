@@ -15,6 +15,7 @@ from .loops import single_loops
 from .noise import noise_finding
 from .process import process_findings
 from .result import DiagnoseResult, Finding, InsufficientData
+from .valve import valve_findings
 from .whitening import AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual
 
 
@@ -124,11 +125,17 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     for out in outputs:
         actions = {sig.inputs[lp.input]: lp.action for lp in loops if lp.output == out.i}
         found += process_findings(out, first_onset, min_segment, step, logn, min_effect, actions)
-    # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels:
-    # it replaces them when it explains more than they do together.
-    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect):
-        rivals = [f for f in found if f.output in nl.outputs_driven and (
-            (f.input == nl.input and f.effect in ("gain", "time_constant", "delay")) or f.effect == "output_drift")]
+    # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels.
+    # A single loop's valve is judged by the closed-loop Hammerstein fit; its stiction replaces
+    # them. An input that drives several outputs gets the actuator candidates, which replace
+    # them when they explain more than they do together.
+    valves, valve_notes = valve_findings(outputs, sig, loops, logn)
+    notes += valve_notes
+    for nl in valves:
+        found = [f for f in found if not _actuator_rival(f, nl)] + [nl]
+    in_loops = {sig.inputs[lp.input] for lp in loops}
+    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect, skip=in_loops):
+        rivals = [f for f in found if _actuator_rival(f, nl)]
         if nl.score > sum(f.score for f in rivals):
             found = [f for f in found if all(f is not r for r in rivals)] + [nl]
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
@@ -149,3 +156,10 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
                           notes=notes)
+
+
+def _actuator_rival(f: Finding, nl: Finding) -> bool:
+    """A linear stand-in for the actuator finding ``nl``: a gain / dynamics change of the
+    actuator's channels or a drift on an output it drives."""
+    return f.output in nl.outputs_driven and (
+        (f.input == nl.input and f.effect in ("gain", "time_constant", "delay")) or f.effect == "output_drift")

@@ -26,13 +26,16 @@ class InsufficientData(Exception):
 @dataclass
 class ModelChange:
     """What ``update`` applies: a process channel (possibly from a new input column) set to
-    ``channel`` and/or the output's noise model set to ``noise``."""
+    ``channel``, the output's noise model set to ``noise``, and/or the input's valve model set
+    to ``actuator`` (the model file's actuator block: the channel is then driven by the valve
+    position instead of the OP)."""
 
     output: str
     input: str | None = None
     channel: TransferFunction | None = None
     noise: TransferFunction | None = None
     new_input: bool = False
+    actuator: dict | None = None
 
 
 @dataclass

@@ -11,8 +11,10 @@ How each effect lands in FORMATS.md's fixed model format:
   the onset (roots reflected inside the unit circle if needed, so H stays stable);
 - output_drift: the noise model gets a slow pole, H / (1 - rho q^-1): a drift is a
   disturbance the file can only describe stochastically (no deterministic-trend field);
-- input_nonlinearity: the file has no actuator block, so the affected channels get the
-  describing-function gain (the linear scale that best reproduces the backlash response).
+- input_nonlinearity of a single loop: the valve goes into the model file's ``actuators``
+  block, the loop's channel and noise model become the ones fitted from the valve position;
+  of an input driving several outputs: the channels get the describing-function gain (the
+  linear scale that best reproduces the backlash response).
 
 Every refit uses the even held-out blocks (1 h, shorter in a short record) after the
 finding's onset only; the error before and after is reported on the odd blocks, which the
@@ -110,8 +112,11 @@ def apply_changes(model, changes: list[ModelChange], name: str | None = None):
 
     process = {o: dict(chans) for o, chans in model.process_dict().items()}
     noise = dict(model.noise_dict())
+    actuators = dict(model.actuators_dict())
     inputs = list(model.inputs)
     for c in changes:
+        if c.actuator is not None:
+            actuators[c.input] = c.actuator
         if c.channel is not None:
             if c.new_input and c.input not in inputs:
                 inputs.append(c.input)
@@ -119,7 +124,7 @@ def apply_changes(model, changes: list[ModelChange], name: str | None = None):
         if c.noise is not None:
             noise[c.output] = c.noise
     return Model(name or f"{model.name} (updated)", model.sample_time_s, inputs, list(model.outputs),
-                 process, noise)
+                 process, noise, actuators)
 
 
 def _rms(x: np.ndarray) -> float:

@@ -181,3 +181,70 @@ def test_external_oscillation_through_a_linear_valve_is_not_stiction(seed):
     data = stiction_study_loop(seed, oscillation=1.0)
     res = diagnose(model_from_data(data, ["OP"], ["PV"]).model, data)
     assert not any(f.effect == "input_nonlinearity" for f in res.findings)
+
+
+# ---- the valve in the model file --------------------------------------------------------------
+
+def test_update_writes_the_valve_and_the_error_falls(tmp_path, capsys):
+    """identify -> diagnose -> update on a sticking valve: the new model file carries the valve
+    in its actuators block, compare simulates it before the channel, and the one-step error
+    falls in update's held-out report and in compare on the whole record."""
+    from mpmpp._core import Valve, ValveKind
+
+    data = stiction_study_loop(11, Valve(ValveKind.stick_slip, 4.0, 2.0))
+    csv, model, new = tmp_path / "loop.csv", tmp_path / "model.json", tmp_path / "new.json"
+    data.to_csv(csv, index=False)
+    assert main(["identify", str(csv), "--inputs", "OP", "--outputs", "PV", "-o", str(model)]) == 0
+    assert main(["update", str(model), str(csv), "--apply", "F1", "-o", str(new), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    err = doc["errors"][0]
+    assert err["error_after"] < 0.95 * err["error_before"]
+    written = json.loads(new.read_text())
+    assert written["actuators"]["version"] == 1
+    valve = written["actuators"]["inputs"]["OP"]
+    assert valve["kind"] in ("stick_slip", "he", "backlash") and 0.0 < valve["confidence"] <= 1.0
+    assert "actuators" not in json.loads(model.read_text())
+
+    def compared(path):
+        assert main(["compare", str(path), str(csv), "--json"]) == 0
+        return json.loads(capsys.readouterr().out)["outputs"][0]
+
+    before, after = compared(model), compared(new)
+    # the valve explains the limit cycle: the simulation fit rises from near 0 (seed 11: 1 % -> 26 %)
+    assert after["fit_simulation"] > before["fit_simulation"] + 10.0
+    assert after["fit_one_step"] > before["fit_one_step"]
+    # the updated model, re-diagnosed, has no valve left to find
+    res = diagnose(mpmpp.load_model(new), data)
+    assert not any(f.effect == "input_nonlinearity" for f in res.findings)
+
+
+def test_actuators_block_round_trip_and_old_files_unchanged(tmp_path):
+    g = mpmpp.TransferFunction([0.3], [1.0, -0.7], 1)
+    plain = mpmpp.Model("loop", 10.0, ["OP"], ["PV"], {"PV": {"OP": g}})
+    path = tmp_path / "plain.json"
+    mpmpp.save_model(plain, path)
+    text = path.read_bytes()
+    mpmpp.save_model(mpmpp.load_model(path), path)
+    assert path.read_bytes() == text and b"actuators" not in text
+    valve = {"kind": "stick_slip", "S": 3.9, "J": 1.0, "confidence": 0.99}
+    with_valve = mpmpp.Model("loop", 10.0, ["OP"], ["PV"], {"PV": {"OP": g}}, {}, {"OP": valve})
+    assert mpmpp.Model.from_json(with_valve.to_json()).actuator("OP") == valve
+    assert plain.actuator("OP") is None
+
+
+@pytest.mark.parametrize("block, message", [
+    ({"version": 2, "inputs": {}}, "actuators.version: version 2 is not supported"),
+    ({"inputs": {}}, 'actuators: missing field "version"'),
+    ({"version": 1, "inputs": {"OP": {"kind": "sticky", "S": 1}}}, 'actuators.inputs.OP.kind: unknown kind "sticky"'),
+    ({"version": 1, "inputs": {"OP": {"kind": "stick_slip", "S": 1}}}, 'missing field "J"'),
+    ({"version": 1, "inputs": {"OP": {"kind": "stick_slip", "S": 1, "J": 2}}}, "actuators.inputs.OP.J: must be <= S"),
+    ({"version": 1, "inputs": {"XX": {"kind": "backlash", "S": 1}}}, 'unknown input "XX"'),
+    ({"version": 1, "inputs": {"OP": {"kind": "backlash", "S": 1, "confidence": 2}}}, "confidence: must be between 0 and 1"),
+])
+def test_bad_actuators_block_is_one_clear_error(tmp_path, block, message):
+    doc = {"sample_time_s": 10.0, "inputs": ["OP"], "outputs": ["PV"],
+           "process": {"PV": {"OP": {"num": [0.3], "den": [1.0, -0.7], "delay": 1}}}, "actuators": block}
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ValueError, match=message):
+        mpmpp.load_model(path)

@@ -129,7 +129,7 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     # A single loop's valve is judged by the closed-loop Hammerstein fit; its stiction replaces
     # them. An input that drives several outputs gets the actuator candidates, which replace
     # them when they explain more than they do together.
-    valves, valve_notes = valve_findings(outputs, sig, loops, logn)
+    valves, valve_notes = valve_findings(outputs, sig, loops, logn, set(model.actuators_dict()))
     notes += valve_notes
     for nl in valves:
         found = [f for f in found if not _actuator_rival(f, nl)] + [nl]

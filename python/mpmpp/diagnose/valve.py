@@ -34,13 +34,16 @@ PARAMS = 3            # kind, S, J
 MIN_EFFECT = 0.05
 
 
-def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop],
-                   logn: float) -> tuple[list[Finding], list[str]]:
+def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop], logn: float,
+                   actuated=frozenset()) -> tuple[list[Finding], list[str]]:
     """An ``input_nonlinearity`` finding per single loop whose valve fit says stiction, and notes
-    for loops the fit could not assess."""
+    for loops the fit could not assess. Inputs in ``actuated`` have a valve model in the model
+    file already and are not refitted."""
     found, notes = [], []
     for lp in loops:
         out, name = outputs[lp.output], sig.inputs[lp.input]
+        if name in actuated:
+            continue   # the model carries its valve already; sig.u is its position
         a, b = max(sig.segments, key=lambda s: s[1] - s[0])
         if b - a < MIN_LOOP_ROWS:
             notes.append(f"{out.name} <- {name}: no stretch of {MIN_LOOP_ROWS} rows without a gap for the valve fit")
@@ -143,7 +146,7 @@ def _numerator(b: np.ndarray, lags: list[int]) -> np.ndarray:
 def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> Finding | None:
     name = sig.inputs[lp.input]
     g = out.row[lp.input]
-    actuator = actuator_from_fit(fit.kind, fit.params)
+    actuator = {**actuator_from_fit(fit.kind, fit.params), "confidence": fit.confidence}
     arx = _ValveArx(out, sig, lp)
     position = np.nan_to_num(valve_input(sig, lp.input, actuator))
     if not _helps_throughout(arx, np.nan_to_num(sig.u[:, lp.input]), position):

@@ -176,8 +176,10 @@ void check_noise(const TransferFunction& h, const std::string& path) {
 // Parameters of each actuator kind, in file order.
 const std::map<std::string, std::vector<std::string>>& actuator_parameters() {
   static const std::map<std::string, std::vector<std::string>> kinds = {
-      {"stick_slip", {"S", "J"}},           {"he", {"fs", "fd"}},
-      {"backlash", {"S"}},                  {"deadband", {"half_width", "centre"}},
+      {"stick_slip", {"S", "J"}},
+      {"he", {"fs", "fd"}},
+      {"backlash", {"S"}},
+      {"deadband", {"half_width", "centre"}},
       {"saturation", {"lower", "upper"}}};
   return kinds;
 }
@@ -191,10 +193,11 @@ std::vector<std::string> kind_names() {
 void check_actuator(const ActuatorSpec& a, const std::string& path) {
   const auto kind = actuator_parameters().find(a.kind);
   if (kind == actuator_parameters().end())
-    fail(join(path, "kind"), "unknown kind " + quoted(a.kind) + " (expected one of: " +
-                                 detail::comma_list(kind_names()) + ")");
+    fail(join(path, "kind"), "unknown kind " + quoted(a.kind) +
+                                 " (expected one of: " + detail::comma_list(kind_names()) + ")");
   for (const auto& p : kind->second)
-    if (!a.parameters.count(p)) fail(path, "missing field " + quoted(p) + " for kind " + quoted(a.kind));
+    if (!a.parameters.count(p))
+      fail(path, "missing field " + quoted(p) + " for kind " + quoted(a.kind));
   for (const auto& [name, value] : a.parameters) {
     bool known = false;
     for (const auto& p : kind->second) known = known || p == name;
@@ -202,12 +205,14 @@ void check_actuator(const ActuatorSpec& a, const std::string& path) {
     if (!std::isfinite(value)) fail(join(path, name), "must be finite");
   }
   auto nonnegative = [&](const char* p) {
-    if (a.parameters.at(p) < 0.0) fail(join(path, p), "must be >= 0, got " + format_number(a.parameters.at(p)));
+    if (a.parameters.at(p) < 0.0)
+      fail(join(path, p), "must be >= 0, got " + format_number(a.parameters.at(p)));
   };
   if (a.kind == "stick_slip") {
     nonnegative("S");
     nonnegative("J");
-    if (a.parameters.at("J") > a.parameters.at("S")) fail(join(path, "J"), "must be <= S (the slip jump cannot exceed the band)");
+    if (a.parameters.at("J") > a.parameters.at("S"))
+      fail(join(path, "J"), "must be <= S (the slip jump cannot exceed the band)");
   } else if (a.kind == "he") {
     nonnegative("fs");
     nonnegative("fd");
@@ -242,9 +247,11 @@ ActuatorSpecs actuators_from_json(const json& block) {
   expect_object(block, "actuators");
   check_keys(block, "actuators", {"version", "inputs"});
   const json& v = field(block, "version", "actuators");
-  expect_type(v, v.is_number_integer() || v.is_number_unsigned(), "an integer", "actuators.version");
+  expect_type(v, v.is_number_integer() || v.is_number_unsigned(), "an integer",
+              "actuators.version");
   if (v.get<long long>() != kActuatorsVersion)
-    fail("actuators.version", "version " + v.dump() + " is not supported (this library reads version " +
+    fail("actuators.version", "version " + v.dump() +
+                                  " is not supported (this library reads version " +
                                   std::to_string(kActuatorsVersion) + ")");
   const json& inputs = field(block, "inputs", "actuators");
   expect_object(inputs, "actuators.inputs");
@@ -299,7 +306,8 @@ class DuplicateKeyCheck {
 
 Model model_from_json(const json& root) {
   expect_object(root, "top level");
-  check_keys(root, "", {"name", "sample_time_s", "inputs", "outputs", "process", "noise", "actuators"});
+  check_keys(root, "",
+             {"name", "sample_time_s", "inputs", "outputs", "process", "noise", "actuators"});
   std::string name;
   if (root.contains("name")) {
     expect_type(root["name"], root["name"].is_string(), "a string", "name");
@@ -337,7 +345,8 @@ Model model_from_json(const json& root) {
       noise.emplace(item.key(), discrete_channel(item.value(), path, false));
     }
   }
-  const ActuatorSpecs actuators = root.contains("actuators") ? actuators_from_json(root["actuators"]) : ActuatorSpecs{};
+  const ActuatorSpecs actuators =
+      root.contains("actuators") ? actuators_from_json(root["actuators"]) : ActuatorSpecs{};
   return make_model(std::move(name), ts, inputs, outputs, process, noise, actuators);
 }
 

@@ -75,7 +75,8 @@ TEST(ModelIo, LoadsTheExampleCases) {
 
 TEST(ModelIo, ActuatorsBlockIsOptionalAndVersioned) {
   const std::string valve =
-      ",\n  \"actuators\": {\"version\": 1, \"inputs\": {\"u2\": {\"kind\": \"stick_slip\", \"S\": 3.9, \"J\": 1.0}}}\n}";
+      ",\n  \"actuators\": {\"version\": 1, \"inputs\": {\"u2\": {\"kind\": \"stick_slip\", \"S\": "
+      "3.9, \"J\": 1.0}}}\n}";
   std::string text = kGood;
   text.replace(text.rfind("\n}"), 2, valve);
   const mpmpp::Model m = mpmpp::parse_model(text, "m.json");
@@ -86,7 +87,8 @@ TEST(ModelIo, ActuatorsBlockIsOptionalAndVersioned) {
   const std::string saved = mpmpp::model_to_json(m);
   EXPECT_EQ(mpmpp::model_to_json(mpmpp::parse_model(saved, "again.json")), saved);
   // a file without the block is written without it
-  EXPECT_EQ(mpmpp::model_to_json(mpmpp::parse_model(kGood, "m.json")).find("actuators"), std::string::npos);
+  EXPECT_EQ(mpmpp::model_to_json(mpmpp::parse_model(kGood, "m.json")).find("actuators"),
+            std::string::npos);
   std::string future = text;
   future.replace(future.find("\"version\": 1"), 12, "\"version\": 2");
   EXPECT_EQ(error_of(future).rfind("m.json: actuators.version: version 2 is not supported", 0), 0u);

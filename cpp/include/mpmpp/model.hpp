@@ -36,7 +36,7 @@ struct Model {
   std::vector<std::string> outputs;
   std::vector<std::vector<std::optional<TransferFunction>>> process;  // [output][input]
   std::vector<TransferFunction> noise;                                 // [output]
-  std::vector<std::optional<ActuatorSpec>> actuators;                      // [input]
+  std::vector<std::optional<ActuatorSpec>> actuators;                  // [input]
 
   int num_inputs() const { return static_cast<int>(inputs.size()); }
   int num_outputs() const { return static_cast<int>(outputs.size()); }

@@ -173,6 +173,104 @@ void check_noise(const TransferFunction& h, const std::string& path) {
                    " >= 1 (H must be inversely stable)");
 }
 
+// Parameters of each actuator kind, in file order.
+const std::map<std::string, std::vector<std::string>>& actuator_parameters() {
+  static const std::map<std::string, std::vector<std::string>> kinds = {
+      {"stick_slip", {"S", "J"}},
+      {"he", {"fs", "fd"}},
+      {"backlash", {"S"}},
+      {"deadband", {"width"}},
+      {"saturation", {"lower", "upper"}}};
+  return kinds;
+}
+
+std::vector<std::string> kind_names() {
+  std::vector<std::string> out;
+  for (const auto& [kind, params] : actuator_parameters()) out.push_back(kind);
+  return out;
+}
+
+void check_actuator(const ActuatorSpec& a, const std::string& path) {
+  const auto kind = actuator_parameters().find(a.kind);
+  if (kind == actuator_parameters().end())
+    fail(join(path, "kind"), "unknown kind " + quoted(a.kind) +
+                                 " (expected one of: " + detail::comma_list(kind_names()) + ")");
+  for (const auto& p : kind->second)
+    if (!a.parameters.count(p))
+      fail(path, "missing field " + quoted(p) + " for kind " + quoted(a.kind));
+  for (const auto& [name, value] : a.parameters) {
+    bool known = false;
+    for (const auto& p : kind->second) known = known || p == name;
+    if (!known) fail(join(path, name), "not a parameter of kind " + quoted(a.kind));
+    if (!std::isfinite(value)) fail(join(path, name), "must be finite");
+  }
+  auto nonnegative = [&](const char* p) {
+    if (a.parameters.at(p) < 0.0)
+      fail(join(path, p), "must be >= 0, got " + format_number(a.parameters.at(p)));
+  };
+  if (a.kind == "stick_slip") {
+    nonnegative("S");
+    nonnegative("J");
+    if (a.parameters.at("J") > a.parameters.at("S"))
+      fail(join(path, "J"), "must be <= S (the slip jump cannot exceed the band)");
+  } else if (a.kind == "he") {
+    nonnegative("fs");
+    nonnegative("fd");
+    if (a.parameters.at("fd") > a.parameters.at("fs"))
+      fail(join(path, "fd"), "must be <= fs (dynamic friction cannot exceed static friction)");
+  } else if (a.kind == "backlash") {
+    nonnegative("S");
+  } else if (a.kind == "deadband") {
+    nonnegative("width");
+  } else if (!(a.parameters.at("lower") < a.parameters.at("upper"))) {
+    fail(join(path, "upper"), "must be > lower");
+  }
+  if (a.confidence >= 0.0 ? a.confidence > 1.0 : a.confidence != -1.0)
+    fail(join(path, "confidence"), "must be between 0 and 1, got " + format_number(a.confidence));
+}
+
+ActuatorSpec actuator_from_json(const json& j, const std::string& path) {
+  expect_object(j, path);
+  ActuatorSpec a;
+  const json& kind = field(j, "kind", path);
+  expect_type(kind, kind.is_string(), "a string", join(path, "kind"));
+  a.kind = kind.get<std::string>();
+  for (const auto& item : j.items()) {
+    if (item.key() == "kind") continue;
+    const double x = finite_number(item.value(), join(path, item.key()));
+    (item.key() == "confidence" ? a.confidence : a.parameters[item.key()]) = x;
+  }
+  check_actuator(a, path);
+  return a;
+}
+
+// The optional, versioned block {"version": 1, "inputs": {input: {kind, parameters...}}}.
+ActuatorSpecs actuators_from_json(const json& block) {
+  expect_object(block, "actuators");
+  check_keys(block, "actuators", {"version", "inputs"});
+  const json& v = field(block, "version", "actuators");
+  expect_type(v, v.is_number_integer() || v.is_number_unsigned(), "an integer",
+              "actuators.version");
+  if (v.get<long long>() != kActuatorsVersion)
+    fail("actuators.version", "version " + v.dump() +
+                                  " is not supported (this library reads version " +
+                                  std::to_string(kActuatorsVersion) + ")");
+  const json& inputs = field(block, "inputs", "actuators");
+  expect_object(inputs, "actuators.inputs");
+  ActuatorSpecs out;
+  for (const auto& item : inputs.items())
+    out.emplace(item.key(), actuator_from_json(item.value(), join("actuators.inputs", item.key())));
+  return out;
+}
+
+nlohmann::ordered_json actuator_json(const ActuatorSpec& a) {
+  nlohmann::ordered_json j;
+  j["kind"] = a.kind;
+  for (const auto& p : actuator_parameters().at(a.kind)) j[p] = a.parameters.at(p);
+  if (a.confidence >= 0.0) j["confidence"] = a.confidence;
+  return j;
+}
+
 // Rejects duplicate keys while parsing (nlohmann keeps the last one silently).
 // Arrays in a model file hold only numbers and names, so the object keys alone
 // give the path of the duplicate.
@@ -210,7 +308,8 @@ class DuplicateKeyCheck {
 
 Model model_from_json(const json& root) {
   expect_object(root, "top level");
-  check_keys(root, "", {"name", "sample_time_s", "inputs", "outputs", "process", "noise"});
+  check_keys(root, "",
+             {"name", "sample_time_s", "inputs", "outputs", "process", "noise", "actuators"});
   std::string name;
   if (root.contains("name")) {
     expect_type(root["name"], root["name"].is_string(), "a string", "name");
@@ -248,7 +347,9 @@ Model model_from_json(const json& root) {
       noise.emplace(item.key(), discrete_channel(item.value(), path, false));
     }
   }
-  return make_model(std::move(name), ts, inputs, outputs, process, noise);
+  const ActuatorSpecs actuators =
+      root.contains("actuators") ? actuators_from_json(root["actuators"]) : ActuatorSpecs{};
+  return make_model(std::move(name), ts, inputs, outputs, process, noise, actuators);
 }
 
 nlohmann::ordered_json discrete_json(const TransferFunction& g, bool with_delay) {
@@ -277,11 +378,16 @@ void validate_model(const Model& m) {
     fail("noise", "has " + std::to_string(m.noise.size()) + " models for " +
                       std::to_string(m.outputs.size()) + " outputs");
   for (std::size_t i = 0; i < m.noise.size(); ++i) check_noise(m.noise[i], join("noise", m.outputs[i]));
+  if (!m.actuators.empty() && m.actuators.size() != m.inputs.size())
+    fail("actuators", "has " + std::to_string(m.actuators.size()) + " entries for " +
+                          std::to_string(m.inputs.size()) + " inputs");
+  for (std::size_t j = 0; j < m.actuators.size(); ++j)
+    if (m.actuators[j]) check_actuator(*m.actuators[j], join("actuators.inputs", m.inputs[j]));
 }
 
 Model make_model(std::string name, double sample_time_s, std::vector<std::string> inputs,
                  std::vector<std::string> outputs, const ProcessChannels& process,
-                 const NoiseModels& noise) {
+                 const NoiseModels& noise, const ActuatorSpecs& actuators) {
   Model m;
   m.name = std::move(name);
   m.sample_time_s = sample_time_s;
@@ -297,6 +403,9 @@ Model make_model(std::string name, double sample_time_s, std::vector<std::string
     for (const auto& [input, g] : row) m.process[i][lookup(m.inputs, input, "input", join(row_path, input))] = g;
   }
   for (const auto& [output, h] : noise) m.noise[lookup(m.outputs, output, "output", join("noise", output))] = h;
+  m.actuators.assign(m.inputs.size(), std::nullopt);
+  for (const auto& [input, a] : actuators)
+    m.actuators[lookup(m.inputs, input, "input", join("actuators.inputs", input))] = a;
   validate_model(m);
   return m;
 }
@@ -338,6 +447,13 @@ std::string model_to_json(const Model& m) {
   for (int i = 0; i < m.num_outputs(); ++i)
     if (!(m.noise[i] == TransferFunction())) noise[m.outputs[i]] = discrete_json(m.noise[i], false);
   if (!noise.empty()) root["noise"] = noise;
+  // Written only when an input has one, so a file without actuators saves as before.
+  if (m.has_actuators()) {
+    auto inputs = nlohmann::ordered_json::object();
+    for (int j = 0; j < m.num_inputs(); ++j)
+      if (m.actuators[j]) inputs[m.inputs[j]] = actuator_json(*m.actuators[j]);
+    root["actuators"] = {{"version", kActuatorsVersion}, {"inputs", inputs}};
+  }
   return root.dump(2) + "\n";
 }
 

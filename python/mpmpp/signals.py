@@ -59,13 +59,14 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     raw_y = data[outputs].to_numpy(dtype=float)
     raw_z = data[extras].to_numpy(dtype=float) if extras else np.zeros((len(data), 0))
     ref = np.ones(len(data), bool) if reference is None else np.asarray(reference, bool)
+    nu, ny = len(inputs), len(outputs)
+    valid = np.all(np.isfinite(np.column_stack([raw_u, raw_y])), axis=1)
+    segments, skipped = _segments(valid, min_segment)
+    raw_u = _through_actuators(model, raw_u, segments)
     both = np.column_stack([raw_u, raw_y, raw_z])
     means = np.nanmean(both[ref], axis=0) if ref.any() else np.nanmean(both, axis=0)
     dev = both - means
-    nu, ny = len(inputs), len(outputs)
     # Extra columns with NaNs do not cut the model signals; they are handled where used.
-    valid = np.all(np.isfinite(dev[:, : nu + ny]), axis=1)
-    segments, skipped = _segments(valid, min_segment)
     rows, noise = model_rows(model)
     return Signals(
         time_s=time_s, inputs=inputs, outputs=outputs, extras=extras,
@@ -74,6 +75,24 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
         segments=segments, skipped_rows=skipped, sample_time_s=float(model.sample_time_s),
         rows=rows, noise=noise,
     )
+
+
+def _through_actuators(model, raw_u: np.ndarray, segments) -> np.ndarray:
+    """The inputs the channels see: an input with an actuator in the model (its valve model,
+    docs/stiction.md "Model file") is replaced by the simulated valve position, per segment
+    (the valve starts at rest at each segment's first row); rows outside the segments are NaN."""
+    actuators = model.actuators_dict()
+    if not actuators:
+        return raw_u
+    from .stiction.valve import valve_position
+
+    out = raw_u.copy()
+    for j, name in enumerate(model.inputs):
+        if name in actuators:
+            out[:, j] = np.nan
+            for a, b in segments:
+                out[a:b, j] = valve_position(actuators[name], raw_u[a:b, j])
+    return out
 
 
 def _segments(valid: np.ndarray, min_segment: int) -> tuple[list[tuple[int, int]], int]:
@@ -95,3 +114,14 @@ def per_segment(signals: Signals, fn, *arrays) -> np.ndarray:
             out = np.full((n,) + res.shape[1:], np.nan)
         out[a:b] = res
     return out
+
+
+def valve_input(signals: Signals, j: int, actuator: dict) -> np.ndarray:
+    """Input j's deviation after the valve ``actuator`` (the model file's actuator block): the
+    valve is simulated on the absolute OP of each segment (it starts at rest at each segment's
+    first row), and the position's mean over the segments is the operating point removed."""
+    from .stiction.valve import valve_position
+
+    op = signals.u[:, j] + signals.operating_point[signals.inputs[j]]
+    position = per_segment(signals, lambda x: valve_position(actuator, x), op)
+    return position - np.nanmean(position)

@@ -11,11 +11,14 @@ How each effect lands in FORMATS.md's fixed model format:
   the onset (roots reflected inside the unit circle if needed, so H stays stable);
 - output_drift: the noise model gets a slow pole, H / (1 - rho q^-1): a drift is a
   disturbance the file can only describe stochastically (no deterministic-trend field);
-- input_nonlinearity: the file has no actuator block, so the affected channels get the
-  describing-function gain (the linear scale that best reproduces the backlash response).
+- input_nonlinearity of a single loop: the valve goes into the model file's ``actuators``
+  block, the loop's channel and noise model become the ones fitted from the valve position;
+  of an input driving several outputs: the channels get the describing-function gain (the
+  linear scale that best reproduces the backlash response).
 
-Every refit uses the even 1 h blocks after the finding's onset only; the error before and
-after is reported on the odd blocks, which the refit never saw.
+Every refit uses the even held-out blocks (1 h, shorter in a short record) after the
+finding's onset only; the error before and after is reported on the odd blocks, which the
+refit never saw.
 """
 from __future__ import annotations
 
@@ -26,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .diagnose import DiagnoseResult, ModelChange, diagnose, one_step_errors
-from .diagnose.pipeline import diagnosis_signals
+from .diagnose.pipeline import BLOCK_S, SEGMENT_S, diagnosis_signals, record_lengths
 from .diagnose.process_error import process_errors
 from .diagnose.result import PROCESS_METRIC
 
@@ -47,7 +50,7 @@ class UpdateResult:
     errors: list[OutputError]
     model: object = field(repr=False)           # the new mpmpp.Model
     diagnosis: DiagnoseResult = field(repr=False, default=None)
-    metric: str = ("RMS of the one-step prediction error (deviation units) on held-out 1 h blocks "
+    metric: str = ("RMS of the one-step prediction error (deviation units) on held-out blocks "
                    "after each finding's onset, not used for the refit")
     process_metric: str = PROCESS_METRIC
 
@@ -83,12 +86,14 @@ class UpdateResult:
         return self.diagnosis.plot(out_dir) if self.diagnosis is not None else []
 
 
-def update(model, data, apply, train_end_s: float | None = None, name: str | None = None) -> UpdateResult:
-    """Re-diagnose, apply the findings named in ``apply`` (ids like "F1"), return the new model."""
+def update(model, data, apply, train_end_s: float | None = None, name: str | None = None,
+           min_segment_s: float = SEGMENT_S, block_s: float = BLOCK_S) -> UpdateResult:
+    """Re-diagnose, apply the findings named in ``apply`` (ids like "F1"), return the new model.
+    ``min_segment_s`` / ``block_s`` as for ``diagnose`` (the same findings are re-derived)."""
     ids = [a.strip() for a in (apply.split(",") if isinstance(apply, str) else apply) if a.strip()]
     if not ids:
         raise ValueError("--apply: give at least one finding id (e.g. F1)")
-    diagnosis = diagnose(model, data, train_end_s=train_end_s)
+    diagnosis = diagnose(model, data, train_end_s=train_end_s, min_segment_s=min_segment_s, block_s=block_s)
     findings = [diagnosis.finding(i) for i in ids]
     changes: list[ModelChange] = []
     for f in findings:
@@ -97,7 +102,7 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
 
     sig = diagnosis_signals(model, data, train_end_s).sig
     time_s = sig.time_s
-    block = max(int(round(3600.0 / sig.sample_time_s)), 10)
+    block = record_lengths(len(time_s), sig.sample_time_s, min_segment_s, block_s).block
     heldout = (np.arange(len(time_s)) // block) % 2 == 1
     errors = []
     for out_name in dict.fromkeys(c.output for c in changes):
@@ -119,8 +124,11 @@ def apply_changes(model, changes: list[ModelChange], name: str | None = None):
 
     process = {o: dict(chans) for o, chans in model.process_dict().items()}
     noise = dict(model.noise_dict())
+    actuators = dict(model.actuators_dict())
     inputs = list(model.inputs)
     for c in changes:
+        if c.actuator is not None:
+            actuators[c.input] = c.actuator
         if c.channel is not None:
             if c.new_input and c.input not in inputs:
                 inputs.append(c.input)
@@ -128,7 +136,7 @@ def apply_changes(model, changes: list[ModelChange], name: str | None = None):
         if c.noise is not None:
             noise[c.output] = c.noise
     return Model(name or f"{model.name} (updated)", model.sample_time_s, inputs, list(model.outputs),
-                 process, noise)
+                 process, noise, actuators)
 
 
 def _rms(x: np.ndarray) -> float:

@@ -72,3 +72,27 @@ TEST(ModelIo, LoadsTheExampleCases) {
   EXPECT_FALSE(m.has_channel(0, 1));  // the model lacks basis_weight <- steam_pressure
   EXPECT_THROW(mpmpp::load_model("/nonexistent/model.json"), mpmpp::InputError);
 }
+
+TEST(ModelIo, ActuatorsBlockIsOptionalAndVersioned) {
+  const std::string valve =
+      ",\n  \"actuators\": {\"version\": 1, \"inputs\": {\"u2\": {\"kind\": \"stick_slip\", \"S\": "
+      "3.9, \"J\": 1.0}}}\n}";
+  std::string text = kGood;
+  text.replace(text.rfind("\n}"), 2, valve);
+  const mpmpp::Model m = mpmpp::parse_model(text, "m.json");
+  ASSERT_FALSE(m.actuators[0].has_value());
+  ASSERT_TRUE(m.actuators[1].has_value());
+  EXPECT_EQ(m.actuators[1]->kind, "stick_slip");
+  EXPECT_EQ(m.actuators[1]->parameters.at("S"), 3.9);
+  const std::string saved = mpmpp::model_to_json(m);
+  EXPECT_EQ(mpmpp::model_to_json(mpmpp::parse_model(saved, "again.json")), saved);
+  // a file without the block is written without it
+  EXPECT_EQ(mpmpp::model_to_json(mpmpp::parse_model(kGood, "m.json")).find("actuators"),
+            std::string::npos);
+  std::string future = text;
+  future.replace(future.find("\"version\": 1"), 12, "\"version\": 2");
+  EXPECT_EQ(error_of(future).rfind("m.json: actuators.version: version 2 is not supported", 0), 0u);
+  std::string bad_j = text;
+  bad_j.replace(bad_j.find("\"J\": 1.0"), 8, "\"J\": 5.0");
+  EXPECT_EQ(error_of(bad_j).rfind("m.json: actuators.inputs.u2.J: must be <= S", 0), 0u);
+}

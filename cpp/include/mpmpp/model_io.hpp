@@ -21,13 +21,18 @@ namespace mpmpp {
 // Channels by name, as in the file: process[output][input], noise[output].
 using ProcessChannels = std::map<std::string, std::map<std::string, TransferFunction>>;
 using NoiseModels = std::map<std::string, TransferFunction>;
+using ActuatorSpecs = std::map<std::string, ActuatorSpec>;  // by input name
+
+// The version of the optional "actuators" block this library reads and writes.
+constexpr int kActuatorsVersion = 1;
 
 // Builds a validated Model from named parts (what the file says, and what code
 // that builds models, e.g. the simulator or `update`, says). Absent channels are
-// zero, absent noise models are H = 1. Throws InputError "<json path>: <what>".
+// zero, absent noise models are H = 1, absent actuators linear. Throws InputError
+// "<json path>: <what>".
 Model make_model(std::string name, double sample_time_s, std::vector<std::string> inputs,
                  std::vector<std::string> outputs, const ProcessChannels& process,
-                 const NoiseModels& noise);
+                 const NoiseModels& noise, const ActuatorSpecs& actuators = {});
 
 // Checks the invariants of a Model built by hand (dimensions, names, noise models
 // monic / stable / minimum phase, sample time). Throws InputError "<json path>: <what>".

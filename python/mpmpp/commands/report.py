@@ -17,12 +17,12 @@ def run(args) -> int:
     import os
 
     from ..report import build_report, write_report
-    from .diagnose import MONITORING_S
+    from .diagnose import monitoring_s
 
     if os.path.exists(args.output) and not args.force:
         raise ValueError(f"{args.output}: exists; choose another name or pass --force to replace it")
     model, data, clock = load_pair(args)
-    end = train_end(args, clock, MONITORING_S, "the report's diagnose and detect")
+    end = train_end(args, clock, monitoring_s(model, data), "the report's diagnose and detect")
     page = build_report(args.model, args.data, None if end is None else end - clock.start_s, args.config,
                         loaded=(model, data))
     write_report(args.output, page, force=args.force)

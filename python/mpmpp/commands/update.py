@@ -6,7 +6,7 @@ import os
 
 from ._pair import (add_pair_arguments, add_train_end_argument, load_pair, result_document,
                     summary_in_data_time, train_end)
-from .diagnose import MONITORING_S
+from .diagnose import add_length_arguments, length_options, monitoring_s
 
 
 def add_arguments(parser) -> None:
@@ -18,6 +18,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--force", action="store_true",
                         help="replace NEW_MODEL if it exists, even when it is MODEL itself")
     add_train_end_argument(parser, help_text="as for diagnose (the same findings are re-derived)")
+    add_length_arguments(parser)
 
 
 def replaces_existing(model_path: str, output_path: str, force: bool) -> bool:
@@ -39,8 +40,9 @@ def run(args) -> int:
 
     replaces = replaces_existing(args.model, args.output, args.force)
     model, data, clock = load_pair(args)
-    end = train_end(args, clock, MONITORING_S, "update (diagnose)")
-    result = update(model, data, args.apply, train_end_s=end)
+    lengths = length_options(args)
+    end = train_end(args, clock, monitoring_s(model, data, lengths["min_segment_s"]), "update (diagnose)")
+    result = update(model, data, args.apply, train_end_s=end, **lengths)
     result.save(args.output)
     if args.out:
         result.plot(args.out)

@@ -7,7 +7,8 @@ Method (docs/diagnose.md has the long form), per output:
    disturbance did.
 2. ``process``: candidate channel changes (gain, time constant, delay, missing coupling,
    unmodeled input, output drift), each fitted from an onset on and scored on held-out 1 h
-   blocks; ``actuator``: backlash / stick-slip on an input, across the outputs it drives.
+   blocks; ``valve``: a single loop's (``loops``) sticking valve by the closed-loop Hammerstein
+   fit; ``actuator``: backlash / stick-slip on an input that drives several outputs.
 3. ``noise``: noise change and drift on outputs without a process finding.
 4. ``pipeline``: findings are accepted greedily and ranked by score; ``errors`` gives the
    reported error before / after on held-out blocks; ``result`` holds the records, ``plots``

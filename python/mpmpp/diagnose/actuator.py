@@ -1,4 +1,6 @@
-"""Actuator candidates: a backlash or stick-slip on an input, seen by every channel from it.
+"""Actuator candidates for an input that drives several outputs (an MPC's MV): a backlash or
+stick-slip on the input, seen by every channel from it. (A single loop's valve is judged by
+the closed-loop Hammerstein fit, ``valve``.)
 
 The plant sees f(u) = u + (f(u) - u): the candidate adds G (f(u) - u) to the nominal G u with
 no free scale (the channel itself is unchanged). A free scale would let a very wide backlash
@@ -78,10 +80,13 @@ def _candidate(outputs: list[OutputResidual], j: int, u: np.ndarray, kind: str, 
 
 
 def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: int, min_segment: int,
-                      step: int, logn: float, min_effect: float) -> list[Finding]:
-    """Per input, the best actuator candidate when it passes the held-out tests."""
+                      step: int, logn: float, min_effect: float, skip=frozenset()) -> list[Finding]:
+    """Per input (except those in ``skip``: single loops, judged by ``valve``), the best
+    actuator candidate when it passes the held-out tests."""
     found = []
     for j, name in enumerate(sig.inputs):
+        if name in skip:
+            continue
         u = np.nan_to_num(sig.u[:, j])
         moves = np.abs(np.diff(u))
         scale = float(np.median(moves[moves > 0])) if np.any(moves > 0) else 0.0

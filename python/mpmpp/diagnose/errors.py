@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
-from ..signals import Signals, per_segment
+from ..signals import Signals, per_segment, valve_input
 from .result import HeldOutError, ModelChange
 from .whitening import OutputResidual
 
@@ -16,9 +16,14 @@ def one_step_errors(sig: Signals, i: int, changes: list[ModelChange]) -> np.ndar
     row = list(sig.rows[i])
     noise = sig.noise[i]
     extra_cols = []
+    u = sig.u
     for c in changes:
         if c.output != name:
             continue
+        if c.actuator is not None:
+            j = sig.inputs.index(c.input)
+            u = u.copy() if u is sig.u else u
+            u[:, j] = valve_input(sig, j, c.actuator)
         if c.noise is not None:
             noise = c.noise
         if c.channel is not None:
@@ -26,7 +31,7 @@ def one_step_errors(sig: Signals, i: int, changes: list[ModelChange]) -> np.ndar
                 extra_cols.append((c.channel, sig.z[:, sig.extras.index(c.input)]))
             else:
                 row[sig.inputs.index(c.input)] = c.channel
-    v = per_segment(sig, lambda yy, uu: _core.output_error(row, yy, uu), sig.y[:, i], sig.u)
+    v = per_segment(sig, lambda yy, uu: _core.output_error(row, yy, uu), sig.y[:, i], u)
     for g, z in extra_cols:
         v = v - per_segment(sig, g.filter, np.nan_to_num(z))
         v[~np.isfinite(z)] = np.nan

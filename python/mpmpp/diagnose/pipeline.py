@@ -7,15 +7,52 @@ import math
 
 import numpy as np
 
+from ..record_length import minimum_rows, require_rows, scaled_rows
 from ..signals import Signals, extract
 from .actuator import actuator_findings
 from .confidence import calibrated_confidence
 from .errors import one_step_errors
+from .loops import single_loops
 from .noise import noise_finding
 from .process import process_findings
 from .process_error import held_out_rms, process_parts
 from .result import DiagnoseResult, Finding, InsufficientData
+from .valve import valve_findings
 from .whitening import AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual
+
+
+SEGMENT_S = 3600.0           # preferred shortest stretch a change is fitted on
+BLOCK_S = 3600.0             # preferred held-out block
+# A segment carries an AR(AR_ORDER) noise correction and an onset fit: at least 4 rows per AR
+# coefficient and 50 rows in all; three segments (before, after, and room to place the onset).
+SEGMENT_PARTS, SEGMENT_FLOOR = 3, max(4 * AR_ORDER, 50)
+# Eight blocks give each fold four stretches spread over the record.
+BLOCK_PARTS, BLOCK_FLOOR = 8, 10
+
+
+@dataclasses.dataclass(frozen=True)
+class RecordLengths:
+    """Segment and block lengths in rows for one record: the preferred seconds when the record
+    holds enough of them, a fixed share of a shorter record (a 2 h historian export) otherwise."""
+
+    min_segment: int
+    block: int
+
+    @property
+    def step(self) -> int:
+        """Onset grid: 60 candidate onsets per segment."""
+        return max(self.min_segment // 60, 1)
+
+
+def record_lengths(rows: int, sample_time_s: float, min_segment_s: float = SEGMENT_S,
+                   block_s: float = BLOCK_S) -> RecordLengths:
+    """The lengths diagnose uses; "too short: N rows (H h); need at least M" below its minimum."""
+    for name, value in (("segment", min_segment_s), ("block", block_s)):
+        if not value > 0:
+            raise ValueError(f"--{name} must be > 0 seconds, got {value}")
+    require_rows(rows, sample_time_s, minimum_rows(SEGMENT_PARTS, SEGMENT_FLOOR))
+    return RecordLengths(scaled_rows(rows, sample_time_s, min_segment_s, SEGMENT_PARTS, SEGMENT_FLOOR),
+                         scaled_rows(rows, sample_time_s, block_s, BLOCK_PARTS, BLOCK_FLOOR))
 
 
 @dataclasses.dataclass
@@ -55,8 +92,8 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
     return DiagnosisSignals(dataclasses.replace(sig, noise=noise), estimated, notes)
 
 
-def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float = 3600.0,
-             block_s: float = 3600.0, min_effect: float = 0.01) -> DiagnoseResult:
+def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float = SEGMENT_S,
+             block_s: float = BLOCK_S, min_effect: float = 0.01) -> DiagnoseResult:
     """Ranked findings (FORMATS.md ``diagnose --json``) for ``model`` against ``data``.
 
     ``min_effect``: practical significance; a finding must remove at least this fraction of the
@@ -66,30 +103,41 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
 
     ``train_end_s``: the data before it are taken to agree with the model (operating point
     from them, no onset inside them except a change present from the start).
+
+    ``min_segment_s`` / ``block_s``: preferred shortest segment and held-out block; a record
+    shorter than three segments / eight blocks gets a third / an eighth of its length
+    (``record_lengths``).
     """
+    lengths = record_lengths(len(data), model.sample_time_s, min_segment_s, block_s)
     prepared = diagnosis_signals(model, data, train_end_s)
     sig, notes = prepared.sig, list(prepared.notes)
     time_s = sig.time_s
-    ts = sig.sample_time_s
-    min_segment = max(int(round(min_segment_s / ts)), 4 * AR_ORDER)
-    block = max(int(round(block_s / ts)), 10)
-    step = max(min_segment // 60, 1)
+    min_segment, block, step = lengths.min_segment, lengths.block, lengths.step
     first_onset = 0 if train_end_s is None else sig.seconds_to_index(train_end_s)
     n = len(time_s)
-    if n < 3 * min_segment:
-        raise ValueError(f"data: {n} rows are too few for diagnosis (need at least {3 * min_segment})")
+    if n - first_onset < min_segment:
+        raise ValueError(f"--train-end leaves {n - first_onset} rows after it; diagnose needs at least "
+                         f"{min_segment} ({min_segment * sig.sample_time_s / 3600:.2g} h)")
     logn = math.log(n)
 
     outputs = [output_residual(sig, i, min_segment, first_onset, block, name in prepared.estimated_noise)
                for i, name in enumerate(sig.outputs)]
+    loops = single_loops(sig, data)
     found: list[Finding] = []
     for out in outputs:
-        found += process_findings(out, first_onset, min_segment, step, logn, min_effect)
-    # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels:
-    # it replaces them when it explains more than they do together.
-    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect):
-        rivals = [f for f in found if f.output in nl.outputs_driven and (
-            (f.input == nl.input and f.effect in ("gain", "time_constant", "delay")) or f.effect == "output_drift")]
+        actions = {sig.inputs[lp.input]: lp.action for lp in loops if lp.output == out.i}
+        found += process_findings(out, first_onset, min_segment, step, logn, min_effect, actions)
+    # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels.
+    # A single loop's valve is judged by the closed-loop Hammerstein fit; its stiction replaces
+    # them. An input that drives several outputs gets the actuator candidates, which replace
+    # them when they explain more than they do together.
+    valves, valve_notes = valve_findings(outputs, sig, loops, logn, set(model.actuators_dict()))
+    notes += valve_notes
+    for nl in valves:
+        found = [f for f in found if not _actuator_rival(f, nl)] + [nl]
+    in_loops = {sig.inputs[lp.input] for lp in loops}
+    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect, skip=in_loops):
+        rivals = [f for f in found if _actuator_rival(f, nl)]
         if nl.score > sum(f.score for f in rivals):
             found = [f for f in found if all(f is not r for r in rivals)] + [nl]
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
@@ -121,3 +169,10 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
                           process_parts=parts,
                           notes=notes)
+
+
+def _actuator_rival(f: Finding, nl: Finding) -> bool:
+    """A linear stand-in for the actuator finding ``nl``: a gain / dynamics change of the
+    actuator's channels or a drift on an output it drives."""
+    return f.output in nl.outputs_driven and (
+        (f.input == nl.input and f.effect in ("gain", "time_constant", "delay")) or f.effect == "output_drift")

@@ -35,6 +35,10 @@ DRIFT_GRID_S = 1800.0
 DRIFT_COLUMN = "(drift)"
 MAX_FINDINGS_PER_OUTPUT = 3
 DELAY_GRID_EFFECTS = ("delay", "missing_coupling", "unmodeled_input")
+# A changed channel of the opposite sign needs overwhelming evidence (|theta| / se): in closed
+# loop the controller's feedback path has the inverse sign and fits readily as a "process".
+SIGN_FLIP_Z = 5.0
+SCALED_CHANNEL_EFFECTS = ("gain", "time_constant", "delay")
 
 
 @dataclass
@@ -191,6 +195,12 @@ def first_order_with_time_constant(g: TransferFunction, factor: float) -> Transf
     return TransferFunction(np.asarray(g.num) * scale, new_den, g.delay)
 
 
+def first_lag(g: TransferFunction) -> int:
+    """The first lag at which u reaches y through g: the delay plus leading zero numerator terms."""
+    nonzero = np.flatnonzero(np.asarray(g.num) != 0.0)
+    return g.delay + (int(nonzero[0]) if len(nonzero) else 0)
+
+
 def _drift_drive(length: int, onset: int, form: str, hour: float) -> np.ndarray:
     """A drift starting at ``onset`` (may be negative: started before the first sample):
     ramp max(t - onset, 0) in hours, or step (t > onset)."""
@@ -215,10 +225,12 @@ def process_shapes(sig: Signals, i: int) -> list[Shape]:
             s = first_order_with_time_constant(g, f)
             if s is not None:
                 shapes.append(Shape("time_constant", name, "input", s, g, f, 2, u))
+        lag, num = first_lag(g), np.trim_zeros(np.asarray(g.num, float), "f")
         for dd in range(*DELAY_RANGE):
-            if dd != 0 and g.delay + dd >= 0:
-                shapes.append(Shape("delay", name, "input", TransferFunction(g.num, g.den, g.delay + dd),
-                                    g, g.delay + dd, 2, u))
+            # no lag 0: in closed loop u(t) may already react to y(t), as for the couplings
+            if dd != 0 and len(num) and lag + dd >= 1:
+                shapes.append(Shape("delay", name, "input", TransferFunction(num, g.den, lag + dd),
+                                    g, lag + dd, 2, u))
     # Output drift competes in the same pool: an additive ramp or step on the output from
     # onset tau on (grid of DRIFT_GRID_S). In closed loop the controller cancels a drift with
     # its inputs, so a drift otherwise poses as a channel change fitted to that compensation.
@@ -251,6 +263,23 @@ def _present_in_both_halves(out: OutputResidual, r: np.ndarray, fit: Fit, respon
     drop = responses.weight(fit.shape) * (r**2 - (_without_channel(r, w) - fit.theta * w.psi) ** 2)
     mid = (fit.onset + len(r)) // 2
     return drop[fit.onset:mid].sum() > 0.0 and drop[mid:].sum() > 0.0
+
+
+def flips_sign_without_evidence(fit: Fit, action: int = 0) -> bool:
+    """A gain / time-constant / delay fit whose channel scale theta is negative reverses the
+    channel's sign. It stands only with |theta| >= SIGN_FLIP_Z se and, in a single loop whose
+    controller action the data show (``action`` +1 / -1), a new gain of the sign that action
+    needs (a stable loop cannot have the other)."""
+    if fit.shape.effect not in SCALED_CHANNEL_EFFECTS or not fit.theta < 0.0:
+        return False
+    if not abs(fit.theta) >= SIGN_FLIP_Z * fit.theta_se:
+        return True
+    return action != 0 and np.sign(fit.theta * _gain_sign(fit.shape.nominal)) != action
+
+
+def _gain_sign(g: TransferFunction) -> float:
+    k = g.dc_gain()
+    return float(np.sign(k)) if np.isfinite(k) and k != 0 else float(np.sign(np.sum(g.num)))
 
 
 def _preferred(fits: list[Fit]) -> Fit:
@@ -298,9 +327,11 @@ def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
 
 
 def process_findings(out: OutputResidual, first_onset: int, min_segment: int, step: int, logn: float,
-                     min_effect: float) -> list[Finding]:
+                     min_effect: float, actions: dict | None = None) -> list[Finding]:
     """Greedy: up to MAX_FINDINGS_PER_OUTPUT channel changes, each accepted change kept in the
-    residual the next candidates are fitted to."""
+    residual the next candidates are fitted to. ``actions``: input name -> the controller action
+    of the single loop it forms with this output (``loops``), for the sign guard."""
+    actions = actions or {}
     sig = out.sig
     shapes = process_shapes(sig, out.i)
     r = out.r.copy()
@@ -310,6 +341,7 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
     for _ in range(MAX_FINDINGS_PER_OUTPUT):
         fits = [_fit_shape(out, r, s, first_onset, min_segment, step, responses)
                 for s in shapes if s.column not in taken]
+        fits = [f for f in fits if not flips_sign_without_evidence(f, actions.get(f.shape.column, 0))]
         fits = _best_per_channel(fits, logn)
         fits = [f for f in fits if _present_in_both_halves(out, r, f, responses)]
         if not fits:
@@ -362,10 +394,10 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
                 f"({t_old * s.label:.0f} s instead of {t_old:.0f} s) {when}")
     elif s.effect == "delay":
         estimate = {"delay_samples": int(s.label), "delay_s": s.label * sig.sample_time_s,
-                    "model_delay_samples": s.nominal.delay, "gain_ratio": theta,
+                    "model_delay_samples": first_lag(s.nominal), "gain_ratio": theta,
                     "ci95": ci_from_profile(fit.profile, fit.statistic)}
         text = (f"dead time of {name} about {s.label * sig.sample_time_s:.0f} s instead of "
-                f"{s.nominal.delay * sig.sample_time_s:.0f} s {when}")
+                f"{first_lag(s.nominal) * sig.sample_time_s:.0f} s {when}")
     else:
         pole = 1.0 - float(s.shape.num[0])
         estimate = {"gain": theta, "ci95": ci, "delay_samples": int(s.label),

@@ -15,10 +15,10 @@ PROCESS_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmode
                    "input_nonlinearity")
 
 METRIC = ("RMS of the one-step prediction error of the output (deviation units) on "
-          "held-out 1 h blocks after onset_s")
+          "held-out blocks after onset_s")
 PROCESS_METRIC = ("process part = RMS of the input-explained part of y - G u (the simulation error "
                   "of the output's process part; a whitened Laguerre-basis filter of the inputs "
-                  "fitted on the even 1 h blocks after onset_s, RMS on the odd ones)")
+                  "fitted on the even held-out blocks after onset_s, RMS on the odd ones)")
 
 
 class InsufficientData(Exception):
@@ -29,13 +29,16 @@ class InsufficientData(Exception):
 @dataclass
 class ModelChange:
     """What ``update`` applies: a process channel (possibly from a new input column) set to
-    ``channel`` and/or the output's noise model set to ``noise``."""
+    ``channel``, the output's noise model set to ``noise``, and/or the input's valve model set
+    to ``actuator`` (the model file's actuator block: the channel is then driven by the valve
+    position instead of the OP)."""
 
     output: str
     input: str | None = None
     channel: TransferFunction | None = None
     noise: TransferFunction | None = None
     new_input: bool = False
+    actuator: dict | None = None
 
 
 @dataclass

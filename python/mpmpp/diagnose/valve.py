@@ -1,0 +1,171 @@
+"""Valve nonlinearity of a single loop (OP -> PV), present throughout the record.
+
+The closed-loop Hammerstein fit of ``mpmpp.stiction.fit_valve`` decides: every valve candidate
+carries its own disturbance correction, so a limit cycle the linear valve's noise model has
+absorbed does not hide the stiction (scoring a candidate after whitening with the nominal
+noise model does). When its verdict is stiction, the finding reports the kind, the size in OP
+units and the fit's calibrated confidence; the model change drives the loop's channel by the
+simulated valve position, with the channel's scale refitted on the even blocks (the linear
+model was fitted to the OP, so its gain carries the valve's average attenuation).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+import math
+
+from .._core import TransferFunction
+from ..signals import Signals, valve_input
+from ..stiction import fit_valve
+from ..stiction.hammerstein import N_U, N_Y
+from ..stiction.valve import actuator_from_fit
+from .errors import held_out_error
+from .loops import Loop
+from .result import Finding, ModelChange
+from .process import first_lag
+from .whitening import OutputResidual, stable
+
+MIN_LOOP_ROWS = 100   # fit_valve's minimum
+PARAMS = 3            # kind, S, J
+# Fraction of the linear valve's held-out one-step error variance the valve must remove in each
+# half of the record. Chosen between what the sticking valves of the stiction study's TUNING
+# flow loops remove (19 % or more) and what a linear integral-control loop with a mid-record
+# noise change gives (3-8 %, tests/python/test_diagnose_degenerate.py).
+MIN_EFFECT = 0.05
+
+
+def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop], logn: float,
+                   actuated=frozenset()) -> tuple[list[Finding], list[str]]:
+    """An ``input_nonlinearity`` finding per single loop whose valve fit says stiction, and notes
+    for loops the fit could not assess. Inputs in ``actuated`` have a valve model in the model
+    file already and are not refitted."""
+    found, notes = [], []
+    for lp in loops:
+        out, name = outputs[lp.output], sig.inputs[lp.input]
+        if name in actuated:
+            continue   # the model carries its valve already; sig.u is its position
+        a, b = max(sig.segments, key=lambda s: s[1] - s[0])
+        if b - a < MIN_LOOP_ROWS:
+            notes.append(f"{out.name} <- {name}: no stretch of {MIN_LOOP_ROWS} rows without a gap for the valve fit")
+            continue
+        op = sig.u[a:b, lp.input] + sig.operating_point[name]
+        pv = sig.y[a:b, lp.output] + sig.operating_point[out.name]
+        try:
+            fit = fit_valve(op, pv)
+        except ValueError as exc:
+            notes.append(f"{out.name} <- {name}: valve fit not possible ({exc})")
+            continue
+        if not fit.verdict:
+            continue
+        finding = _finding(out, sig, lp, fit, logn)
+        # as every finding: the model update must predict the held-out blocks better (and the
+        # valve must help in both halves of the record)
+        if finding is not None and finding.error_after < finding.error_before:
+            found.append(finding)
+        else:
+            notes.append(f"{out.name} <- {name}: the valve fit suggests {fit.kind} (confidence "
+                         f"{fit.confidence:.2f}), but a model with it does not predict held-out data "
+                         f"better throughout the record")
+    return found, notes
+
+
+class _ValveArx:
+    """The Hammerstein fit's ARX for one loop, A(q) y = B(q) v + e with v the (valve-driven)
+    input: N_Y output lags and valve lags 1..N_U, plus N_U lags around the channel's dead time
+    when it lies beyond them (a dead time identified with a sticking valve is unreliable)."""
+
+    def __init__(self, out: OutputResidual, sig: Signals, lp: Loop):
+        around = max(first_lag(out.row[lp.input]) - 1, 1)
+        self.lags = sorted(set(range(1, N_U + 1)) | set(range(around, around + N_U)))
+        start = max(N_Y, self.lags[-1])
+        self.y = np.nan_to_num(sig.y[:, lp.output])
+        self.rows = np.array([t for a, b in sig.segments for t in range(a + start, b) if out.weight[t] > 0])
+        self.fold = [w[self.rows] > 0 for w in out.fold]
+
+    def regressors(self, v: np.ndarray) -> np.ndarray:
+        rows = self.rows
+        return np.column_stack([self.y[rows - k] for k in range(1, N_Y + 1)] + [v[rows - k] for k in self.lags])
+
+    def fit(self, phi: np.ndarray, k: int) -> np.ndarray | None:
+        """Coefficients fitted on fold k's rows (None when too few)."""
+        keep = self.fold[k]
+        if keep.sum() < 10 * phi.shape[1]:
+            return None
+        return np.linalg.lstsq(phi[keep], self.y[self.rows][keep], rcond=None)[0]
+
+    def held_out_errors(self, v: np.ndarray) -> np.ndarray | None:
+        """One-step equation errors of each row, by the ARX fitted on the other fold."""
+        phi = self.regressors(v)
+        errors = np.zeros(len(self.rows))
+        for k in (0, 1):
+            coef = self.fit(phi, k)
+            if coef is None:
+                return None
+            errors[self.fold[1 - k]] = (self.y[self.rows] - phi @ coef)[self.fold[1 - k]]
+        return errors
+
+
+def _helps_throughout(arx: _ValveArx, u: np.ndarray, position: np.ndarray) -> bool:
+    """Valve present throughout the record: with the valve, the ARX's held-out one-step error
+    variance is at least MIN_EFFECT lower than with the linear valve in the first and in the
+    second half of the record. A gain from one part only (a disturbance that changed) is not a
+    valve property, and a small gain can be the valve's memory standing in for a misfit noise
+    model: under integral action the OP's direction is a function of past PVs."""
+    linear, valve = arx.held_out_errors(u), arx.held_out_errors(position)
+    if linear is None or valve is None:
+        return False
+    halves = np.array_split(np.arange(len(linear)), 2)
+    return all(np.sum(valve[h] ** 2) <= (1.0 - MIN_EFFECT) * np.sum(linear[h] ** 2) for h in halves)
+
+
+def _valve_model(arx: _ValveArx, out: OutputResidual, sig: Signals, lp: Loop, actuator: dict,
+                 position: np.ndarray) -> ModelChange | None:
+    """The loop's model with the valve: the ARX on the valve position fitted on the even blocks,
+    written as the channel B / A from the position and the noise model 1 / A. The model's own
+    channel and noise model were fitted with a linear valve and have absorbed the limit cycle,
+    so both are refitted together (each valve candidate carries its own disturbance
+    correction)."""
+    coef = arx.fit(arx.regressors(position), 0)
+    if coef is None:
+        return None
+    # roots on or outside the unit circle (a slow or integrating loop) are reflected inside,
+    # so the channel can be simulated and H = 1 / A inverted
+    den = stable(np.r_[1.0, -coef[:N_Y]])
+    return ModelChange(output=out.name, input=sig.inputs[lp.input], actuator=actuator,
+                       channel=TransferFunction(_numerator(coef[N_Y:], arx.lags), den, 1),
+                       noise=TransferFunction([1.0], den, 0))
+
+
+def _numerator(b: np.ndarray, lags: list[int]) -> np.ndarray:
+    """Coefficients at ``lags`` as a numerator from lag 1 on (zeros between)."""
+    num = np.zeros(lags[-1])
+    num[np.asarray(lags) - 1] = b
+    return num
+
+
+def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> Finding | None:
+    name = sig.inputs[lp.input]
+    g = out.row[lp.input]
+    actuator = {**actuator_from_fit(fit.kind, fit.params), "confidence": fit.confidence}
+    arx = _ValveArx(out, sig, lp)
+    position = np.nan_to_num(valve_input(sig, lp.input, actuator))
+    if not _helps_throughout(arx, np.nan_to_num(sig.u[:, lp.input]), position):
+        return None
+    change = _valve_model(arx, out, sig, lp, actuator, position)
+    if change is None:
+        return None
+    err = held_out_error(out, 0, change)
+    # the held-out one-step log-likelihood gain of the model update writes (as for every finding)
+    heldout = out.fold[1].sum() * math.log(err.before / err.after) if err.after > 0 else 0.0
+    s, j = fit.params["S"], fit.params["J"]
+    kind = {"stick_slip": "stick-slip", "he": "stick-slip (He's model)", "backlash": "backlash"}[fit.kind]
+    return Finding(
+        id="", effect="input_nonlinearity", output=out.name, input=name, onset_s=0.0,
+        confidence=fit.confidence,
+        estimate={"kind": fit.kind, "S": s, "J": j, "units": "input", "actuator": actuator,
+                  "gain_ratio": change.channel.dc_gain() / g.dc_gain(),
+                  "likelihood_gain_per_sample": fit.gain_per_sample},
+        error_before=err.before, error_after=err.after,
+        explanation=(f"valve {name} sticks: {kind} with S = {s:.3g} and J = {j:.3g} (OP units), "
+                     f"throughout the record"),
+        score=heldout - 0.5 * PARAMS * logn, change=change, outputs_driven=(out.name,))

@@ -170,7 +170,8 @@ def test_sticking_valve_is_named_with_its_size(seed):
     top = res.findings[0]
     assert top.effect == "input_nonlinearity" and top.onset_s == 0.0
     assert top.estimate["kind"] in ("stick_slip", "he", "backlash") and 2.0 < top.estimate["S"] < 8.0
-    assert top.confidence > 0.9
+    # A calibrated probability (fit on the stiction study's tuning loops): more likely right than not.
+    assert top.confidence > 0.5
     assert top.error_after < 0.95 * top.error_before
     # the linear stand-ins (a noise change, a changed gain) are not reported beside it
     assert [f.effect for f in res.findings] == ["input_nonlinearity"]

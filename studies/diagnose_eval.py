@@ -1,5 +1,5 @@
 """Hidden-effect suite for `mpmpp diagnose`: closed-loop MPC data from `mpmpp.simulate`
-with one effect the model does not know, per effect of the FORMATS.md vocabulary, plus a
+with one effect the model does not know, per effect of the docs/formats.md vocabulary, plus a
 no-change control and a noise-level-only case, several seeds each.
 
     python studies/diagnose_eval.py [--seeds N] [--effects gain,delay,...] [--quiet]

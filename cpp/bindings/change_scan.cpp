@@ -14,27 +14,32 @@ void bind_change_scan(py::module_& m) {
       .def_readonly("statistic", &OnsetFit::statistic)
       .def_readonly("theta", &OnsetFit::theta)
       .def_readonly("theta_se", &OnsetFit::theta_se);
-  py::class_<CrossValidatedOnset>(m, "CrossValidatedOnset", "onset scan on all samples and two-fold cross-validated")
+  py::class_<CrossValidatedOnset>(m, "CrossValidatedOnset",
+                                  "onset scan on all samples and two-fold cross-validated")
       .def_readonly("full", &CrossValidatedOnset::full)
-      .def_property_readonly("folds", [](const CrossValidatedOnset& c) { return py::make_tuple(c.fold[0], c.fold[1]); })
-      .def_property_readonly("heldout",
-                             [](const CrossValidatedOnset& c) { return py::make_tuple(c.heldout[0], c.heldout[1]); });
+      .def_property_readonly(
+          "folds",
+          [](const CrossValidatedOnset& c) { return py::make_tuple(c.fold[0], c.fold[1]); })
+      .def_property_readonly("heldout", [](const CrossValidatedOnset& c) {
+        return py::make_tuple(c.heldout[0], c.heldout[1]);
+      });
   py::class_<ArSplit>(m, "ArSplit", "two-segment AR split of a residual")
       .def_readonly("onset", &ArSplit::onset)
       .def_readonly("statistic", &ArSplit::statistic)
       .def_readonly("variance_before", &ArSplit::variance_before)
       .def_readonly("variance_after", &ArSplit::variance_after)
       .def_readonly("variance_all", &ArSplit::variance_all);
-  m.def("scan_onset", &scan_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"), py::arg("weight"),
-        py::arg("min_segment"), py::arg("step"), py::call_guard<py::gil_scoped_release>());
-  m.def("scan_onset_cross_validated", &scan_onset_cross_validated, py::arg("r"), py::arg("r_without"),
-        py::arg("psi"), py::arg("weight"), py::arg("odd"), py::arg("min_segment"),
-        py::arg("step"), py::call_guard<py::gil_scoped_release>());
-  m.def("fit_at_onset", &fit_at_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"), py::arg("weight"),
-        py::arg("onset"));
-  m.def("fit_ar", &fit_ar, py::arg("e"), py::arg("order"), py::arg("begin"), py::arg("end"));
-  m.def("split_ar", &split_ar, py::arg("e"), py::arg("order"), py::arg("min_segment"), py::arg("step"),
+  m.def("scan_onset", &scan_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"),
+        py::arg("weight"), py::arg("min_segment"), py::arg("step"),
         py::call_guard<py::gil_scoped_release>());
+  m.def("scan_onset_cross_validated", &scan_onset_cross_validated, py::arg("r"),
+        py::arg("r_without"), py::arg("psi"), py::arg("weight"), py::arg("odd"),
+        py::arg("min_segment"), py::arg("step"), py::call_guard<py::gil_scoped_release>());
+  m.def("fit_at_onset", &fit_at_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"),
+        py::arg("weight"), py::arg("onset"));
+  m.def("fit_ar", &fit_ar, py::arg("e"), py::arg("order"), py::arg("begin"), py::arg("end"));
+  m.def("split_ar", &split_ar, py::arg("e"), py::arg("order"), py::arg("min_segment"),
+        py::arg("step"), py::call_guard<py::gil_scoped_release>());
   m.def("backlash", &backlash, py::arg("u"), py::arg("width"));
   m.def("stick_slip", &stick_slip, py::arg("u"), py::arg("band"));
 }

@@ -29,7 +29,8 @@ void bind_data_io(py::module_& m) {
       .def_readonly("text_columns", &DataRepairs::text_columns)
       .def_readonly("resample_factor", &DataRepairs::resample_factor)
       .def_readonly("raw_sample_time_s", &DataRepairs::raw_sample_time_s);
-  py::class_<DataTable>(m, "DataTable", "A data file's contents (FORMATS.md 'Data file'); NaN = missing")
+  py::class_<DataTable>(m, "DataTable",
+                        "A data file's contents (docs/formats.md 'Data file'); NaN = missing")
       .def(py::init(&make_data_table), py::arg("time_s"), py::arg("columns"), py::arg("values"))
       .def_readonly("time_s", &DataTable::time_s)
       .def_readonly("time_origin", &DataTable::time_origin)
@@ -43,19 +44,23 @@ void bind_data_io(py::module_& m) {
       .def_readonly("segment_starts", &DataTable::segment_starts)
       .def_readonly("repairs", &DataTable::repairs)
       .def_property_readonly("num_samples", &DataTable::num_samples);
-  py::class_<LoadOptions>(m, "LoadOptions", "How load_data puts a historian export on the model's grid")
-      .def(py::init([](double max_gap_s, double jitter_fraction, double resample_s, std::string quality_column,
-                       std::vector<std::string> good_quality) {
+  py::class_<LoadOptions>(m, "LoadOptions",
+                          "How load_data puts a historian export on the model's grid")
+      .def(py::init([](double max_gap_s, double jitter_fraction, double resample_s,
+                       std::string quality_column, std::vector<std::string> good_quality) {
              return LoadOptions{max_gap_s, jitter_fraction, resample_s, std::move(quality_column),
                                 std::move(good_quality)};
            }),
-           py::arg("max_gap_s") = -1.0, py::arg("jitter_fraction") = 0.25, py::arg("resample_s") = 0.0,
-           py::arg("quality_column") = "", py::arg("good_quality") = std::vector<std::string>{});
+           py::arg("max_gap_s") = -1.0, py::arg("jitter_fraction") = 0.25,
+           py::arg("resample_s") = 0.0, py::arg("quality_column") = "",
+           py::arg("good_quality") = std::vector<std::string>{});
   const auto release = py::call_guard<py::gil_scoped_release>();
   m.def("read_csv", &read_csv, py::arg("path"), release);
   m.def("parse_csv", &parse_csv, py::arg("text"), py::arg("source") = "<string>", release);
-  m.def("validate_data", &validate_data, py::arg("data"), py::arg("model"), py::arg("source"), release);
-  m.def("load_data", &load_data, py::arg("path"), py::arg("model"), py::arg("options") = LoadOptions{}, release);
+  m.def("validate_data", &validate_data, py::arg("data"), py::arg("model"), py::arg("source"),
+        release);
+  m.def("load_data", &load_data, py::arg("path"), py::arg("model"),
+        py::arg("options") = LoadOptions{}, release);
   m.def("load_data_text", &load_data_text, py::arg("text"), py::arg("source"), py::arg("model"),
         py::arg("options") = LoadOptions{}, release);
   m.def("format_time", &format_time, py::arg("data"), py::arg("time_s"));

@@ -32,8 +32,9 @@ py::list windows_list(const std::vector<FeatureWindow>& ws) {
 }  // namespace
 
 void bind_detector(py::module_& m) {
-  py::class_<DetectorConfig>(m, "DetectorConfig",
-                             "Every detector parameter (paper Tables 1 and 3); see detector_config.hpp")
+  py::class_<DetectorConfig>(
+      m, "DetectorConfig",
+      "Every detector parameter (paper Tables 1 and 3); see detector_config.hpp")
       .def(py::init<>())
       .def_readwrite("window_s", &DetectorConfig::window_s)
       .def_readwrite("step_s", &DetectorConfig::step_s)
@@ -54,10 +55,14 @@ void bind_detector(py::module_& m) {
       .def_readwrite("resampled_models", &DetectorConfig::resampled_models)
       .def_readwrite("seed", &DetectorConfig::seed)
       .def_property(
-          "oe_structure", [](const DetectorConfig& c) { return std::string(to_string(c.oe_structure)); },
-          [](DetectorConfig& c, const std::string& s) { c.oe_structure = oe_structure_from_string(s); })
+          "oe_structure",
+          [](const DetectorConfig& c) { return std::string(to_string(c.oe_structure)); },
+          [](DetectorConfig& c, const std::string& s) {
+            c.oe_structure = oe_structure_from_string(s);
+          })
       .def_property(
-          "resampling", [](const DetectorConfig& c) { return std::string(to_string(c.resampling)); },
+          "resampling",
+          [](const DetectorConfig& c) { return std::string(to_string(c.resampling)); },
           [](DetectorConfig& c, const std::string& s) { c.resampling = resampling_from_string(s); })
       .def_readwrite("arx_regularisation", &DetectorConfig::arx_regularisation)
       .def_static("paper_siso", &DetectorConfig::paper_siso)
@@ -72,45 +77,55 @@ void bind_detector(py::module_& m) {
       .def("step_samples", &DetectorConfig::step_samples, py::arg("sample_time_s"))
       .def("inspection_windows", &DetectorConfig::inspection_windows)
       .def("alarm_count", &DetectorConfig::alarm_count)
-      .def("__repr__", [](const DetectorConfig& c) { return "DetectorConfig(" + c.to_json() + ")"; });
+      .def("__repr__",
+           [](const DetectorConfig& c) { return "DetectorConfig(" + c.to_json() + ")"; });
 
-  py::class_<MismatchIndicator>(m, "MismatchIndicator", "Indicator of eq. 23 and its alarm rule, one channel")
+  py::class_<MismatchIndicator>(m, "MismatchIndicator",
+                                "Indicator of eq. 23 and its alarm rule, one channel")
       .def(py::init<int, int>(), py::arg("n_T"), py::arg("alarm_count"))
-      .def("push",
-           [](MismatchIndicator& self, double score) {
-             auto u = self.push(score);
-             return py::make_tuple(u.indicator, u.alarm, u.started);
-           },
-           py::arg("score"), "-> (indicator, alarm, started)")
+      .def(
+          "push",
+          [](MismatchIndicator& self, double score) {
+            auto u = self.push(score);
+            return py::make_tuple(u.indicator, u.alarm, u.started);
+          },
+          py::arg("score"), "-> (indicator, alarm, started)")
       .def_property_readonly("indicator", &MismatchIndicator::indicator)
       .def_property_readonly("alarm", &MismatchIndicator::alarm)
       .def("history", &MismatchIndicator::history)
       .def("restore", &MismatchIndicator::restore, py::arg("history"), py::arg("alarm"));
 
-  py::class_<WindowFeatures::Series>(m, "WindowSeries", "ARX-OE features of every moving window of a series")
-      .def_property_readonly("windows", [](const WindowFeatures::Series& s) { return windows_list(s.windows); })
+  py::class_<WindowFeatures::Series>(m, "WindowSeries",
+                                     "ARX-OE features of every moving window of a series")
+      .def_property_readonly(
+          "windows", [](const WindowFeatures::Series& s) { return windows_list(s.windows); })
       .def_readonly("features", &WindowFeatures::Series::features,
                     "per channel: windows x feature length (NaN rows for skipped windows)")
       .def_readonly("covariances", &WindowFeatures::Series::covariances,
-                    "resampling 'estimator' only: per channel, windows x d^2 feature covariances (row-major)");
+                    "resampling 'estimator' only: per channel, windows x d^2 feature covariances "
+                    "(row-major)");
 
-  py::class_<WindowFeatures>(m, "WindowFeatures", "Per-window ARX-OE features per monitored channel")
+  py::class_<WindowFeatures>(m, "WindowFeatures",
+                             "Per-window ARX-OE features per monitored channel")
       .def(py::init<const Model&, const DetectorConfig&>(), py::arg("model"), py::arg("config"))
-      .def_property_readonly("channels",
-                             [](const WindowFeatures& f) {
-                               py::list l;
-                               for (const auto& c : f.channels())
-                                 l.append(py::make_tuple(c.kind == MonitoredChannel::Kind::Process ? "process" : "noise",
-                                                         c.output, c.input));
-                               return l;
-                             })
+      .def_property_readonly(
+          "channels",
+          [](const WindowFeatures& f) {
+            py::list l;
+            for (const auto& c : f.channels())
+              l.append(
+                  py::make_tuple(c.kind == MonitoredChannel::Kind::Process ? "process" : "noise",
+                                 c.output, c.input));
+            return l;
+          })
       .def("feature_length", &WindowFeatures::feature_length, py::arg("channel"))
       .def_property_readonly("window_samples", &WindowFeatures::window_samples)
       .def_property_readonly("step_samples", &WindowFeatures::step_samples)
-      .def("extract_series", &WindowFeatures::extract_series, py::arg("time_s"), py::arg("u"), py::arg("y"),
-           py::call_guard<py::gil_scoped_release>());
+      .def("extract_series", &WindowFeatures::extract_series, py::arg("time_s"), py::arg("u"),
+           py::arg("y"), py::call_guard<py::gil_scoped_release>());
 
-  py::class_<ChannelScorer>(m, "ChannelScorer", "Standardisation + trained one-class SVM of one channel")
+  py::class_<ChannelScorer>(m, "ChannelScorer",
+                            "Standardisation + trained one-class SVM of one channel")
       .def(py::init<>())
       .def_readwrite("feature_mean", &ChannelScorer::feature_mean)
       .def_readwrite("feature_scale", &ChannelScorer::feature_scale)
@@ -126,10 +141,12 @@ void bind_detector(py::module_& m) {
       .def_readwrite("training_windows", &ChannelScorer::training_windows)
       .def_readwrite("outlier_fraction", &ChannelScorer::outlier_fraction)
       .def_readwrite("cv_accuracy", &ChannelScorer::cv_accuracy)
-      .def("score_rows", &ChannelScorer::score_rows, py::arg("X"), py::arg("covariances") = Eigen::MatrixXd());
+      .def("score_rows", &ChannelScorer::score_rows, py::arg("X"),
+           py::arg("covariances") = Eigen::MatrixXd());
 
   py::class_<DetectionResult>(m, "DetectionResult")
-      .def_property_readonly("windows", [](const DetectionResult& r) { return windows_list(r.windows); })
+      .def_property_readonly("windows",
+                             [](const DetectionResult& r) { return windows_list(r.windows); })
       .def_readonly("training", &DetectionResult::training)
       .def_readonly("scores", &DetectionResult::scores)
       .def_readonly("indicator", &DetectionResult::indicator)
@@ -143,17 +160,21 @@ void bind_detector(py::module_& m) {
       .def(py::init<Model, DetectorConfig, double, std::vector<ChannelScorer>>(), py::arg("model"),
            py::arg("config"), py::arg("train_end_s"), py::arg("scorers"))
       .def("monitor",
-           py::overload_cast<const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::MatrixXd>&,
-                             const Eigen::Ref<const Eigen::MatrixXd>&>(&Detector::monitor, py::const_),
+           py::overload_cast<const Eigen::Ref<const Eigen::VectorXd>&,
+                             const Eigen::Ref<const Eigen::MatrixXd>&,
+                             const Eigen::Ref<const Eigen::MatrixXd>&>(&Detector::monitor,
+                                                                       py::const_),
            py::arg("time_s"), py::arg("u"), py::arg("y"), py::call_guard<py::gil_scoped_release>())
-      .def("monitor_series", py::overload_cast<const WindowFeatures::Series&>(&Detector::monitor, py::const_),
+      .def("monitor_series",
+           py::overload_cast<const WindowFeatures::Series&>(&Detector::monitor, py::const_),
            py::arg("series"), py::call_guard<py::gil_scoped_release>())
       .def_property_readonly("model", &Detector::model)
       .def_property_readonly("config", &Detector::config)
       .def_property_readonly("train_end_s", &Detector::train_end_s)
       .def_property_readonly("scorers", &Detector::scorers)
       .def("to_json", &Detector::to_json)
-      .def_static("from_json", &Detector::from_json, py::arg("text"), py::arg("source") = "<string>")
+      .def_static("from_json", &Detector::from_json, py::arg("text"),
+                  py::arg("source") = "<string>")
       .def("save", &Detector::save, py::arg("path"))
       .def_static("load", &Detector::load, py::arg("path"));
 }

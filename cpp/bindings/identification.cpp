@@ -31,7 +31,8 @@ OeOptions make_oe_options(int max_iterations, double max_pole_radius, int init_f
 }  // namespace
 
 void bind_identification(py::module_& m) {
-  py::class_<ArxResult>(m, "ArxResult", "High-order ARX estimate A(q) y = sum_j q^-d_j B_j(q) u_j + e")
+  py::class_<ArxResult>(m, "ArxResult",
+                        "High-order ARX estimate A(q) y = sum_j q^-d_j B_j(q) u_j + e")
       .def_readonly("a", &ArxResult::a, "[1, a_1, ..., a_na]")
       .def_readonly("b", &ArxResult::b, "per input [b_j0, ..., b_j,nb_j-1]")
       .def_readonly("theta", &ArxResult::theta)
@@ -40,8 +41,11 @@ void bind_identification(py::module_& m) {
       .def_readonly("equations", &ArxResult::equations)
       .def_readonly("regularised", &ArxResult::regularised);
 
-  py::class_<OeChannel>(m, "OeChannel", "G_j = q^-delay B(q)/F(q) with nb numerator, nf denominator coefficients")
-      .def(py::init([](int nb, int nf, int delay) { return OeChannel{nb, nf, delay}; }),
+  py::class_<OeChannel>(m, "OeChannel",
+                        "G_j = q^-delay B(q)/F(q) with nb numerator, nf denominator coefficients")
+      .def(py::init([](int nb, int nf, int delay) {
+             return OeChannel{nb, nf, delay};
+           }),
            py::arg("nb"), py::arg("nf"), py::arg("delay"))
       .def_static("foptd", &OeChannel::foptd, py::arg("delay"))
       .def_static("fir", &OeChannel::fir, py::arg("length"), py::arg("delay"))
@@ -77,8 +81,9 @@ void bind_identification(py::module_& m) {
       .def_readonly("noise", &ArxOeResult::noise, "a_1 .. a_na of A(q) = 1/H(q)")
       .def_readonly("arx", &ArxOeResult::arx)
       .def_readonly("oe", &ArxOeResult::oe)
-      .def_readonly("two_step_covariance", &ArxOeResult::two_step_covariance,
-                    "covariance of oe.theta with the ARX step's A(q) uncertainty (empty unless asked for)");
+      .def_readonly(
+          "two_step_covariance", &ArxOeResult::two_step_covariance,
+          "covariance of oe.theta with the ARX step's A(q) uncertainty (empty unless asked for)");
 
   py::class_<WindowEstimate>(m, "WindowEstimate")
       .def_readonly("start", &WindowEstimate::start)
@@ -94,14 +99,16 @@ void bind_identification(py::module_& m) {
                    ArxOptions{delta, rank_tolerance});
       },
       py::arg("y"), py::arg("u"), py::arg("na"), py::arg("nb"), py::arg("delays"),
-      py::arg("delta") = ArxOptions{}.delta, py::arg("rank_tolerance") = ArxOptions{}.rank_tolerance,
+      py::arg("delta") = ArxOptions{}.delta,
+      py::arg("rank_tolerance") = ArxOptions{}.rank_tolerance,
       py::call_guard<py::gil_scoped_release>());
 
   m.def(
       "oe",
       [](const ConstVec& y, const ConstMat& u, const std::vector<OeChannel>& channels,
          Eigen::Index skip, int max_iterations, double max_pole_radius, int init_fir_length) {
-        return oe(y, u, channels, skip, make_oe_options(max_iterations, max_pole_radius, init_fir_length));
+        return oe(y, u, channels, skip,
+                  make_oe_options(max_iterations, max_pole_radius, init_fir_length));
       },
       py::arg("y"), py::arg("u"), py::arg("channels"), py::arg("skip") = 0,
       py::arg("max_iterations") = OeOptions{}.max_iterations,
@@ -109,7 +116,8 @@ void bind_identification(py::module_& m) {
       py::arg("init_fir_length") = OeOptions{}.init_fir_length,
       py::call_guard<py::gil_scoped_release>());
 
-  py::class_<ArxOeEstimator>(m, "ArxOeEstimator", "Per-window ARX-OE of one output (reusable workspace)")
+  py::class_<ArxOeEstimator>(m, "ArxOeEstimator",
+                             "Per-window ARX-OE of one output (reusable workspace)")
       .def(py::init([](int na, std::vector<int> arx_nb, std::vector<int> delays,
                        std::vector<OeChannel> structures, std::vector<int> fir_length,
                        const std::string& detrend, double delta, int max_iterations,
@@ -130,7 +138,8 @@ void bind_identification(py::module_& m) {
            py::arg("max_iterations") = OeOptions{}.max_iterations,
            py::arg("max_pole_radius") = OeOptions{}.max_pole_radius,
            py::arg("two_step_covariance") = false)
-      .def("estimate", py::overload_cast<const ConstVec&, const ConstMat&>(&ArxOeEstimator::estimate),
+      .def("estimate",
+           py::overload_cast<const ConstVec&, const ConstMat&>(&ArxOeEstimator::estimate),
            py::arg("y"), py::arg("u"), py::call_guard<py::gil_scoped_release>())
       .def("estimate_windows", &ArxOeEstimator::estimate_windows, py::arg("y"), py::arg("u"),
            py::arg("window"), py::arg("step"), py::call_guard<py::gil_scoped_release>());

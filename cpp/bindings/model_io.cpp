@@ -62,9 +62,10 @@ py::dict actuator_to_python(const ActuatorSpec& a) {
 }  // namespace
 
 void bind_model_io(py::module_& m) {
-  py::class_<Model>(m, "Model",
-                    "The nominal model (FORMATS.md 'Model file'): process[output][input] channels "
-                    "(absent = zero) and noise[output] models (absent = 1).")
+  py::class_<Model>(
+      m, "Model",
+      "The nominal model (docs/formats.md 'Model file'): process[output][input] channels "
+      "(absent = zero) and noise[output] models (absent = 1).")
       .def(py::init([](std::string name, double ts, std::vector<std::string> inputs,
                        std::vector<std::string> outputs, const ProcessChannels& process,
                        const NoiseModels& noise, const py::dict& actuators) {
@@ -84,7 +85,8 @@ void bind_model_io(py::module_& m) {
       .def(
           "process",
           [](const Model& self, const std::string& output, const std::string& input) {
-            return self.process[index_of(self.outputs, output, "output")][index_of(self.inputs, input, "input")];
+            return self.process[index_of(self.outputs, output, "output")]
+                               [index_of(self.inputs, input, "input")];
           },
           py::arg("output"), py::arg("input"),
           "The channel output <- input, or None if the model has none")
@@ -131,8 +133,10 @@ void bind_model_io(py::module_& m) {
           [](const Model& a, const Model& b) { return model_to_json(a) == model_to_json(b); },
           py::is_operator())
       .def("__repr__", [](const Model& self) {
-        return "<mpmpp.Model '" + self.name + "': " + std::to_string(self.num_inputs()) + " inputs, " +
-               std::to_string(self.num_outputs()) + " outputs, Ts = " + py::repr(py::float_(self.sample_time_s)).cast<std::string>() + " s>";
+        return "<mpmpp.Model '" + self.name + "': " + std::to_string(self.num_inputs()) +
+               " inputs, " + std::to_string(self.num_outputs()) +
+               " outputs, Ts = " + py::repr(py::float_(self.sample_time_s)).cast<std::string>() +
+               " s>";
       });
   m.def("load_model", &load_model, py::arg("path"));
   m.def("save_model", &save_model, py::arg("model"), py::arg("path"));

@@ -10,7 +10,8 @@ namespace py = pybind11;
 namespace mpmpp::bindings {
 
 void bind_mpc(py::module_& m) {
-  py::enum_<DisturbanceModel>(m, "DisturbanceModel", "output-disturbance forecast of the MPC (see mpc.hpp)")
+  py::enum_<DisturbanceModel>(m, "DisturbanceModel",
+                              "output-disturbance forecast of the MPC (see mpc.hpp)")
       .value("bias", DisturbanceModel::Bias)
       .value("noise_model", DisturbanceModel::NoiseModel);
 
@@ -37,8 +38,8 @@ void bind_mpc(py::module_& m) {
       .def_readwrite("disturbance", &MpcTuning::disturbance);
 
   py::class_<Mpc>(m, "Mpc", "Linear MPC on a nominal transfer-matrix model (see mpc.hpp)")
-      .def(py::init<const Model&, MpcTuning, const Eigen::Ref<const Eigen::VectorXd>&>(), py::arg("model"),
-           py::arg("tuning"), py::arg("u_initial"))
+      .def(py::init<const Model&, MpcTuning, const Eigen::Ref<const Eigen::VectorXd>&>(),
+           py::arg("model"), py::arg("tuning"), py::arg("u_initial"))
       .def("step", &Mpc::step, py::arg("y"), "measured y(t) -> applied u(t)")
       .def("set_cv_target", &Mpc::set_cv_target, py::arg("output"), py::arg("value"))
       .def("set_mv_target", &Mpc::set_mv_target, py::arg("input"), py::arg("value"))
@@ -50,7 +51,8 @@ void bind_mpc(py::module_& m) {
       .def_property_readonly("l", &Mpc::qp_l)
       .def_property_readonly("u_bound", &Mpc::qp_u)
       .def_property_readonly("x", [](const Mpc& c) { return c.last_result().x; })
-      .def_property_readonly("status", [](const Mpc& c) { return std::string(to_string(c.last_result().status)); })
+      .def_property_readonly(
+          "status", [](const Mpc& c) { return std::string(to_string(c.last_result().status)); })
       .def_property_readonly("dynamic_matrix", &Mpc::dynamic_matrix)
       .def_property_readonly("free_response", &Mpc::free_response)
       .def_property_readonly("disturbance_estimate", &Mpc::disturbance_estimate)

@@ -9,8 +9,8 @@ namespace py = pybind11;
 
 namespace mpmpp::bindings {
 
-OneClassSvmOptions svm_options(double nu, double kernel_scale, double tol, double cache_mb, bool shrinking,
-                               std::int64_t max_iter) {
+OneClassSvmOptions svm_options(double nu, double kernel_scale, double tol, double cache_mb,
+                               bool shrinking, std::int64_t max_iter) {
   OneClassSvmOptions o;
   o.nu = nu;
   o.kernel_scale = kernel_scale;
@@ -43,7 +43,8 @@ void bind_one_class_svm(py::module_& m) {
       "fit_one_class_svm",
       [](const Ref& X, double nu, double kernel_scale, double tol, double cache_mb, bool shrinking,
          std::int64_t max_iter) {
-        return fit_one_class_svm(X, svm_options(nu, kernel_scale, tol, cache_mb, shrinking, max_iter));
+        return fit_one_class_svm(X,
+                                 svm_options(nu, kernel_scale, tol, cache_mb, shrinking, max_iter));
       },
       py::arg("X"), py::arg("nu") = 0.5, py::arg("kernel_scale") = 1.0, py::arg("tol") = 1e-3,
       py::arg("cache_mb") = 200.0, py::arg("shrinking") = true, py::arg("max_iter") = -1,
@@ -66,7 +67,8 @@ void bind_one_class_svm(py::module_& m) {
         py::arg("covariance"), py::arg("n"), py::arg("alpha"), py::arg("seed"),
         py::call_guard<py::gil_scoped_release>());
   m.def("resample", &resample, py::arg("features"), py::arg("n"), py::arg("alpha") = 1.5,
-        py::arg("seed") = 0, py::arg("correlated") = false, py::call_guard<py::gil_scoped_release>());
+        py::arg("seed") = 0, py::arg("correlated") = false,
+        py::call_guard<py::gil_scoped_release>());
 }
 
 }  // namespace mpmpp::bindings

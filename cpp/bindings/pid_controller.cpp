@@ -10,7 +10,8 @@ namespace py = pybind11;
 namespace mpmpp::bindings {
 
 void bind_pid_controller(py::module_& m) {
-  py::class_<PidLoop>(m, "PidLoop", "one PID loop: output <- input, K, Ti, Td, N, saturation (pid_controller.hpp)")
+  py::class_<PidLoop>(
+      m, "PidLoop", "one PID loop: output <- input, K, Ti, Td, N, saturation (pid_controller.hpp)")
       .def(py::init<>())
       .def_readwrite("output", &PidLoop::output)
       .def_readwrite("input", &PidLoop::input)
@@ -20,8 +21,9 @@ void bind_pid_controller(py::module_& m) {
       .def_readwrite("derivative_filter", &PidLoop::derivative_filter)
       .def_readwrite("min", &PidLoop::min)
       .def_readwrite("max", &PidLoop::max);
-  m.def("pid_outputs", &pid_outputs, py::arg("loops"), py::arg("sample_time_s"), py::arg("u_initial"), py::arg("y"),
-        py::arg("setpoint"), "controller outputs u (samples x inputs) for measurements y and setpoints");
+  m.def("pid_outputs", &pid_outputs, py::arg("loops"), py::arg("sample_time_s"),
+        py::arg("u_initial"), py::arg("y"), py::arg("setpoint"),
+        "controller outputs u (samples x inputs) for measurements y and setpoints");
 }
 
 }  // namespace mpmpp::bindings

@@ -34,8 +34,9 @@ Eigen::MatrixXd as_constraint_matrix(const Eigen::Ref<const Eigen::MatrixXd>& A,
 
 // Per-solve wall times (seconds) of warm-started solves of a sequence, measured inside C++ so
 // that Python-call overhead does not enter. Each repeat restarts cold at the first problem.
-RowMatrix time_sequence(QpSolver& solver, const Eigen::Ref<const RowMatrix>& Q, const Eigen::Ref<const RowMatrix>& L,
-                        const Eigen::Ref<const RowMatrix>& U, int repeats) {
+RowMatrix time_sequence(QpSolver& solver, const Eigen::Ref<const RowMatrix>& Q,
+                        const Eigen::Ref<const RowMatrix>& L, const Eigen::Ref<const RowMatrix>& U,
+                        int repeats) {
   if (Q.cols() != solver.num_variables()) throw InputError("Q must have one q per row");
   if (L.cols() != solver.num_constraints() || U.cols() != solver.num_constraints() ||
       L.rows() != Q.rows() || U.rows() != Q.rows())
@@ -61,10 +62,12 @@ RowMatrix time_sequence(QpSolver& solver, const Eigen::Ref<const RowMatrix>& Q, 
 }  // namespace
 
 void bind_qp(py::module_& m) {
-  py::class_<QpResult>(m, "QpResult", "Solution of a QP: x, duals y (OSQP sign), status, iterations, objective")
+  py::class_<QpResult>(m, "QpResult",
+                       "Solution of a QP: x, duals y (OSQP sign), status, iterations, objective")
       .def_readonly("x", &QpResult::x)
       .def_readonly("y", &QpResult::y)
-      .def_property_readonly("status", [](const QpResult& r) { return std::string(to_string(r.status)); })
+      .def_property_readonly("status",
+                             [](const QpResult& r) { return std::string(to_string(r.status)); })
       .def_readonly("iterations", &QpResult::iterations)
       .def_readonly("objective", &QpResult::objective)
       .def("__repr__", [](const QpResult& r) {
@@ -74,25 +77,31 @@ void bind_qp(py::module_& m) {
       });
 
   const QpSettings defaults;
-  py::class_<QpSolver>(m, "QpSolver",
-                       "Dense dual active-set (Goldfarb-Idnani) solver for min 1/2 x'Px + q'x s.t. l <= Ax <= u\n"
-                       "with fixed P, A; each solve(q, l, u) warm-starts from the previous active set.")
-      .def(py::init([](const Eigen::Ref<const Eigen::MatrixXd>& P, const Eigen::Ref<const Eigen::MatrixXd>& A,
-                       int max_iterations, double feasibility_tol, double optimality_tol, double dependency_tol) {
-             return QpSolver(P, as_constraint_matrix(A, P.rows()),
-                             make_settings(max_iterations, feasibility_tol, optimality_tol, dependency_tol));
+  py::class_<QpSolver>(
+      m, "QpSolver",
+      "Dense dual active-set (Goldfarb-Idnani) solver for min 1/2 x'Px + q'x s.t. l <= Ax <= u\n"
+      "with fixed P, A; each solve(q, l, u) warm-starts from the previous active set.")
+      .def(py::init([](const Eigen::Ref<const Eigen::MatrixXd>& P,
+                       const Eigen::Ref<const Eigen::MatrixXd>& A, int max_iterations,
+                       double feasibility_tol, double optimality_tol, double dependency_tol) {
+             return QpSolver(
+                 P, as_constraint_matrix(A, P.rows()),
+                 make_settings(max_iterations, feasibility_tol, optimality_tol, dependency_tol));
            }),
            py::arg("P"), py::arg("A"), py::arg("max_iterations") = defaults.max_iterations,
-           py::arg("feasibility_tol") = defaults.feasibility_tol, py::arg("optimality_tol") = defaults.optimality_tol,
+           py::arg("feasibility_tol") = defaults.feasibility_tol,
+           py::arg("optimality_tol") = defaults.optimality_tol,
            py::arg("dependency_tol") = defaults.dependency_tol)
       // A solve takes microseconds: keeping the GIL costs less than releasing it and keeps
       // concurrent Python threads from sharing one solver's workspace.
-      .def("solve", &QpSolver::solve, py::arg("q"), py::arg("l"), py::arg("u"), py::return_value_policy::copy,
+      .def("solve", &QpSolver::solve, py::arg("q"), py::arg("l"), py::arg("u"),
+           py::return_value_policy::copy,
            "Solve with the given q, l, u, warm-started from the previous active set")
       .def("reset_warm_start", &QpSolver::reset_warm_start)
       .def_property_readonly("num_variables", &QpSolver::num_variables)
       .def_property_readonly("num_constraints", &QpSolver::num_constraints)
-      .def("time_sequence", &time_sequence, py::arg("Q"), py::arg("L"), py::arg("U"), py::arg("repeats") = 1,
+      .def("time_sequence", &time_sequence, py::arg("Q"), py::arg("L"), py::arg("U"),
+           py::arg("repeats") = 1,
            "Per-solve seconds (repeats x len(Q)) of warm-started solves timed inside C++",
            py::call_guard<py::gil_scoped_release>());
 
@@ -102,12 +111,15 @@ void bind_qp(py::module_& m) {
          const Eigen::Ref<const Eigen::MatrixXd>& A, const Eigen::Ref<const Eigen::VectorXd>& l,
          const Eigen::Ref<const Eigen::VectorXd>& u, int max_iterations, double feasibility_tol,
          double optimality_tol, double dependency_tol) {
-        return solve_qp(P, q, as_constraint_matrix(A, P.rows()), l, u,
-                        make_settings(max_iterations, feasibility_tol, optimality_tol, dependency_tol));
+        return solve_qp(
+            P, q, as_constraint_matrix(A, P.rows()), l, u,
+            make_settings(max_iterations, feasibility_tol, optimality_tol, dependency_tol));
       },
       py::arg("P"), py::arg("q"), py::arg("A"), py::arg("l"), py::arg("u"),
-      py::arg("max_iterations") = defaults.max_iterations, py::arg("feasibility_tol") = defaults.feasibility_tol,
-      py::arg("optimality_tol") = defaults.optimality_tol, py::arg("dependency_tol") = defaults.dependency_tol,
+      py::arg("max_iterations") = defaults.max_iterations,
+      py::arg("feasibility_tol") = defaults.feasibility_tol,
+      py::arg("optimality_tol") = defaults.optimality_tol,
+      py::arg("dependency_tol") = defaults.dependency_tol,
       "Solve min 1/2 x'Px + q'x s.t. l <= Ax <= u once (dense dual active-set method)");
 }
 

@@ -12,7 +12,8 @@ namespace py = pybind11;
 namespace mpmpp::bindings {
 
 void bind_streaming_detector(py::module_& m) {
-  py::class_<StreamWindow>(m, "StreamWindow", "One completed moving window (see streaming_detector.hpp)")
+  py::class_<StreamWindow>(m, "StreamWindow",
+                           "One completed moving window (see streaming_detector.hpp)")
       .def_readonly("window", &StreamWindow::window)
       .def_readonly("start_s", &StreamWindow::start_s)
       .def_readonly("end_s", &StreamWindow::end_s)
@@ -25,8 +26,9 @@ void bind_streaming_detector(py::module_& m) {
       .def_readonly("alarm_starts", &StreamWindow::alarm_starts);
 
   using Vec = Eigen::Ref<const Eigen::VectorXd>;
-  py::class_<StreamingDetector>(m, "StreamingDetector",
-                                "Sample-by-sample MPM / noise-change monitoring with a trained Detector")
+  py::class_<StreamingDetector>(
+      m, "StreamingDetector",
+      "Sample-by-sample MPM / noise-change monitoring with a trained Detector")
       .def(py::init<Detector>(), py::arg("detector"))
       .def_static("load", &StreamingDetector::load, py::arg("detector_path"))
       .def(
@@ -42,8 +44,8 @@ void bind_streaming_detector(py::module_& m) {
           },
           py::arg("time_s"), py::arg("u"), py::arg("y"),
           "One sample; the completed StreamWindow, or None")
-      .def("push_block", &StreamingDetector::push_block, py::arg("time_s"), py::arg("u"), py::arg("y"),
-           py::call_guard<py::gil_scoped_release>())
+      .def("push_block", &StreamingDetector::push_block, py::arg("time_s"), py::arg("u"),
+           py::arg("y"), py::call_guard<py::gil_scoped_release>())
       .def("checkpoint_json", &StreamingDetector::checkpoint_json)
       .def("save_checkpoint", &StreamingDetector::save_checkpoint, py::arg("path"),
            py::call_guard<py::gil_scoped_release>())

@@ -10,8 +10,8 @@ namespace py = pybind11;
 namespace mpmpp::bindings {
 
 void bind_transfer_function(py::module_& m) {
-  py::class_<TransferFunction>(m, "TransferFunction",
-                               "G(q) = q^-delay num(q^-1) / den(q^-1), den normalised to den[0] = 1")
+  py::class_<TransferFunction>(
+      m, "TransferFunction", "G(q) = q^-delay num(q^-1) / den(q^-1), den normalised to den[0] = 1")
       .def(py::init<>())
       .def(py::init<Eigen::VectorXd, Eigen::VectorXd, int>(), py::arg("num"), py::arg("den"),
            py::arg("delay") = 0)

@@ -8,7 +8,7 @@
 // Loads a trained detector (saved by `mpmpp detect --save-detector`, mpmpp.Detector.save or
 // this program), or trains one here (train_detector) on the windows of DATA ending within
 // SECONDS of its first sample, as `mpmpp detect` does; to retrain on newer normal data, run
-// again with --train on that data. Then reads a data file (FORMATS.md "Data file") and pushes
+// again with --train on that data. Then reads a data file (docs/formats.md "Data file") and pushes
 // its samples one by one into a StreamingDetector, as a historian would. Prints each alarm as
 // it starts and each skipped window; at the end it writes the detection results (detector_io:
 // alarms CSV, scores CSV, the `detect --json` document), atomically.
@@ -42,9 +42,11 @@ struct Args {
 
 [[noreturn]] void usage(const std::string& what) {
   std::cerr << "stream_csv: " << what
-            << "\nusage: stream_csv DETECTOR.json DATA.csv [--alarms-csv FILE] [--scores-csv FILE] [--json FILE]"
+            << "\nusage: stream_csv DETECTOR.json DATA.csv [--alarms-csv FILE] [--scores-csv FILE] "
+               "[--json FILE]"
                " [--checkpoint FILE] [--stop-after N]\n"
-               "       stream_csv --train MODEL.json --train-end SECONDS [--config FILE|PRESET] [--save-detector FILE]"
+               "       stream_csv --train MODEL.json --train-end SECONDS [--config FILE|PRESET] "
+               "[--save-detector FILE]"
                " DATA.csv [--alarms-csv FILE] [--scores-csv FILE] [--json FILE] [--stop-after N]\n";
   std::exit(2);
 }
@@ -58,25 +60,36 @@ Args parse_args(int argc, char** argv) {
       if (k + 1 >= argc) usage(s + " needs a value");
       return argv[++k];
     };
-    if (s == "--alarms-csv") a.alarms_csv = value();
-    else if (s == "--scores-csv") a.scores_csv = value();
-    else if (s == "--json") a.json = value();
-    else if (s == "--checkpoint") a.checkpoint = value();
-    else if (s == "--train") a.train_model = value();
-    else if (s == "--config") a.config = value();
-    else if (s == "--save-detector") a.save_detector = value();
+    if (s == "--alarms-csv")
+      a.alarms_csv = value();
+    else if (s == "--scores-csv")
+      a.scores_csv = value();
+    else if (s == "--json")
+      a.json = value();
+    else if (s == "--checkpoint")
+      a.checkpoint = value();
+    else if (s == "--train")
+      a.train_model = value();
+    else if (s == "--config")
+      a.config = value();
+    else if (s == "--save-detector")
+      a.save_detector = value();
     else if (s == "--train-end") {
       const std::string v = value();
       char* end = nullptr;
       a.train_end_s = std::strtod(v.c_str(), &end);
-      if (*end != '\0' || !(*a.train_end_s > 0)) usage("--train-end: expected seconds > 0, got \"" + v + "\"");
+      if (*end != '\0' || !(*a.train_end_s > 0))
+        usage("--train-end: expected seconds > 0, got \"" + v + "\"");
     } else if (s == "--stop-after") {
       const std::string v = value();
       char* end = nullptr;
       a.stop_after = std::strtoll(v.c_str(), &end, 10);
-      if (*end != '\0' || a.stop_after < 0) usage("--stop-after: expected a sample count, got \"" + v + "\"");
-    } else if (s.rfind("--", 0) == 0) usage("unknown option " + s);
-    else positional.push_back(s);
+      if (*end != '\0' || a.stop_after < 0)
+        usage("--stop-after: expected a sample count, got \"" + v + "\"");
+    } else if (s.rfind("--", 0) == 0)
+      usage("unknown option " + s);
+    else
+      positional.push_back(s);
   }
   if (a.train_model.empty()) {
     if (a.train_end_s || !a.config.empty() || !a.save_detector.empty())
@@ -86,7 +99,8 @@ Args parse_args(int argc, char** argv) {
     a.data = positional[1];
   } else {
     if (!a.train_end_s) usage("--train needs --train-end SECONDS");
-    if (!a.checkpoint.empty()) usage("--checkpoint resumes a saved detector's stream, not a training run");
+    if (!a.checkpoint.empty())
+      usage("--checkpoint resumes a saved detector's stream, not a training run");
     if (positional.size() != 1) usage("with --train, expected DATA.csv only");
     a.data = positional[0];
   }
@@ -113,7 +127,8 @@ std::vector<int> columns_of(const mpmpp::DataTable& data, const std::string& sou
   std::vector<int> cols;
   for (const auto& name : names) {
     const int c = data.column(name);
-    if (c < 0) throw mpmpp::InputError(source + ": column \"" + name + "\" (model " + kind + ") is missing");
+    if (c < 0)
+      throw mpmpp::InputError(source + ": column \"" + name + "\" (model " + kind + ") is missing");
     cols.push_back(c);
   }
   return cols;
@@ -121,7 +136,8 @@ std::vector<int> columns_of(const mpmpp::DataTable& data, const std::string& sou
 
 Eigen::MatrixXd gather(const mpmpp::DataTable& data, const std::vector<int>& cols) {
   Eigen::MatrixXd m(data.num_samples(), static_cast<Eigen::Index>(cols.size()));
-  for (std::size_t j = 0; j < cols.size(); ++j) m.col(static_cast<Eigen::Index>(j)) = data.values.col(cols[j]);
+  for (std::size_t j = 0; j < cols.size(); ++j)
+    m.col(static_cast<Eigen::Index>(j)) = data.values.col(cols[j]);
   return m;
 }
 
@@ -140,7 +156,8 @@ int main(int argc, char** argv) {
       if (args.config.empty() && model.num_outputs() > 1) config = mpmpp::DetectorConfig::mimo();
       const Eigen::MatrixXd u = gather(data, columns_of(data, args.data, model.inputs, "input"));
       const Eigen::MatrixXd y = gather(data, columns_of(data, args.data, model.outputs, "output"));
-      mpmpp::Detector trained = mpmpp::train_detector(model, config, data.time_s, u, y, *args.train_end_s);
+      mpmpp::Detector trained =
+          mpmpp::train_detector(model, config, data.time_s, u, y, *args.train_end_s);
       if (!args.save_detector.empty()) trained.save(args.save_detector);
       std::printf("trained on %g s of %s\n", *args.train_end_s, args.data.c_str());
       loaded.emplace(std::move(trained));
@@ -148,7 +165,8 @@ int main(int argc, char** argv) {
     mpmpp::StreamingDetector& stream = *loaded;
     const mpmpp::Detector& detector = stream.detector();
     const mpmpp::Model& model = detector.model();
-    if (!args.checkpoint.empty() && std::ifstream(args.checkpoint)) stream.load_checkpoint(args.checkpoint);
+    if (!args.checkpoint.empty() && std::ifstream(args.checkpoint))
+      stream.load_checkpoint(args.checkpoint);
     const std::vector<int> u_cols = columns_of(data, args.data, model.inputs, "input");
     const std::vector<int> y_cols = columns_of(data, args.data, model.outputs, "output");
 
@@ -170,18 +188,21 @@ int main(int argc, char** argv) {
         throw mpmpp::InputError(args.data + ": row " + std::to_string(r + 2) + ": " + e.what());
       }
       if (!completed) continue;
-      result.windows.push_back({w.window * stream.step_samples(), w.start_s, w.end_s, w.skipped, w.skip_reason});
+      result.windows.push_back(
+          {w.window * stream.step_samples(), w.start_s, w.end_s, w.skipped, w.skip_reason});
       result.training.push_back(w.training);
       scores.push_back(w.scores);
       indicator.push_back(w.indicator);
       if (w.skipped)
-        std::printf("window %d (%.17g .. %.17g s) skipped: %s\n", w.window, w.start_s, w.end_s, w.skip_reason.c_str());
+        std::printf("window %d (%.17g .. %.17g s) skipped: %s\n", w.window, w.start_s, w.end_s,
+                    w.skip_reason.c_str());
       for (int k : w.alarm_starts) {
         result.alarms.push_back({k, static_cast<int>(result.windows.size()) - 1, w.end_s});
-        std::printf("alarm %-5s %-28s starts at %.17g s (%.2f h), indicator %.3f\n",
-                    result.channels[k].kind == mpmpp::MonitoredChannel::Kind::Process ? "MPM" : "noise",
-                    mpmpp::channel_label(model, result.channels[k]).c_str(), w.end_s, w.end_s / 3600.0,
-                    w.indicator[k]);
+        std::printf(
+            "alarm %-5s %-28s starts at %.17g s (%.2f h), indicator %.3f\n",
+            result.channels[k].kind == mpmpp::MonitoredChannel::Kind::Process ? "MPM" : "noise",
+            mpmpp::channel_label(model, result.channels[k]).c_str(), w.end_s, w.end_s / 3600.0,
+            w.indicator[k]);
       }
       std::fflush(stdout);
     }
@@ -195,8 +216,10 @@ int main(int argc, char** argv) {
     }
     std::printf("%" PRId64 " samples, %d windows streamed\n", stream.samples(), stream.windows());
     if (!args.checkpoint.empty()) stream.save_checkpoint(args.checkpoint);
-    if (!args.alarms_csv.empty()) mpmpp::save_detection_alarms_csv(args.alarms_csv, detector, result);
-    if (!args.scores_csv.empty()) mpmpp::save_detection_scores_csv(args.scores_csv, detector, result);
+    if (!args.alarms_csv.empty())
+      mpmpp::save_detection_alarms_csv(args.alarms_csv, detector, result);
+    if (!args.scores_csv.empty())
+      mpmpp::save_detection_scores_csv(args.scores_csv, detector, result);
     if (!args.json.empty()) mpmpp::save_detection_json(args.json, detector, result);
     return 0;
   } catch (const std::exception& e) {

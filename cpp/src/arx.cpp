@@ -35,7 +35,8 @@ ArxEstimator::ArxEstimator(ArxOrders orders, ArxOptions options)
     : orders_(std::move(orders)), options_(options) {
   const std::size_t m = orders_.nb.size();
   if (orders_.na < 0) throw InputError("na must be >= 0, got " + std::to_string(orders_.na));
-  if (orders_.na > detail::kMaxLag) throw InputError("na must be <= 1000000, got " + std::to_string(orders_.na));
+  if (orders_.na > detail::kMaxLag)
+    throw InputError("na must be <= 1000000, got " + std::to_string(orders_.na));
   if (m == 0) throw InputError("nb must name at least one input");
   if (orders_.delays.size() != m)
     throw InputError("delays must have one entry per input (" + std::to_string(m) + "), got " +
@@ -49,7 +50,8 @@ ArxEstimator::ArxEstimator(ArxOrders orders, ArxOptions options)
       throw InputError("nb[" + std::to_string(j) + "] must be >= 1, got " +
                        std::to_string(orders_.nb[j]));
     if (orders_.nb[j] > detail::kMaxLag)
-      throw InputError("nb[" + std::to_string(j) + "] must be <= 1000000, got " + std::to_string(orders_.nb[j]));
+      throw InputError("nb[" + std::to_string(j) + "] must be <= 1000000, got " +
+                       std::to_string(orders_.nb[j]));
     if (orders_.delays[j] > detail::kMaxLag)
       throw InputError("delays[" + std::to_string(j) + "] must be <= 1000000, got " +
                        std::to_string(orders_.delays[j]));
@@ -70,13 +72,13 @@ void ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     throw InputError("u must have one column per input (" + std::to_string(m) + "), got " +
                      std::to_string(u.cols()));
   if (u.rows() != N)
-    throw InputError("u must have as many rows as y has samples (" + std::to_string(N) +
-                     "), got " + std::to_string(u.rows()));
+    throw InputError("u must have as many rows as y has samples (" + std::to_string(N) + "), got " +
+                     std::to_string(u.rows()));
   if (N < min_window())
     throw NumericalError("window too short for the ARX orders: " + std::to_string(N) +
                          " samples, need at least " + std::to_string(min_window()) + " (" +
-                         std::to_string(p_) + " parameters, first equation at t0 = " +
-                         std::to_string(t0_) + ")");
+                         std::to_string(p_) +
+                         " parameters, first equation at t0 = " + std::to_string(t0_) + ")");
   if (check_signals_) require_informative_window(y, u);
 
   // Regressor phi(t) = [-y(t-1) .. -y(t-na), u_j(t-d_j) .. u_j(t-d_j-nb_j+1) ...] (eq. 6).

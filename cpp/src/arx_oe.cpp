@@ -17,8 +17,9 @@ int fir_length_to_one_percent(const TransferFunction& nominal) {
     // Decayed when the last quarter of the computed response stays below the threshold.
     if (last < n - n / 4) return static_cast<int>(last + 1);
   }
-  throw InputError("nominal impulse response does not fall below 1% of its peak within 1,000,000 samples "
-                   "(integrating or unstable?): give fir_length");
+  throw InputError(
+      "nominal impulse response does not fall below 1% of its peak within 1,000,000 samples "
+      "(integrating or unstable?): give fir_length");
 }
 
 void detrend_in_place(Eigen::Ref<Eigen::VectorXd> x, Detrend mode) {
@@ -81,7 +82,8 @@ void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                            " is a pure trend (nothing left after detrending)");
   };
   require_left(y, y_, "y");
-  for (Eigen::Index j = 0; j < m; ++j) require_left(u.col(j), u_.col(j), "u[" + std::to_string(j) + "]");
+  for (Eigen::Index j = 0; j < m; ++j)
+    require_left(u.col(j), u_.col(j), "u[" + std::to_string(j) + "]");
 
   // 2. high-order ARX.
   arx_.estimate(y_, u_, out.arx);
@@ -104,7 +106,8 @@ void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   }
   oe_.estimate(yf_, uf_, na, out.oe, &start_impulse_);
   if (config_.two_step_covariance)
-    two_step_.compute(y_, u_, yf_, uf_, arx_, out.arx, config_.structures, out.oe, out.two_step_covariance);
+    two_step_.compute(y_, u_, yf_, uf_, arx_, out.arx, config_.structures, out.oe,
+                      out.two_step_covariance);
   else
     out.two_step_covariance.resize(0, 0);
 

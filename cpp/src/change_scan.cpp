@@ -11,7 +11,8 @@ namespace mpmpp {
 namespace {
 
 void check_same_length(Eigen::Index a, Eigen::Index b, Eigen::Index c, Eigen::Index d) {
-  if (a != b || a != c || a != d) throw InputError("r, r_without, psi and weight must have the same length");
+  if (a != b || a != c || a != d)
+    throw InputError("r, r_without, psi and weight must have the same length");
 }
 
 OnsetFit make_fit(Eigen::Index k, double drop, double rp, double pp) {
@@ -47,9 +48,11 @@ double ar_variance(const Eigen::MatrixXd& gram, int order, double n) {
 // samples (columns 1 and 2; column 0 is then their sum).
 class GridSums {
  public:
-  GridSums(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
-           const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-           const double* odd, Eigen::Index min_segment, Eigen::Index step) {
+  GridSums(const Eigen::Ref<const Eigen::VectorXd>& r,
+           const Eigen::Ref<const Eigen::VectorXd>& r_without,
+           const Eigen::Ref<const Eigen::VectorXd>& psi,
+           const Eigen::Ref<const Eigen::VectorXd>& weight, const double* odd,
+           Eigen::Index min_segment, Eigen::Index step) {
     const Eigen::Index n = r.size();
     onsets_.push_back(0);
     for (Eigen::Index k = min_segment; k + min_segment <= n; k += step) onsets_.push_back(k);
@@ -66,9 +69,10 @@ class GridSums {
 
  private:
   template <int M>
-  void accumulate(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
-                  const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-                  const double* odd) {
+  void accumulate(const Eigen::Ref<const Eigen::VectorXd>& r,
+                  const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                  const Eigen::Ref<const Eigen::VectorXd>& psi,
+                  const Eigen::Ref<const Eigen::VectorXd>& weight, const double* odd) {
     const Eigen::Index n = r.size();
     const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
     // Before the first sample where the candidate differs from the nominal model (psi != 0 or
@@ -142,9 +146,10 @@ class GridSums {
 
 }  // namespace
 
-OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
-                      const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-                      Eigen::Index onset) {
+OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
+                      const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                      const Eigen::Ref<const Eigen::VectorXd>& psi,
+                      const Eigen::Ref<const Eigen::VectorXd>& weight, Eigen::Index onset) {
   check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
   if (onset < 0 || onset >= r.size()) throw InputError("onset must be inside the record");
   double drop = 0.0, rp = 0.0, pp = 0.0;
@@ -156,22 +161,26 @@ OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::R
   return make_fit(onset, drop, rp, pp);
 }
 
-OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
-                    const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-                    Eigen::Index min_segment, Eigen::Index step) {
+OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
+                    const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                    const Eigen::Ref<const Eigen::VectorXd>& psi,
+                    const Eigen::Ref<const Eigen::VectorXd>& weight, Eigen::Index min_segment,
+                    Eigen::Index step) {
   check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
   return GridSums(r, r_without, psi, weight, nullptr, min_segment, step).scan(0);
 }
 
-CrossValidatedOnset scan_onset_cross_validated(
-    const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
-    const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-    const Eigen::Ref<const Eigen::VectorXd>& odd, Eigen::Index min_segment, Eigen::Index step) {
+CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::VectorXd>& r,
+                                               const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                                               const Eigen::Ref<const Eigen::VectorXd>& psi,
+                                               const Eigen::Ref<const Eigen::VectorXd>& weight,
+                                               const Eigen::Ref<const Eigen::VectorXd>& odd,
+                                               Eigen::Index min_segment, Eigen::Index step) {
   check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
   if (odd.size() != r.size()) throw InputError("odd must have the same length as r");
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
-  const Eigen::VectorXd in_odd = odd;   // contiguous even if the caller passed a strided view
+  const Eigen::VectorXd in_odd = odd;  // contiguous even if the caller passed a strided view
   const GridSums sums(r, r_without, psi, weight, in_odd.data(), min_segment, step);
   CrossValidatedOnset out;
   out.full = sums.scan(0);
@@ -191,7 +200,8 @@ Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Ei
     throw InputError("too few samples for an AR(" + std::to_string(order) + ") fit");
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(order + 1, order + 1);
   for (Eigen::Index t = begin; t < end; ++t) gram += lag_gram(e, order, t);
-  const Eigen::VectorXd a = gram.bottomRightCorner(order, order).ldlt().solve(gram.col(0).tail(order));
+  const Eigen::VectorXd a =
+      gram.bottomRightCorner(order, order).ldlt().solve(gram.col(0).tail(order));
   Eigen::VectorXd poly(order + 1);
   poly[0] = 1.0;
   poly.tail(order) = -a;
@@ -201,7 +211,8 @@ Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Ei
 ArSplit split_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index min_segment,
                  Eigen::Index step) {
   if (order < 1) throw InputError("AR order must be >= 1");
-  if (min_segment <= 2 * order || step < 1) throw InputError("min_segment must exceed 2 * order; step >= 1");
+  if (min_segment <= 2 * order || step < 1)
+    throw InputError("min_segment must exceed 2 * order; step >= 1");
   const Eigen::Index n = e.size();
   ArSplit out;
   if (n - order < 2 * min_segment) return out;
@@ -234,8 +245,10 @@ Eigen::VectorXd backlash(const Eigen::Ref<const Eigen::VectorXd>& u, double widt
   const double half = 0.5 * width;
   double pos = u[0];
   for (Eigen::Index t = 0; t < u.size(); ++t) {
-    if (u[t] > pos + half) pos = u[t] - half;
-    else if (u[t] < pos - half) pos = u[t] + half;
+    if (u[t] > pos + half)
+      pos = u[t] - half;
+    else if (u[t] < pos - half)
+      pos = u[t] + half;
     out[t] = pos;
   }
   return out;

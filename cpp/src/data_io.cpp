@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <charconv>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <optional>
@@ -35,7 +35,8 @@ std::string_view trim(std::string_view s) {
 
 bool is_nan_word(const std::string& s) {
   if (s.size() != 3) return false;
-  return (s[0] == 'n' || s[0] == 'N') && (s[1] == 'a' || s[1] == 'A') && (s[2] == 'n' || s[2] == 'N');
+  return (s[0] == 'n' || s[0] == 'N') && (s[1] == 'a' || s[1] == 'A') &&
+         (s[2] == 'n' || s[2] == 'N');
 }
 
 // A decimal number (no hex, no words), optional leading '+'.
@@ -43,7 +44,8 @@ std::optional<double> parse_number(const std::string& cell) {
   const char* first = cell.data();
   const char* last = first + cell.size();
   if (first != last && *first == '+') ++first;
-  if (first == last || !(std::isdigit(static_cast<unsigned char>(*first)) || *first == '-' || *first == '.'))
+  if (first == last ||
+      !(std::isdigit(static_cast<unsigned char>(*first)) || *first == '-' || *first == '.'))
     return std::nullopt;
   double x = 0.0;
   const auto r = std::from_chars(first, last, x);
@@ -64,7 +66,9 @@ void split_fields(std::string_view line, std::size_t row, const std::string& sou
       ++i;
       while (true) {
         if (i >= line.size())
-          throw InputError(source + ": " + row_name(row) + ": unterminated quoted field (line breaks inside quotes are not supported)");
+          throw InputError(
+              source + ": " + row_name(row) +
+              ": unterminated quoted field (line breaks inside quotes are not supported)");
         if (line[i] == '"') {
           if (i + 1 < line.size() && line[i + 1] == '"') {
             field += '"';
@@ -111,7 +115,7 @@ struct Timestamp {
   std::int64_t seconds;  // whole seconds since 1970-01-01 (UTC if an offset was given)
   double fraction;       // [0, 1)
   bool has_offset;
-  int offset_s;          // the UTC offset written (0 without one)
+  int offset_s;  // the UTC offset written (0 without one)
 };
 
 // Days since 1970-01-01 of a proleptic Gregorian date (the civil-from-days
@@ -153,7 +157,8 @@ std::string iso_timestamp(double t, int offset_s, const char* zone) {
   int y, m, d;
   civil_from_days(days, y, m, d);
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d", y, m, d, sod / 3600, sod / 60 % 60, sod % 60);
+  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d", y, m, d, sod / 3600,
+                sod / 60 % 60, sod % 60);
   std::string out = buf;
   if (ms) {
     std::snprintf(buf, sizeof buf, ".%03lld", ms);
@@ -194,7 +199,8 @@ std::optional<Timestamp> parse_timestamp(const std::string& s) {
   };
   int year, month, day, hour = 0, minute = 0, second = 0;
   double fraction = 0.0;
-  if (!digits(4, year) || !literal('-') || !digits(2, month) || !literal('-') || !digits(2, day)) return std::nullopt;
+  if (!digits(4, year) || !literal('-') || !digits(2, month) || !literal('-') || !digits(2, day))
+    return std::nullopt;
   if (month < 1 || month > 12 || day < 1 || day > days_in_month(year, month)) return std::nullopt;
   if (literal('T') || literal(' ')) {
     if (!digits(2, hour) || !literal(':') || !digits(2, minute)) return std::nullopt;
@@ -230,7 +236,8 @@ std::optional<Timestamp> parse_timestamp(const std::string& s) {
     has_offset = true;
   }
   if (i != s.size()) return std::nullopt;
-  const std::int64_t secs = days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second - offset_s;
+  const std::int64_t secs =
+      days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + second - offset_s;
   return Timestamp{secs, fraction, has_offset, static_cast<int>(offset_s)};
 }
 
@@ -249,12 +256,14 @@ void read_time(const std::vector<std::string>& cells, const std::string& source,
   if (numeric) {
     for (std::size_t k = 0; k < n; ++k) {
       const auto x = parse_number(cells[k]);
-      if (!x) throw InputError(where(k) + quoted(cells[k]) + " is not a number of seconds (row 2 is)");
+      if (!x)
+        throw InputError(where(k) + quoted(cells[k]) + " is not a number of seconds (row 2 is)");
       t[static_cast<Eigen::Index>(k)] = *x;
     }
     // Past the year 5000 in seconds: an export in epoch milliseconds or microseconds.
     if (t[0] >= 1e11)
-      throw InputError(where(0) + quoted(cells[0]) + " is too large for Unix epoch seconds (milliseconds? "
+      throw InputError(where(0) + quoted(cells[0]) +
+                       " is too large for Unix epoch seconds (milliseconds? "
                        "write seconds or ISO-8601 timestamps)");
     if (t[0] >= kEpochThresholdS) {
       d.time_kind = TimeKind::EpochSeconds;
@@ -267,20 +276,25 @@ void read_time(const std::vector<std::string>& cells, const std::string& source,
     return;
   }
   const auto first = parse_timestamp(cells[0]);
-  if (!first) throw InputError(where(0) + quoted(cells[0]) + " is neither seconds nor an ISO-8601 timestamp");
+  if (!first)
+    throw InputError(where(0) + quoted(cells[0]) + " is neither seconds nor an ISO-8601 timestamp");
   d.time_origin = cells[0];
   d.time_kind = first->has_offset ? TimeKind::Timestamp : TimeKind::LocalTimestamp;
   d.origin_epoch_s = static_cast<double>(first->seconds) + first->fraction;
   d.utc_offsets = {{0.0, first->offset_s}};
   for (std::size_t k = 0; k < n; ++k) {
     const auto ts = parse_timestamp(cells[k]);
-    if (!ts) throw InputError(where(k) + quoted(cells[k]) + " is not an ISO-8601 timestamp (row 2 is)");
+    if (!ts)
+      throw InputError(where(k) + quoted(cells[k]) + " is not an ISO-8601 timestamp (row 2 is)");
     if (ts->has_offset != first->has_offset)
-      throw InputError(where(k) + quoted(cells[k]) + (first->has_offset ? " has no UTC offset but row 2 has one"
-                                                                        : " has a UTC offset but row 2 has none"));
+      throw InputError(where(k) + quoted(cells[k]) +
+                       (first->has_offset ? " has no UTC offset but row 2 has one"
+                                          : " has a UTC offset but row 2 has none"));
     // Whole seconds subtracted as integers first, so the result keeps sub-microsecond precision.
-    t[static_cast<Eigen::Index>(k)] = static_cast<double>(ts->seconds - first->seconds) + (ts->fraction - first->fraction);
-    if (ts->offset_s != d.utc_offsets.back().second) d.utc_offsets.emplace_back(t[static_cast<Eigen::Index>(k)], ts->offset_s);
+    t[static_cast<Eigen::Index>(k)] =
+        static_cast<double>(ts->seconds - first->seconds) + (ts->fraction - first->fraction);
+    if (ts->offset_s != d.utc_offsets.back().second)
+      d.utc_offsets.emplace_back(t[static_cast<Eigen::Index>(k)], ts->offset_s);
   }
   d.time_s = std::move(t);
 }
@@ -288,21 +302,23 @@ void read_time(const std::vector<std::string>& cells, const std::string& source,
 void check_increasing(const Eigen::VectorXd& t, const std::string& source) {
   for (Eigen::Index k = 1; k < t.size(); ++k)
     if (!(t[k] > t[k - 1]))
-      throw InputError(source + ": " + row_name(static_cast<std::size_t>(k) + 2) + ", column time: " +
-                       format_number(t[k]) + " s is not after the previous row's " + format_number(t[k - 1]) +
+      throw InputError(source + ": " + row_name(static_cast<std::size_t>(k) + 2) +
+                       ", column time: " + format_number(t[k]) +
+                       " s is not after the previous row's " + format_number(t[k - 1]) +
                        " s (time must be strictly increasing)");
 }
 
 void check_column_names(const std::vector<std::string>& names, const std::string& where) {
   std::map<std::string, std::size_t> seen;
   for (std::size_t c = 0; c < names.size(); ++c) {
-    if (names[c].empty()) throw InputError(where + "column " + std::to_string(c + 1) + " has an empty name");
+    if (names[c].empty())
+      throw InputError(where + "column " + std::to_string(c + 1) + " has an empty name");
     if (names[c].find_first_of("\r\n") != std::string::npos)
       throw InputError(where + "column " + std::to_string(c + 1) + " has a line break in its name");
     const auto [it, fresh] = seen.emplace(names[c], c);
     if (!fresh)
-      throw InputError(where + "duplicate column " + quoted(names[c]) + " (columns " + std::to_string(it->second + 1) +
-                       " and " + std::to_string(c + 1) + ")");
+      throw InputError(where + "duplicate column " + quoted(names[c]) + " (columns " +
+                       std::to_string(it->second + 1) + " and " + std::to_string(c + 1) + ")");
   }
 }
 
@@ -328,9 +344,9 @@ namespace {
 void check_parts(const Eigen::VectorXd& time_s, const std::vector<std::string>& columns,
                  const Eigen::MatrixXd& values) {
   if (values.rows() != time_s.size() || values.cols() != static_cast<Eigen::Index>(columns.size()))
-    throw InputError("values: shape " + std::to_string(values.rows()) + "x" + std::to_string(values.cols()) +
-                     ", expected " + std::to_string(time_s.size()) + " samples x " + std::to_string(columns.size()) +
-                     " columns");
+    throw InputError("values: shape " + std::to_string(values.rows()) + "x" +
+                     std::to_string(values.cols()) + ", expected " + std::to_string(time_s.size()) +
+                     " samples x " + std::to_string(columns.size()) + " columns");
   std::vector<std::string> all{"time"};
   all.insert(all.end(), columns.begin(), columns.end());
   check_column_names(all, "");
@@ -338,17 +354,21 @@ void check_parts(const Eigen::VectorXd& time_s, const std::vector<std::string>& 
   check_increasing(time_s, "time");
   for (Eigen::Index c = 0; c < values.cols(); ++c)
     for (Eigen::Index k = 0; k < values.rows(); ++k)
-      if (std::isinf(values(k, c))) throw InputError("column " + columns[c] + ": infinite value at sample " + std::to_string(k));
+      if (std::isinf(values(k, c)))
+        throw InputError("column " + columns[c] + ": infinite value at sample " +
+                         std::to_string(k));
 }
 
 }  // namespace
 
-DataTable make_data_table(Eigen::VectorXd time_s, std::vector<std::string> columns, Eigen::MatrixXd values) {
+DataTable make_data_table(Eigen::VectorXd time_s, std::vector<std::string> columns,
+                          Eigen::MatrixXd values) {
   check_parts(time_s, columns, values);
   DataTable d;
   d.missing.resize(columns.size());
   for (std::size_t c = 0; c < columns.size(); ++c)
-    d.missing[c] = static_cast<int>(values.col(static_cast<Eigen::Index>(c)).array().isNaN().count());
+    d.missing[c] =
+        static_cast<int>(values.col(static_cast<Eigen::Index>(c)).array().isNaN().count());
   d.time_s = std::move(time_s);
   d.columns = std::move(columns);
   d.values = std::move(values);
@@ -359,8 +379,10 @@ namespace {
 
 DataTable parse_csv_text(const std::string& text, const std::string& source) {
   const std::string where = source + ": ";
-  if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError(where + "file is empty");
-  if (text.find('\0') != std::string::npos) throw InputError(where + "not a CSV file (binary content)");
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw InputError(where + "file is empty");
+  if (text.find('\0') != std::string::npos)
+    throw InputError(where + "not a CSV file (binary content)");
   std::vector<std::string_view> lines = split_lines(text);
   if (lines[0].substr(0, 3) == "\xEF\xBB\xBF") lines[0].remove_prefix(3);  // UTF-8 byte order mark
 
@@ -373,7 +395,8 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
     if (header.size() == 1)
       throw InputError(where + "not a CSV file with a header row: row 1 is " + quoted(header[0]) +
                        " (expected comma-separated column names including \"time\")");
-    throw InputError(where + "row 1: no \"time\" column (columns: " + detail::printable(detail::comma_list(header), 200) + ")");
+    throw InputError(where + "row 1: no \"time\" column (columns: " +
+                     detail::printable(detail::comma_list(header), 200) + ")");
   }
   check_column_names(header, where + "row 1: ");
   if (lines.size() < 2) throw InputError(where + "no data rows after the header");
@@ -391,8 +414,8 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
   std::vector<std::size_t> numbers(width, 0), first_text_row(width, 0);
   std::vector<std::vector<std::string>> text_cells(width);
   auto not_a_number = [&](std::size_t j, std::size_t row, const std::string& cell) {
-    return InputError(where + row_name(row) + ", column " + detail::printable(d.columns[j]) + ": " + quoted(cell) +
-                      " is not a number");
+    return InputError(where + row_name(row) + ", column " + detail::printable(d.columns[j]) + ": " +
+                      quoted(cell) + " is not a number");
   };
   std::vector<std::string> fields;
   for (std::size_t k = 0; k < n; ++k) {
@@ -400,8 +423,8 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
     if (trim(lines[k + 1]).empty()) throw InputError(where + row_name(row) + ": empty line");
     split_fields(lines[k + 1], row, source, fields);
     if (fields.size() != header.size())
-      throw InputError(where + row_name(row) + ": " + std::to_string(fields.size()) + " fields, the header has " +
-                       std::to_string(header.size()));
+      throw InputError(where + row_name(row) + ": " + std::to_string(fields.size()) +
+                       " fields, the header has " + std::to_string(header.size()));
     std::size_t j = 0;
     for (std::size_t c = 0; c < fields.size(); ++c) {
       if (c == time_col) {
@@ -413,7 +436,8 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
       if (empty) {
         ++d.missing[j];
       } else if (const auto v = parse_number(fields[c])) {
-        if (first_text_row[j]) throw not_a_number(j, first_text_row[j], text_cells[j][first_text_row[j] - 2]);
+        if (first_text_row[j])
+          throw not_a_number(j, first_text_row[j], text_cells[j][first_text_row[j] - 2]);
         ++numbers[j];
         x = *v;
       } else if (numbers[j]) {
@@ -476,11 +500,12 @@ void check_columns(const DataTable& data, const Model& model, const std::string&
         std::size_t row = 0;
         const std::string cell =
             first_text_cell(data, static_cast<std::size_t>(text - data.text_columns.begin()), row);
-        throw InputError(source + ": " + row_name(row) + ", column " + detail::printable(name) + ": " + quoted(cell) +
-                         " is not a number");
+        throw InputError(source + ": " + row_name(row) + ", column " + detail::printable(name) +
+                         ": " + quoted(cell) + " is not a number");
       }
-      throw InputError(source + ": column " + quoted(name) + " (model " + kind + ") is missing (columns: time" +
-                       (data.columns.empty() ? "" : ", ") + detail::printable(detail::comma_list(data.columns), 200) + ")");
+      throw InputError(source + ": column " + quoted(name) + " (model " + kind +
+                       ") is missing (columns: time" + (data.columns.empty() ? "" : ", ") +
+                       detail::printable(detail::comma_list(data.columns), 200) + ")");
     }
   };
   require(model.inputs, "input");
@@ -499,8 +524,9 @@ void check_spacing(const DataTable& data, const Model& model, const std::string&
     }
     const double step = data.time_s[k] - data.time_s[k - 1];
     if (std::abs(step - ts) > kSpacingTolerance * ts)
-      throw InputError(source + ": " + row_name(static_cast<std::size_t>(k) + 2) + ", column time: time step " +
-                       format_number(step) + " s from the previous row, expected the model's sample_time_s = " +
+      throw InputError(source + ": " + row_name(static_cast<std::size_t>(k) + 2) +
+                       ", column time: time step " + format_number(step) +
+                       " s from the previous row, expected the model's sample_time_s = " +
                        format_number(ts) + " s");
   }
 }
@@ -534,7 +560,9 @@ DataTable parse_csv(const std::string& text, const std::string& source) {
   });
 }
 
-DataTable read_csv(const std::string& path) { return parse_csv(detail::read_text_file(path), path); }
+DataTable read_csv(const std::string& path) {
+  return parse_csv(detail::read_text_file(path), path);
+}
 
 void validate_data(const DataTable& data, const Model& model, const std::string& source) {
   one_line_errors([&] { check_against_model(data, model, source); });
@@ -542,11 +570,14 @@ void validate_data(const DataTable& data, const Model& model, const std::string&
 
 namespace {
 
-DataTable repaired(DataTable rows, const std::string& source, const Model& model, const LoadOptions& options) {
+DataTable repaired(DataTable rows, const std::string& source, const Model& model,
+                   const LoadOptions& options) {
   const double ts = model.sample_time_s;
-  if (!options.quality_column.empty()) mask_bad_quality(rows, options.quality_column, options.good_quality, source);
+  if (!options.quality_column.empty())
+    mask_bad_quality(rows, options.quality_column, options.good_quality, source);
   rows.repairs.text_columns = rows.text_columns;
-  GridOptions grid{ts, options.max_gap_s < 0 ? 10.0 * ts : options.max_gap_s, options.jitter_fraction};
+  GridOptions grid{ts, options.max_gap_s < 0 ? 10.0 * ts : options.max_gap_s,
+                   options.jitter_fraction};
   if (!(options.jitter_fraction >= 0 && options.jitter_fraction < 0.5))
     throw InputError(source + ": the jitter tolerance must be in [0, 0.5) sample times, got " +
                      format_number(options.jitter_fraction));
@@ -556,9 +587,11 @@ DataTable repaired(DataTable rows, const std::string& source, const Model& model
                      " s differs from the model's sample_time_s = " + format_number(ts) + " s");
   const double raw = median_step(rows);
   const long long factor = raw > 0 ? std::llround(ts / raw) : 0;
-  if (factor < 1 || std::abs(ts - static_cast<double>(factor) * raw) > options.jitter_fraction * raw)
-    throw InputError(source + ": the file's sample time " + format_number(raw) +
-                     " s (median step) does not divide the model's sample_time_s = " + format_number(ts) + " s");
+  if (factor < 1 ||
+      std::abs(ts - static_cast<double>(factor) * raw) > options.jitter_fraction * raw)
+    throw InputError(
+        source + ": the file's sample time " + format_number(raw) +
+        " s (median step) does not divide the model's sample_time_s = " + format_number(ts) + " s");
   const double raw_ts = ts / static_cast<double>(factor);
   grid.sample_time_s = raw_ts;
   grid.max_gap_s = std::max(grid.max_gap_s, raw_ts);

@@ -35,7 +35,9 @@ bool symmetric_root(const Eigen::MatrixXd& m, bool inverse, Eigen::MatrixXd& roo
 
 double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   if (reference_covariance.size() != 0)
-    throw InputError("detector: this channel scores a window together with its covariance (resampling 'estimator')");
+    throw InputError(
+        "detector: this channel scores a window together with its covariance (resampling "
+        "'estimator')");
   return score(x, Eigen::MatrixXd());
 }
 
@@ -44,11 +46,12 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
   Eigen::VectorXd deviation = x - feature_mean;
   if (reference_covariance.size() != 0) {
     if (window_covariance.rows() != x.size() || window_covariance.cols() != x.size())
-      throw InputError("detector: the window covariance must be " + std::to_string(x.size()) + " x " +
-                       std::to_string(x.size()));
+      throw InputError("detector: the window covariance must be " + std::to_string(x.size()) +
+                       " x " + std::to_string(x.size()));
     Eigen::MatrixXd reference_root, window_inverse_root;
     const Eigen::MatrixXd deviation_covariance =
-        mean_covariance.size() != 0 ? Eigen::MatrixXd(window_covariance + mean_covariance) : Eigen::MatrixXd(window_covariance);
+        mean_covariance.size() != 0 ? Eigen::MatrixXd(window_covariance + mean_covariance)
+                                    : Eigen::MatrixXd(window_covariance);
     if (!symmetric_root(reference_covariance, false, reference_root) ||
         !symmetric_root(deviation_covariance, true, window_inverse_root))
       return std::numeric_limits<double>::quiet_NaN();
@@ -56,12 +59,14 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
   }
   RowMatrixXd z = (deviation.array() / feature_scale.array()).matrix().transpose();
   if (feature_decorrelation.size() != 0) z = z * feature_decorrelation.transpose();
-  const double f = gaussian_kernel_expansion(support_vectors, dual_coef, kernel_scale, z)[0] - offset;
+  const double f =
+      gaussian_kernel_expansion(support_vectors, dual_coef, kernel_scale, z)[0] - offset;
   return f / (nu * n_train);  // eq. 20: h = f / (nu l)
 }
 
-Eigen::VectorXd ChannelScorer::score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X,
-                                          const Eigen::Ref<const Eigen::MatrixXd>& covariances) const {
+Eigen::VectorXd ChannelScorer::score_rows(
+    const Eigen::Ref<const Eigen::MatrixXd>& X,
+    const Eigen::Ref<const Eigen::MatrixXd>& covariances) const {
   const Eigen::Index d = X.cols();
   const bool with_covariance = reference_covariance.size() != 0;
   if (with_covariance && (covariances.rows() != X.rows() || covariances.cols() != d * d))
@@ -90,15 +95,16 @@ void ChannelScorer::validate(int feature_length, const std::string& where) const
   if (!feature_mean.allFinite() || !feature_scale.allFinite() || (feature_scale.array() <= 0).any())
     fail("feature_scale must be finite and positive, feature_mean finite");
   if (feature_decorrelation.size() != 0 &&
-      (feature_decorrelation.rows() != feature_length || feature_decorrelation.cols() != feature_length ||
-       !feature_decorrelation.allFinite()))
-    fail("feature_decorrelation must be empty or a finite " + std::to_string(feature_length) + " x " +
-         std::to_string(feature_length) + " matrix");
+      (feature_decorrelation.rows() != feature_length ||
+       feature_decorrelation.cols() != feature_length || !feature_decorrelation.allFinite()))
+    fail("feature_decorrelation must be empty or a finite " + std::to_string(feature_length) +
+         " x " + std::to_string(feature_length) + " matrix");
   if (reference_covariance.size() != 0 &&
-      (reference_covariance.rows() != feature_length || reference_covariance.cols() != feature_length ||
-       !reference_covariance.allFinite() || !reference_covariance.isApprox(reference_covariance.transpose())))
-    fail("reference_covariance must be empty or a finite symmetric " + std::to_string(feature_length) + " x " +
-         std::to_string(feature_length) + " matrix");
+      (reference_covariance.rows() != feature_length ||
+       reference_covariance.cols() != feature_length || !reference_covariance.allFinite() ||
+       !reference_covariance.isApprox(reference_covariance.transpose())))
+    fail("reference_covariance must be empty or a finite symmetric " +
+         std::to_string(feature_length) + " x " + std::to_string(feature_length) + " matrix");
   if (mean_covariance.size() != 0 &&
       (reference_covariance.size() == 0 || mean_covariance.rows() != feature_length ||
        mean_covariance.cols() != feature_length || !mean_covariance.allFinite() ||
@@ -107,7 +113,8 @@ void ChannelScorer::validate(int feature_length, const std::string& where) const
          std::to_string(feature_length) + " x " + std::to_string(feature_length) + " matrix");
   if (support_vectors.rows() < 1 || support_vectors.cols() != feature_length)
     fail("support_vectors must be n_sv x " + std::to_string(feature_length));
-  if (dual_coef.size() != support_vectors.rows()) fail("dual_coef must have one entry per support vector");
+  if (dual_coef.size() != support_vectors.rows())
+    fail("dual_coef must have one entry per support vector");
   if (!support_vectors.allFinite() || !dual_coef.allFinite() || !std::isfinite(offset))
     fail("support_vectors, dual_coef and offset must be finite");
   if (!(kernel_scale > 0) || !std::isfinite(kernel_scale)) fail("kernel_scale must be positive");
@@ -122,12 +129,15 @@ std::string channel_label(const std::string& output, const std::string& input) {
 }
 
 std::string channel_label(const Model& model, const MonitoredChannel& c) {
-  return channel_label(model.outputs[c.output], c.kind == MonitoredChannel::Kind::Noise ? "" : model.inputs[c.input]);
+  return channel_label(model.outputs[c.output],
+                       c.kind == MonitoredChannel::Kind::Noise ? "" : model.inputs[c.input]);
 }
 
 Detector::Detector(Model nominal, DetectorConfig config, double train_end_s,
                    std::vector<ChannelScorer> scorers)
-    : model_(std::move(nominal)), config_(std::move(config)), train_end_s_(train_end_s),
+    : model_(std::move(nominal)),
+      config_(std::move(config)),
+      train_end_s_(train_end_s),
       scorers_(std::move(scorers)) {
   config_.validate();
   if (!std::isfinite(train_end_s_) || train_end_s_ <= 0)
@@ -135,8 +145,9 @@ Detector::Detector(Model nominal, DetectorConfig config, double train_end_s,
   const WindowFeatures features(model_, config_);  // checks the model against the config
   channels_ = features.channels();
   if (scorers_.size() != channels_.size())
-    throw InputError("detector: " + std::to_string(scorers_.size()) + " channel scorers given, the model has " +
-                     std::to_string(channels_.size()) + " monitored channels");
+    throw InputError("detector: " + std::to_string(scorers_.size()) +
+                     " channel scorers given, the model has " + std::to_string(channels_.size()) +
+                     " monitored channels");
   for (size_t k = 0; k < channels_.size(); ++k)
     scorers_[k].validate(features.feature_length(static_cast<int>(k)),
                          "detector: channel " + channel_label(model_, channels_[k]));
@@ -164,7 +175,8 @@ DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
   if (n_windows == 0) return r;
   // Training windows end at or before the first window's start + train_end_s (half a sample
   // of slack so that times read back from a CSV compare as intended).
-  const double train_end_abs = series.windows[0].start_s + train_end_s_ + 0.5 * model_.sample_time_s;
+  const double train_end_abs =
+      series.windows[0].start_s + train_end_s_ + 0.5 * model_.sample_time_s;
   for (int w = 0; w < n_windows; ++w) r.training[w] = series.windows[w].end_s <= train_end_abs;
   for (int k = 0; k < n_channels; ++k) {
     if (series.features[k].rows() != n_windows)
@@ -175,8 +187,9 @@ DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
     if (with_covariance && series.covariances.size() != static_cast<size_t>(n_channels))
       throw InputError("detector: channel " + channel_label(model_, channels_[k]) +
                        " needs the window covariances (resampling 'estimator')");
-    r.scores.col(k) = with_covariance ? scorers_[k].score_rows(series.features[k], series.covariances[k])
-                                      : scorers_[k].score_rows(series.features[k]);
+    r.scores.col(k) = with_covariance
+                          ? scorers_[k].score_rows(series.features[k], series.covariances[k])
+                          : scorers_[k].score_rows(series.features[k]);
     MismatchIndicator indicator(config_.inspection_windows(), config_.alarm_count());
     for (int w = 0; w < n_windows; ++w) {
       if (r.training[w]) r.scores(w, k) = 0.0;  // as in the paper: 0 while the SVM is trained
@@ -185,12 +198,14 @@ DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
       if (update.started) r.alarms.push_back({k, w, series.windows[w].end_s});
     }
   }
-  std::stable_sort(r.alarms.begin(), r.alarms.end(),
-                   [](const DetectionAlarm& a, const DetectionAlarm& b) { return a.window < b.window; });
+  std::stable_sort(
+      r.alarms.begin(), r.alarms.end(),
+      [](const DetectionAlarm& a, const DetectionAlarm& b) { return a.window < b.window; });
   return r;
 }
 
-Eigen::VectorXd Detector::score_window(WindowFeatures& features, const Eigen::Ref<const Eigen::MatrixXd>& u,
+Eigen::VectorXd Detector::score_window(WindowFeatures& features,
+                                       const Eigen::Ref<const Eigen::MatrixXd>& u,
                                        const Eigen::Ref<const Eigen::MatrixXd>& y,
                                        std::string* skip_reason) const {
   std::vector<Eigen::VectorXd> f;
@@ -199,7 +214,8 @@ Eigen::VectorXd Detector::score_window(WindowFeatures& features, const Eigen::Re
                                                 std::numeric_limits<double>::quiet_NaN());
   if (!features.extract(u, y, f, skip_reason, &c)) return h;
   for (size_t k = 0; k < channels_.size(); ++k)
-    h[k] = scorers_[k].reference_covariance.size() != 0 ? scorers_[k].score(f[k], c[k]) : scorers_[k].score(f[k]);
+    h[k] = scorers_[k].reference_covariance.size() != 0 ? scorers_[k].score(f[k], c[k])
+                                                        : scorers_[k].score(f[k]);
   return h;
 }
 
@@ -207,7 +223,9 @@ Eigen::VectorXd Detector::score_window(WindowFeatures& features, const Eigen::Re
 
 namespace {
 
-json vector_json(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
+json vector_json(const Eigen::VectorXd& v) {
+  return std::vector<double>(v.data(), v.data() + v.size());
+}
 json rows_json(const Eigen::Ref<const Eigen::MatrixXd>& m) {
   json rows = json::array();
   for (Eigen::Index r = 0; r < m.rows(); ++r) rows.push_back(vector_json(m.row(r).transpose()));
@@ -242,8 +260,10 @@ class Reader {
     return v;
   }
   // An array of rows of `cols` numbers each (`rows_required`: at least one row).
-  RowMatrixXd matrix(const json& j, const std::string& path, Eigen::Index cols, bool rows_required) const {
-    if (!j.is_array() || (rows_required && j.empty())) fail(path, "expected a non-empty array of rows");
+  RowMatrixXd matrix(const json& j, const std::string& path, Eigen::Index cols,
+                     bool rows_required) const {
+    if (!j.is_array() || (rows_required && j.empty()))
+      fail(path, "expected a non-empty array of rows");
     RowMatrixXd m(j.size(), cols);
     for (size_t r = 0; r < j.size(); ++r) {
       const std::string pr = path + "[" + std::to_string(r) + "]";
@@ -280,8 +300,11 @@ std::string Detector::to_json() const {
     jc["feature_decorrelation"] = rows_json(s.feature_decorrelation);
     jc["reference_covariance"] = rows_json(s.reference_covariance);
     jc["mean_covariance"] = rows_json(s.mean_covariance);
-    jc["svm"] = json{{"kernel_scale", s.kernel_scale}, {"nu", s.nu},     {"n_train", s.n_train},
-                     {"offset", s.offset},             {"dual_coef", vector_json(s.dual_coef)},
+    jc["svm"] = json{{"kernel_scale", s.kernel_scale},
+                     {"nu", s.nu},
+                     {"n_train", s.n_train},
+                     {"offset", s.offset},
+                     {"dual_coef", vector_json(s.dual_coef)},
                      {"support_vectors", rows_json(s.support_vectors)}};
     channels.push_back(std::move(jc));
   }
@@ -301,17 +324,20 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
   try {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw InputError(source + ": not a complete JSON document (truncated or corrupt file?): " + e.what());
+    throw InputError(source +
+                     ": not a complete JSON document (truncated or corrupt file?): " + e.what());
   }
   const json& format = rd.field(j, "(top level)", "format");
   if (!format.is_string() || format.get<std::string>() != "mpmpp-detector")
     rd.fail("format", "not an mpmpp detector file (expected \"mpmpp-detector\")");
   const int version = rd.integer(rd.field(j, "(top level)", "version"), "version");
   if (version < 1 || version > kFormatVersion)
-    rd.fail("version", "format version " + std::to_string(version) + " is not supported (this mpmpp reads " +
-                           std::to_string(kFormatVersion) + "); upgrade mpmpp or retrain");
+    rd.fail("version", "format version " + std::to_string(version) +
+                           " is not supported (this mpmpp reads " + std::to_string(kFormatVersion) +
+                           "); upgrade mpmpp or retrain");
   const double train_end_s = rd.number(rd.field(j, "(top level)", "train_end_s"), "train_end_s");
-  DetectorConfig config = detail::config_from_json(rd.field(j, "(top level)", "config"), source + ": config");
+  DetectorConfig config =
+      detail::config_from_json(rd.field(j, "(top level)", "config"), source + ": config");
   Model model = parse_model(rd.field(j, "(top level)", "model").dump(), source + ": model");
   const json& jch = rd.field(j, "(top level)", "channels");
   if (!jch.is_array()) rd.fail("channels", "expected an array");
@@ -327,7 +353,8 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
     const json& kind = rd.field(c, p, "kind");
     const bool same = kind.is_string() && kind.get<std::string>() == kind_name(e.kind) &&
                       rd.field(c, p, "output") == model.outputs[e.output] &&
-                      (e.kind == MonitoredChannel::Kind::Noise || rd.field(c, p, "input") == model.inputs[e.input]);
+                      (e.kind == MonitoredChannel::Kind::Noise ||
+                       rd.field(c, p, "input") == model.inputs[e.input]);
     if (!same) rd.fail(p, "does not match the model's channel " + channel_label(model, e));
     ChannelScorer s;
     s.training_windows = rd.integer(rd.field(c, p, "training_windows"), p + ".training_windows");
@@ -344,15 +371,17 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
     s.offset = rd.number(rd.field(svm, ps, "offset"), ps + ".offset");
     s.dual_coef = rd.vector(rd.field(svm, ps, "dual_coef"), ps + ".dual_coef");
     const Eigen::Index m = s.feature_mean.size();
-    s.support_vectors = rd.matrix(rd.field(svm, ps, "support_vectors"), ps + ".support_vectors", m, true);
+    s.support_vectors =
+        rd.matrix(rd.field(svm, ps, "support_vectors"), ps + ".support_vectors", m, true);
     if (version >= 2)  // version 1 files predate it: identity
-      s.feature_decorrelation =
-          rd.matrix(rd.field(c, p, "feature_decorrelation"), p + ".feature_decorrelation", m, false);
+      s.feature_decorrelation = rd.matrix(rd.field(c, p, "feature_decorrelation"),
+                                          p + ".feature_decorrelation", m, false);
     if (version >= 3)  // earlier files predate it: no window-covariance mapping
       s.reference_covariance =
           rd.matrix(rd.field(c, p, "reference_covariance"), p + ".reference_covariance", m, false);
     if (version >= 4)  // earlier files predate it: the training mean taken as exact
-      s.mean_covariance = rd.matrix(rd.field(c, p, "mean_covariance"), p + ".mean_covariance", m, false);
+      s.mean_covariance =
+          rd.matrix(rd.field(c, p, "mean_covariance"), p + ".mean_covariance", m, false);
     scorers.push_back(std::move(s));
   }
   try {
@@ -364,6 +393,8 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
 
 void Detector::save(const std::string& path) const { detail::write_file_atomic(path, to_json()); }
 
-Detector Detector::load(const std::string& path) { return from_json(detail::read_text_file(path), path); }
+Detector Detector::load(const std::string& path) {
+  return from_json(detail::read_text_file(path), path);
+}
 
 }  // namespace mpmpp

@@ -121,7 +121,8 @@ void DetectorConfig::validate() const {
   finite_positive(train_duration_s, "train_duration_s");
   finite_positive(inspection_s, "inspection_s");
   finite_positive(alpha, "alpha");
-  if (!(std::isfinite(noise_alpha) && noise_alpha >= 0)) fail("noise_alpha", "must be >= 0 (0 = alpha)");
+  if (!(std::isfinite(noise_alpha) && noise_alpha >= 0))
+    fail("noise_alpha", "must be >= 0 (0 = alpha)");
   finite_positive(kernel_scale, "kernel_scale");
   if (step_s > window_s) fail("step_s", "must not exceed window_s");
   if (arx_order_a < 1) fail("arx_order_a", "must be >= 1");
@@ -131,7 +132,8 @@ void DetectorConfig::validate() const {
   if (!(outlier_fraction < 1)) fail("outlier_fraction", "must be < 1 (negative: cross-validate)");
   if (outlier_fraction < 0) {
     if (outlier_fraction_grid.empty())
-      fail("outlier_fraction_grid", "must not be empty when outlier_fraction is chosen by cross-validation");
+      fail("outlier_fraction_grid",
+           "must not be empty when outlier_fraction is chosen by cross-validation");
     for (double f : outlier_fraction_grid)
       if (!(f > 0 && f < 1)) fail("outlier_fraction_grid", "values must be in (0, 1)");
     if (cv_folds < 2) fail("cv_folds", "must be >= 2");
@@ -139,7 +141,9 @@ void DetectorConfig::validate() const {
   if (fir_length < 0) fail("fir_length", "must be >= 0 (0 = automatic)");
   if (resampled_models < 10) fail("resampled_models", "must be >= 10");
   if (resampling == Resampling::Estimator && oe_structure != OeStructure::Fir)
-    fail("resampling", "'estimator' needs oe_structure 'fir' (the OE covariance is then the features' covariance)");
+    fail("resampling",
+         "'estimator' needs oe_structure 'fir' (the OE covariance is then the features' "
+         "covariance)");
   if (!(arx_regularisation > 0 && std::isfinite(arx_regularisation)))
     fail("arx_regularisation", "must be a positive number");
   inspection_windows();
@@ -166,9 +170,11 @@ namespace {
 template <typename E>
 using EnumName = std::pair<E, const char*>;
 
-const EnumName<OeStructure> kOeStructureNames[] = {{OeStructure::Foptd, "foptd"}, {OeStructure::Fir, "fir"}};
-const EnumName<Resampling> kResamplingNames[] = {
-    {Resampling::Independent, "independent"}, {Resampling::Covariance, "covariance"}, {Resampling::Estimator, "estimator"}};
+const EnumName<OeStructure> kOeStructureNames[] = {{OeStructure::Foptd, "foptd"},
+                                                   {OeStructure::Fir, "fir"}};
+const EnumName<Resampling> kResamplingNames[] = {{Resampling::Independent, "independent"},
+                                                 {Resampling::Covariance, "covariance"},
+                                                 {Resampling::Estimator, "estimator"}};
 
 template <typename E, std::size_t N>
 const char* name_of(E value, const EnumName<E> (&names)[N]) {
@@ -184,15 +190,20 @@ E value_of(const std::string& s, const EnumName<E> (&names)[N], const char* fiel
     if (s == name) return v;
     listed += (listed.empty() ? "" : ", ") + std::string(name);
   }
-  throw InputError(std::string("detector config: ") + field + " '" + s + "' is not one of " + listed);
+  throw InputError(std::string("detector config: ") + field + " '" + s + "' is not one of " +
+                   listed);
 }
 
 }  // namespace
 
 const char* to_string(OeStructure s) { return name_of(s, kOeStructureNames); }
-OeStructure oe_structure_from_string(const std::string& s) { return value_of(s, kOeStructureNames, "oe_structure"); }
+OeStructure oe_structure_from_string(const std::string& s) {
+  return value_of(s, kOeStructureNames, "oe_structure");
+}
 const char* to_string(Resampling r) { return name_of(r, kResamplingNames); }
-Resampling resampling_from_string(const std::string& s) { return value_of(s, kResamplingNames, "resampling"); }
+Resampling resampling_from_string(const std::string& s) {
+  return value_of(s, kResamplingNames, "resampling");
+}
 
 std::string DetectorConfig::to_json() const { return detail::config_to_json(*this).dump(2); }
 
@@ -209,28 +220,29 @@ DetectorConfig DetectorConfig::from_json(const std::string& text) {
 namespace detail {
 
 nlohmann::json config_to_json(const DetectorConfig& c) {
-  return nlohmann::json{{"window_s", c.window_s},
-                        {"step_s", c.step_s},
-                        {"arx_order_a", c.arx_order_a},
-                        {"arx_order_b", c.arx_order_b},
-                        {"train_duration_s", c.train_duration_s},
-                        {"inspection_s", c.inspection_s},
-                        {"threshold", c.threshold},
-                        {"alpha", c.alpha},
-                        {"noise_alpha", c.noise_alpha},
-                        {"nu", c.nu},
-                        {"kernel_scale", c.kernel_scale},
-                        {"outlier_fraction", c.outlier_fraction < 0 ? nlohmann::json(nullptr)
-                                                                    : nlohmann::json(c.outlier_fraction)},
-                        {"outlier_fraction_grid", c.outlier_fraction_grid},
-                        {"cv_folds", c.cv_folds},
-                        {"fir_length", c.fir_length},
-                        {"standardise", c.standardise},
-                        {"resampled_models", c.resampled_models},
-                        {"seed", c.seed},
-                        {"oe_structure", to_string(c.oe_structure)},
-                        {"arx_regularisation", c.arx_regularisation},
-                        {"resampling", to_string(c.resampling)}};
+  return nlohmann::json{
+      {"window_s", c.window_s},
+      {"step_s", c.step_s},
+      {"arx_order_a", c.arx_order_a},
+      {"arx_order_b", c.arx_order_b},
+      {"train_duration_s", c.train_duration_s},
+      {"inspection_s", c.inspection_s},
+      {"threshold", c.threshold},
+      {"alpha", c.alpha},
+      {"noise_alpha", c.noise_alpha},
+      {"nu", c.nu},
+      {"kernel_scale", c.kernel_scale},
+      {"outlier_fraction",
+       c.outlier_fraction < 0 ? nlohmann::json(nullptr) : nlohmann::json(c.outlier_fraction)},
+      {"outlier_fraction_grid", c.outlier_fraction_grid},
+      {"cv_folds", c.cv_folds},
+      {"fir_length", c.fir_length},
+      {"standardise", c.standardise},
+      {"resampled_models", c.resampled_models},
+      {"seed", c.seed},
+      {"oe_structure", to_string(c.oe_structure)},
+      {"arx_regularisation", c.arx_regularisation},
+      {"resampling", to_string(c.resampling)}};
 }
 
 DetectorConfig config_from_json(const nlohmann::json& j, const std::string& where) {
@@ -249,31 +261,48 @@ DetectorConfig config_from_json(const nlohmann::json& j, const std::string& wher
     return v.get<long long>();
   };
   for (const auto& [key, v] : j.items()) {
-    if (key == "preset") continue;
-    else if (key == "window_s") c.window_s = number(key, v);
-    else if (key == "step_s") c.step_s = number(key, v);
-    else if (key == "arx_order_a") c.arx_order_a = static_cast<int>(integer(key, v));
-    else if (key == "arx_order_b") c.arx_order_b = static_cast<int>(integer(key, v));
-    else if (key == "train_duration_s") c.train_duration_s = number(key, v);
-    else if (key == "inspection_s") c.inspection_s = number(key, v);
-    else if (key == "threshold") c.threshold = number(key, v);
-    else if (key == "alpha") c.alpha = number(key, v);
-    else if (key == "noise_alpha") c.noise_alpha = number(key, v);
-    else if (key == "nu") c.nu = number(key, v);
-    else if (key == "kernel_scale") c.kernel_scale = number(key, v);
-    else if (key == "outlier_fraction") c.outlier_fraction = v.is_null() ? -1.0 : number(key, v);
+    if (key == "preset")
+      continue;
+    else if (key == "window_s")
+      c.window_s = number(key, v);
+    else if (key == "step_s")
+      c.step_s = number(key, v);
+    else if (key == "arx_order_a")
+      c.arx_order_a = static_cast<int>(integer(key, v));
+    else if (key == "arx_order_b")
+      c.arx_order_b = static_cast<int>(integer(key, v));
+    else if (key == "train_duration_s")
+      c.train_duration_s = number(key, v);
+    else if (key == "inspection_s")
+      c.inspection_s = number(key, v);
+    else if (key == "threshold")
+      c.threshold = number(key, v);
+    else if (key == "alpha")
+      c.alpha = number(key, v);
+    else if (key == "noise_alpha")
+      c.noise_alpha = number(key, v);
+    else if (key == "nu")
+      c.nu = number(key, v);
+    else if (key == "kernel_scale")
+      c.kernel_scale = number(key, v);
+    else if (key == "outlier_fraction")
+      c.outlier_fraction = v.is_null() ? -1.0 : number(key, v);
     else if (key == "outlier_fraction_grid") {
       if (!v.is_array()) throw InputError(where + ": outlier_fraction_grid must be an array");
       c.outlier_fraction_grid.clear();
       for (const auto& f : v) c.outlier_fraction_grid.push_back(number(key, f));
-    } else if (key == "cv_folds") c.cv_folds = static_cast<int>(integer(key, v));
-    else if (key == "fir_length") c.fir_length = static_cast<int>(integer(key, v));
+    } else if (key == "cv_folds")
+      c.cv_folds = static_cast<int>(integer(key, v));
+    else if (key == "fir_length")
+      c.fir_length = static_cast<int>(integer(key, v));
     else if (key == "standardise") {
       if (!v.is_boolean()) throw InputError(where + ": standardise must be true or false");
       c.standardise = v.get<bool>();
-    } else if (key == "resampled_models") c.resampled_models = static_cast<int>(integer(key, v));
+    } else if (key == "resampled_models")
+      c.resampled_models = static_cast<int>(integer(key, v));
     else if (key == "seed") {
-      if (!v.is_number_unsigned()) throw InputError(where + ": seed must be a non-negative integer");
+      if (!v.is_number_unsigned())
+        throw InputError(where + ": seed must be a non-negative integer");
       c.seed = v.get<std::uint64_t>();
     } else if (key == "oe_structure") {
       if (!v.is_string()) throw InputError(where + ": oe_structure must be a string");
@@ -281,8 +310,10 @@ DetectorConfig config_from_json(const nlohmann::json& j, const std::string& wher
     } else if (key == "resampling") {
       if (!v.is_string()) throw InputError(where + ": resampling must be a string");
       c.resampling = resampling_from_string(v.get<std::string>());
-    } else if (key == "arx_regularisation") c.arx_regularisation = number(key, v);
-    else throw InputError(where + ": unknown key '" + key + "'");
+    } else if (key == "arx_regularisation")
+      c.arx_regularisation = number(key, v);
+    else
+      throw InputError(where + ": unknown key '" + key + "'");
   }
   c.validate();
   return c;

@@ -15,7 +15,8 @@ namespace {
 bool is_process(const MonitoredChannel& c) { return c.kind == MonitoredChannel::Kind::Process; }
 
 ordered_json channel_json(const Model& model, const MonitoredChannel& c) {
-  ordered_json j{{"kind", is_process(c) ? "process" : "noise"}, {"output", model.outputs[c.output]}};
+  ordered_json j{{"kind", is_process(c) ? "process" : "noise"},
+                 {"output", model.outputs[c.output]}};
   if (is_process(c)) j["input"] = model.inputs[c.input];
   return j;
 }
@@ -33,8 +34,8 @@ ordered_json row(const Eigen::MatrixXd& m, Eigen::Index r) {
 
 std::string detection_json(const Detector& detector, const DetectionResult& result, int indent) {
   const Model& model = detector.model();
-  ordered_json channels = ordered_json::array(), windows = ordered_json::array(), alarms = ordered_json::array(),
-               skipped = ordered_json::array();
+  ordered_json channels = ordered_json::array(), windows = ordered_json::array(),
+               alarms = ordered_json::array(), skipped = ordered_json::array();
   for (const MonitoredChannel& c : result.channels) channels.push_back(channel_json(model, c));
   for (std::size_t w = 0; w < result.windows.size(); ++w) {
     const FeatureWindow& fw = result.windows[w];
@@ -42,16 +43,22 @@ std::string detection_json(const Detector& detector, const DetectionResult& resu
     if (fw.skipped)
       skipped.push_back({{"start_s", fw.start_s}, {"end_s", fw.end_s}, {"reason", fw.skip_reason}});
     else
-      windows.push_back(
-          {{"start_s", fw.start_s}, {"end_s", fw.end_s}, {"scores", row(result.scores, r)}, {"indicator", row(result.indicator, r)}});
+      windows.push_back({{"start_s", fw.start_s},
+                         {"end_s", fw.end_s},
+                         {"scores", row(result.scores, r)},
+                         {"indicator", row(result.indicator, r)}});
   }
   for (const DetectionAlarm& a : result.alarms) {
     ordered_json j = channel_json(model, result.channels[a.channel]);
     j["start_s"] = a.start_s;
     alarms.push_back(std::move(j));
   }
-  const ordered_json doc{{"train_end_s", detector.train_end_s()}, {"channels", channels}, {"windows", windows},
-                         {"alarms", alarms}, {"threshold", detector.config().threshold}, {"skipped_windows", skipped}};
+  const ordered_json doc{{"train_end_s", detector.train_end_s()},
+                         {"channels", channels},
+                         {"windows", windows},
+                         {"alarms", alarms},
+                         {"threshold", detector.config().threshold},
+                         {"skipped_windows", skipped}};
   return doc.dump(indent) + (indent >= 0 ? "\n" : "");
 }
 
@@ -78,24 +85,29 @@ std::string detection_scores_csv(const Detector& detector, const DetectionResult
   for (std::size_t w = 0; w < result.windows.size(); ++w) {
     const FeatureWindow& fw = result.windows[w];
     const auto r = static_cast<Eigen::Index>(w);
-    out += std::to_string(fw.first / step) + "," + csv_number(fw.start_s) + "," + csv_number(fw.end_s);
-    for (Eigen::Index k = 0; k < result.scores.cols(); ++k) out += "," + csv_number(result.scores(r, k));
-    for (Eigen::Index k = 0; k < result.indicator.cols(); ++k) out += "," + csv_number(result.indicator(r, k));
+    out +=
+        std::to_string(fw.first / step) + "," + csv_number(fw.start_s) + "," + csv_number(fw.end_s);
+    for (Eigen::Index k = 0; k < result.scores.cols(); ++k)
+      out += "," + csv_number(result.scores(r, k));
+    for (Eigen::Index k = 0; k < result.indicator.cols(); ++k)
+      out += "," + csv_number(result.indicator(r, k));
     out += "\n";
   }
   return out;
 }
 
-void save_detection_json(const std::string& path, const Detector& detector, const DetectionResult& result,
-                         int indent) {
+void save_detection_json(const std::string& path, const Detector& detector,
+                         const DetectionResult& result, int indent) {
   detail::write_file_atomic(path, detection_json(detector, result, indent));
 }
 
-void save_detection_alarms_csv(const std::string& path, const Detector& detector, const DetectionResult& result) {
+void save_detection_alarms_csv(const std::string& path, const Detector& detector,
+                               const DetectionResult& result) {
   detail::write_file_atomic(path, detection_alarms_csv(detector, result));
 }
 
-void save_detection_scores_csv(const std::string& path, const Detector& detector, const DetectionResult& result) {
+void save_detection_scores_csv(const std::string& path, const Detector& detector,
+                               const DetectionResult& result) {
   detail::write_file_atomic(path, detection_scores_csv(detector, result));
 }
 

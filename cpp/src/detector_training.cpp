@@ -15,7 +15,8 @@ namespace {
 
 // Non-overlapping windows spanned by n consecutive moving windows.
 int independent_windows(int n_windows, const DetectorConfig& config) {
-  return static_cast<int>(std::floor((config.window_s + (n_windows - 1) * config.step_s) / config.window_s));
+  return static_cast<int>(
+      std::floor((config.window_s + (n_windows - 1) * config.step_s) / config.window_s));
 }
 
 // Uniform integer in [0, bound] without modulo bias: masked draws, rejected above bound.
@@ -32,13 +33,15 @@ std::vector<int> shuffled_order(int n, std::uint64_t seed) {
   std::vector<int> order(n);
   std::iota(order.begin(), order.end(), 0);
   std::mt19937_64 engine(seed);
-  for (int i = n - 1; i > 0; --i) std::swap(order[i], order[bounded(engine, static_cast<std::uint64_t>(i))]);
+  for (int i = n - 1; i > 0; --i)
+    std::swap(order[i], order[bounded(engine, static_cast<std::uint64_t>(i))]);
   return order;
 }
 
 RowMatrixXd take_rows(const Eigen::Ref<const RowMatrixXd>& X, const std::vector<int>& rows) {
   RowMatrixXd out(static_cast<Eigen::Index>(rows.size()), X.cols());
-  for (std::size_t r = 0; r < rows.size(); ++r) out.row(static_cast<Eigen::Index>(r)) = X.row(rows[r]);
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    out.row(static_cast<Eigen::Index>(r)) = X.row(rows[r]);
   return out;
 }
 
@@ -90,12 +93,15 @@ Eigen::MatrixXd directional_max(const Eigen::Ref<const Eigen::MatrixXd>& A,
   if (a.info() != Eigen::Success || !(a.eigenvalues().minCoeff() > 0))
     throw InputError("the training windows' OE covariance is not positive definite");
   const Eigen::VectorXd sqrt_w = a.eigenvalues().cwiseSqrt();
-  const Eigen::MatrixXd root = a.eigenvectors() * sqrt_w.asDiagonal() * a.eigenvectors().transpose();
-  const Eigen::MatrixXd inv_root = a.eigenvectors() * sqrt_w.cwiseInverse().asDiagonal() * a.eigenvectors().transpose();
+  const Eigen::MatrixXd root =
+      a.eigenvectors() * sqrt_w.asDiagonal() * a.eigenvectors().transpose();
+  const Eigen::MatrixXd inv_root =
+      a.eigenvectors() * sqrt_w.cwiseInverse().asDiagonal() * a.eigenvectors().transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> b(inv_root * B * inv_root);
   if (b.info() != Eigen::Success) throw InputError("directional_max: eigendecomposition failed");
   const Eigen::VectorXd raised = b.eigenvalues().cwiseMax(1.0);
-  const Eigen::MatrixXd V = root * b.eigenvectors() * raised.asDiagonal() * b.eigenvectors().transpose() * root;
+  const Eigen::MatrixXd V =
+      root * b.eigenvectors() * raised.asDiagonal() * b.eigenvectors().transpose() * root;
   return 0.5 * (V + V.transpose());
 }
 
@@ -103,7 +109,8 @@ std::uint64_t channel_seed(std::uint64_t seed, int channel) {
   if (channel < 0) throw InputError("channel_seed: channel must be >= 0");
   // NumPy's SeedSequence (pool of 4 32-bit words, entropy = the 32-bit words of seed, then of
   // channel, least significant first, 0 as one word).
-  constexpr std::uint32_t kInitA = 0x43b0d7e5, kMultA = 0x931e8875, kInitB = 0x8b51f9dd, kMultB = 0x58f38ded;
+  constexpr std::uint32_t kInitA = 0x43b0d7e5, kMultA = 0x931e8875, kInitB = 0x8b51f9dd,
+                          kMultB = 0x58f38ded;
   constexpr std::uint32_t kMixL = 0xca01f9dd, kMixR = 0x4973f715;
   constexpr int kPool = 4;
   std::vector<std::uint32_t> entropy;
@@ -127,7 +134,8 @@ std::uint64_t channel_seed(std::uint64_t seed, int channel) {
     return r ^ (r >> 16);
   };
   std::uint32_t pool[kPool];
-  for (int i = 0; i < kPool; ++i) pool[i] = hashmix(i < static_cast<int>(entropy.size()) ? entropy[i] : 0u);
+  for (int i = 0; i < kPool; ++i)
+    pool[i] = hashmix(i < static_cast<int>(entropy.size()) ? entropy[i] : 0u);
   for (int src = 0; src < kPool; ++src)
     for (int dst = 0; dst < kPool; ++dst)
       if (src != dst) pool[dst] = mix(pool[dst], hashmix(pool[src]));
@@ -153,22 +161,27 @@ double outlier_offset(const Eigen::Ref<const Eigen::VectorXd>& scores, double fr
   std::vector<double> s(scores.data(), scores.data() + n);
   std::sort(s.begin(), s.end());
   if (n == 1) return s[0];
-  const auto k = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(fraction * n + 0.5)), 1, n - 1);
+  const auto k =
+      std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(fraction * n + 0.5)), 1, n - 1);
   return 0.5 * (s[k - 1] + s[k]);
 }
 
 OutlierFractionCv cross_validate_outlier_fraction(const Eigen::Ref<const RowMatrixXd>& X,
                                                   const std::vector<double>& fractions, int n_folds,
-                                                  std::uint64_t seed, const OneClassSvmOptions& svm) {
-  if (fractions.empty() || std::any_of(fractions.begin(), fractions.end(), [](double f) { return !(f > 0 && f < 1); }))
+                                                  std::uint64_t seed,
+                                                  const OneClassSvmOptions& svm) {
+  if (fractions.empty() ||
+      std::any_of(fractions.begin(), fractions.end(), [](double f) { return !(f > 0 && f < 1); }))
     throw InputError("fractions: need a non-empty grid of values in (0, 1)");
-  if (n_folds < 2) throw InputError("n_folds: must be an integer >= 2, got " + std::to_string(n_folds));
+  if (n_folds < 2)
+    throw InputError("n_folds: must be an integer >= 2, got " + std::to_string(n_folds));
   const int n = static_cast<int>(X.rows());
   if (n < 2 * n_folds)
-    throw InputError("X: need at least 2 * n_folds = " + std::to_string(2 * n_folds) + " rows, got " +
-                     std::to_string(n));
+    throw InputError("X: need at least 2 * n_folds = " + std::to_string(2 * n_folds) +
+                     " rows, got " + std::to_string(n));
   OutlierFractionCv cv;
-  cv.fractions = Eigen::Map<const Eigen::VectorXd>(fractions.data(), static_cast<Eigen::Index>(fractions.size()));
+  cv.fractions = Eigen::Map<const Eigen::VectorXd>(fractions.data(),
+                                                   static_cast<Eigen::Index>(fractions.size()));
   cv.n_folds = n_folds;
   cv.order = shuffled_order(n, seed);
   Eigen::VectorXd accepted = Eigen::VectorXd::Zero(cv.fractions.size());
@@ -210,13 +223,17 @@ ResampledModels draw_training_models(const Eigen::Ref<const RowMatrixXd>& estima
     // windows' mean two-step covariance plus their mean's) is computed from every sample, so
     // it is sound even when the training period spans only a few independent windows; S, the
     // sample covariance of the window estimates, takes over where the real spread exceeds it.
-    const Eigen::MatrixXd spread = directional_max(reference_covariance, coefficient_covariance(estimates));
-    return {draw_correlated_gaussian_models(estimates.colwise().mean().transpose(), spread, n, alpha, seed), true};
+    const Eigen::MatrixXd spread =
+        directional_max(reference_covariance, coefficient_covariance(estimates));
+    return {draw_correlated_gaussian_models(estimates.colwise().mean().transpose(), spread, n,
+                                            alpha, seed),
+            true};
   }
   // Correlated draws need more independent windows than coefficients: a sample covariance
   // from fewer is singular.
-  const bool correlated = config.resampling == Resampling::Covariance &&
-                          independent_windows(static_cast<int>(estimates.rows()), config) > estimates.cols();
+  const bool correlated =
+      config.resampling == Resampling::Covariance &&
+      independent_windows(static_cast<int>(estimates.rows()), config) > estimates.cols();
   if (correlated) {
     try {
       return {resample(estimates, n, alpha, seed, true), true};
@@ -246,7 +263,8 @@ ChannelScorer train_channel_scorer(const Eigen::Ref<const RowMatrixXd>& estimate
     s.mean_covariance = mean_ratio * window;
     s.reference_covariance = window + s.mean_covariance;
   }
-  const ResampledModels drawn = draw_training_models(estimates, config, seed, s.reference_covariance, noise);
+  const ResampledModels drawn =
+      draw_training_models(estimates, config, seed, s.reference_covariance, noise);
   const RowMatrixXd& Z = drawn.models;
   RowMatrixXd Zs;
   if (config.standardise) {
@@ -287,8 +305,8 @@ ChannelScorer train_channel_scorer(const Eigen::Ref<const RowMatrixXd>& estimate
   double fraction = config.outlier_fraction;
   s.cv_accuracy = -1;
   if (fraction < 0) {
-    const OutlierFractionCv cv =
-        cross_validate_outlier_fraction(Zs, config.outlier_fraction_grid, config.cv_folds, seed, options);
+    const OutlierFractionCv cv = cross_validate_outlier_fraction(Zs, config.outlier_fraction_grid,
+                                                                 config.cv_folds, seed, options);
     fraction = cv.outlier_fraction;
     s.cv_accuracy = cv.validation_accuracy;
   }
@@ -308,14 +326,16 @@ Detector train_detector(const Model& model, const DetectorConfig& config,
                         const WindowFeatures::Series& series, double train_end_s) {
   config.validate();
   if (!std::isfinite(train_end_s) || train_end_s <= 0)
-    throw InputError("train_end_s: must be a positive number of seconds, got " + format_seconds(train_end_s));
+    throw InputError("train_end_s: must be a positive number of seconds, got " +
+                     format_seconds(train_end_s));
   const std::vector<MonitoredChannel> channels = monitored_channels(model);
   if (series.features.size() != channels.size())
     throw InputError("train_detector: the series has " + std::to_string(series.features.size()) +
                      " channels, the model " + std::to_string(channels.size()));
   const auto& windows = series.windows;
   const double t0 = windows.empty() ? 0.0 : windows[0].start_s;
-  const double train_end_abs = t0 + train_end_s + 0.5 * model.sample_time_s;  // as Detector::monitor
+  const double train_end_abs =
+      t0 + train_end_s + 0.5 * model.sample_time_s;  // as Detector::monitor
   std::vector<int> train, firsts;
   int in_period = 0;
   for (int w = 0; w < static_cast<int>(windows.size()); ++w) {
@@ -341,8 +361,9 @@ Detector train_detector(const Model& model, const DetectorConfig& config,
       for (std::size_t r = 0; r < train.size(); ++r)
         covariances.row(static_cast<Eigen::Index>(r)) = series.covariances[k].row(train[r]);
     }
-    scorers.push_back(train_channel_scorer(X, config, channel_seed(config.seed, static_cast<int>(k)), covariances,
-                                           channels[k].kind == MonitoredChannel::Kind::Noise, ratio));
+    scorers.push_back(
+        train_channel_scorer(X, config, channel_seed(config.seed, static_cast<int>(k)), covariances,
+                             channels[k].kind == MonitoredChannel::Kind::Noise, ratio));
   }
   return Detector(model, config, train_end_s, std::move(scorers));
 }

@@ -52,8 +52,10 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
   thread_local Eigen::VectorXd batch;
   runs.clear();
   for (Eigen::Index k = 0; k < p; ++k) {
-    if (continues(k)) ++runs.back().length;
-    else runs.push_back({k, 1});
+    if (continues(k))
+      ++runs.back().length;
+    else
+      runs.push_back({k, 1});
   }
   // Columns first + skip .. first + length - 1 of a run, the last lag first.
   const auto hankel = [&](const Run& r, Eigen::Index skip) {
@@ -70,10 +72,12 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
       const LaggedColumn& cb = columns[b.first];
       const double s = ca.sign * cb.sign;
       batch.noalias() = hankel(a, 0).transpose() * column_segment(cb, t0, n);
-      for (Eigen::Index m = 0; m < a.length; ++m) G(a.first + m, b.first) = s * batch[a.length - 1 - m];
+      for (Eigen::Index m = 0; m < a.length; ++m)
+        G(a.first + m, b.first) = s * batch[a.length - 1 - m];
       if (ib == ia) continue;
       batch.noalias() = hankel(b, 1).transpose() * column_segment(ca, t0, n);
-      for (Eigen::Index m = 1; m < b.length; ++m) G(a.first, b.first + m) = s * batch[b.length - 1 - m];
+      for (Eigen::Index m = 1; m < b.length; ++m)
+        G(a.first, b.first + m) = s * batch[b.length - 1 - m];
     }
   }
   for (Eigen::Index i = 0; i < p; ++i) {
@@ -98,7 +102,8 @@ void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const dou
       // sum_t x(t - l) y(t) is the sum_t x(t - l - 1) y(t - 1) of G(i + 1, target_lag1)
       // over rows shifted by one: gain the row t0 + n - 1, lose the row t0 - 1 (both
       // readable: column i + 1 reaches x(t0 - l - 1), the lag-1 column y(t0 - 1)).
-      const double shifted = G(i + 1, target_lag1) * columns[i + 1].sign * columns[target_lag1].sign;
+      const double shifted =
+          G(i + 1, target_lag1) * columns[i + 1].sign * columns[target_lag1].sign;
       const double enter = ci.signal[t0 + n - 1 - ci.lag] * target[t0 + n - 1];
       const double leave = ci.signal[t0 - 1 - ci.lag] * target[t0 - 1];
       h[i] = ci.sign * (shifted + enter - leave);
@@ -116,8 +121,7 @@ bool NormalEquationsSolver::positive_definite_above(double shift) {
 }
 
 NormalEquationsSolver::Outcome NormalEquationsSolver::solve(const Eigen::MatrixXd& G,
-                                                            const Eigen::VectorXd& h,
-                                                            double delta,
+                                                            const Eigen::VectorXd& h, double delta,
                                                             double rank_tolerance,
                                                             Eigen::VectorXd& theta) {
   Outcome out;

@@ -48,12 +48,14 @@ void expect_object(const json& j, const std::string& path) {
   expect_type(j, j.is_object(), "an object", path);
 }
 
-// Unknown keys are an error (FORMATS.md): a typo must not be silently ignored.
+// Unknown keys are an error (docs/formats.md): a typo must not be silently ignored.
 void check_keys(const json& obj, const std::string& path, const std::vector<std::string>& allowed) {
   for (const auto& item : obj.items()) {
     bool known = false;
     for (const auto& a : allowed) known = known || item.key() == a;
-    if (!known) fail(join(path, item.key()), "unknown key (expected one of: " + detail::comma_list(allowed) + ")");
+    if (!known)
+      fail(join(path, item.key()),
+           "unknown key (expected one of: " + detail::comma_list(allowed) + ")");
   }
 }
 
@@ -74,7 +76,8 @@ Eigen::VectorXd coefficients(const json& j, const std::string& path) {
   expect_type(j, j.is_array(), "an array of numbers", path);
   if (j.empty()) fail(path, "must have at least one coefficient");
   Eigen::VectorXd c(static_cast<Eigen::Index>(j.size()));
-  for (std::size_t i = 0; i < j.size(); ++i) c[static_cast<Eigen::Index>(i)] = finite_number(j[i], index(path, i));
+  for (std::size_t i = 0; i < j.size(); ++i)
+    c[static_cast<Eigen::Index>(i)] = finite_number(j[i], index(path, i));
   return c;
 }
 
@@ -85,7 +88,8 @@ int delay_samples(const json& j, const std::string& path) {
   expect_type(j, j.is_number(), "an integer", path);
   const double d = j.get<double>();
   if (!(d >= 0.0)) fail(path, "must be >= 0, got " + format_number(d));
-  if (d != std::floor(d)) fail(path, "must be an integer number of samples, got " + format_number(d));
+  if (d != std::floor(d))
+    fail(path, "must be an integer number of samples, got " + format_number(d));
   if (d > kMaxDelay) fail(path, "must be <= 1000000 samples, got " + format_number(d));
   return static_cast<int>(d);
 }
@@ -103,20 +107,23 @@ std::vector<std::string> names(const json& j, const std::string& path) {
 TransferFunction discrete_channel(const json& j, const std::string& path, bool with_delay) {
   const Eigen::VectorXd num = coefficients(field(j, "num", path), join(path, "num"));
   const Eigen::VectorXd den = coefficients(field(j, "den", path), join(path, "den"));
-  const int delay = with_delay && j.contains("delay") ? delay_samples(j["delay"], join(path, "delay")) : 0;
+  const int delay =
+      with_delay && j.contains("delay") ? delay_samples(j["delay"], join(path, "delay")) : 0;
   return at(path, [&] { return TransferFunction(num, den, delay); });
 }
 
 TransferFunction process_channel(const json& j, const std::string& path, double sample_time_s) {
   expect_object(j, path);
-  const bool foptd = j.contains("gain") || j.contains("time_constant_s") || j.contains("dead_time_s");
+  const bool foptd =
+      j.contains("gain") || j.contains("time_constant_s") || j.contains("dead_time_s");
   if (!foptd) {
     check_keys(j, path, {"num", "den", "delay"});
     return discrete_channel(j, path, true);
   }
   check_keys(j, path, {"gain", "time_constant_s", "dead_time_s"});
   const double gain = finite_number(field(j, "gain", path), join(path, "gain"));
-  const double tau = finite_number(field(j, "time_constant_s", path), join(path, "time_constant_s"));
+  const double tau =
+      finite_number(field(j, "time_constant_s", path), join(path, "time_constant_s"));
   const double theta = finite_number(field(j, "dead_time_s", path), join(path, "dead_time_s"));
   return at(path, [&] { return TransferFunction::from_foptd(gain, tau, theta, sample_time_s); });
 }
@@ -146,7 +153,9 @@ int position(const std::vector<std::string>& names, const std::string& name) {
 int lookup(const std::vector<std::string>& names, const std::string& name, const char* kind,
            const std::string& path) {
   const int i = position(names, name);
-  if (i < 0) fail(path, "unknown " + std::string(kind) + " " + quoted(name) + " (" + kind + "s: " + detail::comma_list(names) + ")");
+  if (i < 0)
+    fail(path, "unknown " + std::string(kind) + " " + quoted(name) + " (" + kind +
+                   "s: " + detail::comma_list(names) + ")");
   return i;
 }
 
@@ -165,12 +174,15 @@ void check_noise(const TransferFunction& h, const std::string& path) {
     fail(path, "at most 200 coefficients in num and in den");
   if (h.delay() != 0) fail(path, "delay must be 0 (the noise model is monic)");
   if (std::abs(h.num()[0] - 1.0) > 1e-12)
-    fail(path, "must be monic (num[0] == den[0]), got num[0]/den[0] = " + format_number(h.num()[0]));
+    fail(path,
+         "must be monic (num[0] == den[0]), got num[0]/den[0] = " + format_number(h.num()[0]));
   if (!h.is_stable())
-    fail(path, "unstable: a pole has |z| = " + format_number(largest_magnitude(h.poles())) + " >= 1");
+    fail(path,
+         "unstable: a pole has |z| = " + format_number(largest_magnitude(h.poles())) + " >= 1");
   if (!h.is_minimum_phase())
-    fail(path, "non-minimum-phase: a zero has |z| = " + format_number(largest_magnitude(h.zeros())) +
-                   " >= 1 (H must be inversely stable)");
+    fail(path,
+         "non-minimum-phase: a zero has |z| = " + format_number(largest_magnitude(h.zeros())) +
+             " >= 1 (H must be inversely stable)");
 }
 
 // Parameters of each actuator kind, in file order.
@@ -303,7 +315,8 @@ class DuplicateKeyCheck {
 
  private:
   std::vector<std::set<std::string>> scopes_;
-  std::vector<std::pair<int, std::string>> path_;  // (depth, key) of the enclosing objects' current keys
+  std::vector<std::pair<int, std::string>>
+      path_;  // (depth, key) of the enclosing objects' current keys
 };
 
 Model model_from_json(const json& root) {
@@ -373,11 +386,13 @@ void validate_model(const Model& m) {
   for (std::size_t i = 0; i < m.process.size(); ++i)
     if (m.process[i].size() != m.inputs.size())
       fail(join("process", m.outputs[i]), "has " + std::to_string(m.process[i].size()) +
-                                              " channels for " + std::to_string(m.inputs.size()) + " inputs");
+                                              " channels for " + std::to_string(m.inputs.size()) +
+                                              " inputs");
   if (m.noise.size() != m.outputs.size())
     fail("noise", "has " + std::to_string(m.noise.size()) + " models for " +
                       std::to_string(m.outputs.size()) + " outputs");
-  for (std::size_t i = 0; i < m.noise.size(); ++i) check_noise(m.noise[i], join("noise", m.outputs[i]));
+  for (std::size_t i = 0; i < m.noise.size(); ++i)
+    check_noise(m.noise[i], join("noise", m.outputs[i]));
   if (!m.actuators.empty() && m.actuators.size() != m.inputs.size())
     fail("actuators", "has " + std::to_string(m.actuators.size()) + " entries for " +
                           std::to_string(m.inputs.size()) + " inputs");
@@ -400,9 +415,11 @@ Model make_model(std::string name, double sample_time_s, std::vector<std::string
   for (const auto& [output, row] : process) {
     const std::string row_path = join("process", output);
     const int i = lookup(m.outputs, output, "output", row_path);
-    for (const auto& [input, g] : row) m.process[i][lookup(m.inputs, input, "input", join(row_path, input))] = g;
+    for (const auto& [input, g] : row)
+      m.process[i][lookup(m.inputs, input, "input", join(row_path, input))] = g;
   }
-  for (const auto& [output, h] : noise) m.noise[lookup(m.outputs, output, "output", join("noise", output))] = h;
+  for (const auto& [output, h] : noise)
+    m.noise[lookup(m.outputs, output, "output", join("noise", output))] = h;
   m.actuators.assign(m.inputs.size(), std::nullopt);
   for (const auto& [input, a] : actuators)
     m.actuators[lookup(m.inputs, input, "input", join("actuators.inputs", input))] = a;
@@ -412,7 +429,8 @@ Model make_model(std::string name, double sample_time_s, std::vector<std::string
 
 Model parse_model(const std::string& json_text, const std::string& source) {
   try {
-    if (json_text.find_first_not_of(" \t\r\n") == std::string::npos) throw InputError("file is empty");
+    if (json_text.find_first_not_of(" \t\r\n") == std::string::npos)
+      throw InputError("file is empty");
     json root;
     try {
       root = json::parse(json_text, DuplicateKeyCheck());
@@ -429,7 +447,9 @@ Model parse_model(const std::string& json_text, const std::string& source) {
   }
 }
 
-Model load_model(const std::string& path) { return parse_model(detail::read_text_file(path), path); }
+Model load_model(const std::string& path) {
+  return parse_model(detail::read_text_file(path), path);
+}
 
 std::string model_to_json(const Model& m) {
   validate_model(m);
@@ -441,7 +461,8 @@ std::string model_to_json(const Model& m) {
   root["process"] = nlohmann::ordered_json::object();
   for (int i = 0; i < m.num_outputs(); ++i)
     for (int j = 0; j < m.num_inputs(); ++j)
-      if (m.has_channel(i, j)) root["process"][m.outputs[i]][m.inputs[j]] = discrete_json(*m.process[i][j], true);
+      if (m.has_channel(i, j))
+        root["process"][m.outputs[i]][m.inputs[j]] = discrete_json(*m.process[i][j], true);
   // H = 1 is what an absent entry means, so it is left out.
   auto noise = nlohmann::ordered_json::object();
   for (int i = 0; i < m.num_outputs(); ++i)

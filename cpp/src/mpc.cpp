@@ -71,7 +71,7 @@ struct Mpc::Impl {
   Eigen::VectorXd f, dist, q, l, u, ref, u_gap;
   std::vector<MovingBound> mv_bounds, cv_bounds;
   std::optional<QpSolver> solver;
-  QpResult fallback;             // reported before the first solve
+  QpResult fallback;  // reported before the first solve
   const QpResult* last = nullptr;
   int failed = 0;
 
@@ -96,7 +96,8 @@ Mpc::Mpc(const Model& model, MpcTuning tuning, const Eigen::Ref<const Eigen::Vec
     throw InputError("controller control_horizon must be in [1, prediction_horizon]");
   // The condensed QP is dense ((ny Hp) x (nu Hc) dynamic matrix, (nu Hc)^2 Hessian): bounds
   // far beyond MD practice (paper: Hp 40, Hc 4) so a hostile horizon cannot ask for gigabytes.
-  if (tuning.prediction_horizon > 10000) throw InputError("controller prediction_horizon must be <= 10000");
+  if (tuning.prediction_horizon > 10000)
+    throw InputError("controller prediction_horizon must be <= 10000");
   if (static_cast<long long>(tuning.control_horizon) * s.nu > 2000)
     throw InputError("controller control_horizon x inputs must be <= 2000 (the QP is dense)");
   if (u_initial.size() != s.nu || !u_initial.allFinite())
@@ -192,7 +193,8 @@ Mpc::Mpc(const Model& model, MpcTuning tuning, const Eigen::Ref<const Eigen::Vec
     }
   if (s.tuning.disturbance == DisturbanceModel::NoiseModel) {
     if (static_cast<int>(model.noise.size()) != ny)
-      throw InputError("model noise must have one model per output for the noise-model disturbance");
+      throw InputError(
+          "model noise must have one model per output for the noise-model disturbance");
     for (int i = 0; i < ny; ++i) {
       const TransferFunction& h = model.noise[i];
       if (h.delay() != 0 || h.num()[0] != 1.0 || !h.is_minimum_phase())
@@ -243,7 +245,8 @@ void Mpc::Impl::build_qp() {
   P.topLeftCorner(ndu, ndu) = 2.0 * (theta.transpose() * wy.asDiagonal() * theta);
   P.topLeftCorner(ndu, ndu).diagonal() += 2.0 * wmove;
   P.topLeftCorner(ndu, ndu) += 2.0 * C.transpose() * (wtarget + wdev).asDiagonal() * C;
-  q_from_f = 2.0 * theta.transpose() * wy.asDiagonal();  // q_du = q_from_f (f - r) + q_from_u (u(t-1) - u_target)
+  q_from_f = 2.0 * theta.transpose() *
+             wy.asDiagonal();  // q_du = q_from_f (f - r) + q_from_u (u(t-1) - u_target)
   q_from_u = 2.0 * C.transpose() * wtarget.asDiagonal();
 
   // Rows of A, counted first, then filled.
@@ -345,7 +348,8 @@ Mpc& Mpc::operator=(Mpc&&) noexcept = default;
 
 const Eigen::VectorXd& Mpc::step(const Eigen::Ref<const Eigen::VectorXd>& y) {
   Impl& s = *impl_;
-  if (y.size() != s.ny) throw InputError("measured outputs must have " + std::to_string(s.ny) + " entries");
+  if (y.size() != s.ny)
+    throw InputError("measured outputs must have " + std::to_string(s.ny) + " entries");
   const int nu = s.nu, hp = s.hp;
   // Nominal model output y_model(t) from u(t-1); disturbance estimate held over the horizon.
   for (int i = 0; i < s.ny; ++i) {
@@ -384,8 +388,7 @@ const Eigen::VectorXd& Mpc::step(const Eigen::Ref<const Eigen::VectorXd>& y) {
       }
     }
   }
-  for (int m = 0; m < s.hc; ++m)
-    s.u_gap.segment(m * nu, nu) = s.u_prev - s.tuning.mv_target;
+  for (int m = 0; m < s.hc; ++m) s.u_gap.segment(m * nu, nu) = s.u_prev - s.tuning.mv_target;
   s.q.head(s.ndu).noalias() = s.q_from_f * (s.f - s.ref);
   s.q.head(s.ndu).noalias() += s.q_from_u * s.u_gap;
   for (const MovingBound& b : s.mv_bounds)

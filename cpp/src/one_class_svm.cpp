@@ -39,7 +39,8 @@ constexpr int kPanel = 8;
 class PackedPoints {
  public:
   explicit PackedPoints(const Eigen::Ref<const RowMatrixXd>& X)
-      : n_(static_cast<int>(X.rows())), m_(static_cast<int>(X.cols())),
+      : n_(static_cast<int>(X.rows())),
+        m_(static_cast<int>(X.cols())),
         n_pad_((n_ + kPanel - 1) / kPanel * kPanel),
         data_(static_cast<size_t>(n_pad_) * m_, 0.0) {
     for (int j = 0; j < n_; ++j) {
@@ -68,10 +69,10 @@ class PackedPoints {
 };
 
 // out[p * ldo + j - j_first] = sum_k q[p * m + k] x_jk   for p < n_q and the packed points j
-// in panels [panel0, panel1), j_first = panel0 * kPanel. q: n_q query points, row-major. Every sum runs over k in increasing order, as
-// a plain dot product does. Register tile of 4 queries x 8 points in 4-wide vectors (GCC vector
-// extensions, lowered to each clone's ISA): per feature, two contiguous loads feed 32
-// multiply-adds.
+// in panels [panel0, panel1), j_first = panel0 * kPanel. q: n_q query points, row-major. Every sum
+// runs over k in increasing order, as a plain dot product does. Register tile of 4 queries x 8
+// points in 4-wide vectors (GCC vector extensions, lowered to each clone's ISA): per feature, two
+// contiguous loads feed 32 multiply-adds.
 typedef double Vec4 __attribute__((vector_size(32)));
 #define MPMPP_LOAD4(v, ptr) __builtin_memcpy(&(v), (ptr), sizeof(Vec4))
 #define MPMPP_STORE4(ptr, v) __builtin_memcpy((ptr), &(v), sizeof(Vec4))
@@ -224,8 +225,7 @@ void gaussian_column(const double* dots, const double* sq, double sq_i, double g
     const Vec4f f = __builtin_convertvector(v, Vec4f);  // round to nearest, as static_cast
     __builtin_memcpy(out + j, &f, sizeof f);
   }
-  for (; j < n; ++j)
-    out[j] = static_cast<float>(std::exp(-gamma * (sq_i + sq[j] - 2 * dots[j])));
+  for (; j < n; ++j) out[j] = static_cast<float>(std::exp(-gamma * (sq_i + sq[j] - 2 * dots[j])));
 }
 
 // sum_j coef[j] exp(-gamma max(0, x_sq + sq[j] - 2 dots[j])), j < n: a decision-function term.
@@ -247,8 +247,7 @@ double gaussian_sum(const double* dots, const double* sq, const double* coef, do
     acc += c * v;
   }
   double sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-  for (; j < n; ++j)
-    sum += coef[j] * std::exp(-gamma * std::max(0.0, x_sq + sq[j] - 2 * dots[j]));
+  for (; j < n; ++j) sum += coef[j] * std::exp(-gamma * std::max(0.0, x_sq + sq[j] - 2 * dots[j]));
   return sum;
 }
 
@@ -375,13 +374,18 @@ int second_order_partner(const double* grad, const double* alpha, const float* q
 class KernelColumns {
  public:
   KernelColumns(const Eigen::Ref<const RowMatrixXd>& X, double gamma, double cache_mb)
-      : x_(X), sq_norm_(X.rowwise().squaredNorm()), gamma_(gamma), l_(static_cast<int>(X.rows())),
-        columns_(static_cast<size_t>(l_) + 1), dots_(x_.padded_size()), point_(X.cols()) {
+      : x_(X),
+        sq_norm_(X.rowwise().squaredNorm()),
+        gamma_(gamma),
+        l_(static_cast<int>(X.rows())),
+        columns_(static_cast<size_t>(l_) + 1),
+        dots_(x_.padded_size()),
+        point_(X.cols()) {
     const double bytes = cache_mb * 1024.0 * 1024.0;
     const double floats = bytes / sizeof(float) - 8.0 * l_;  // minus bookkeeping, like libsvm
     // At least two full columns, so fetching Q_j never evicts the Q_i fetched just before it.
-    budget_ = std::max<std::int64_t>(
-        static_cast<std::int64_t>(std::min(floats, 9.0e18)), 2 * static_cast<std::int64_t>(l_));
+    budget_ = std::max<std::int64_t>(static_cast<std::int64_t>(std::min(floats, 9.0e18)),
+                                     2 * static_cast<std::int64_t>(l_));
     sentinel().prev = sentinel().next = l_;
   }
 
@@ -547,8 +551,17 @@ class KernelColumns {
 class SmoSolver {
  public:
   SmoSolver(KernelColumns& q, double tol, bool shrinking, std::int64_t max_iter)
-      : q_(q), l_(q.size()), tol_(tol), shrinking_(shrinking), max_iter_(max_iter),
-        alpha_(l_), grad_(l_), grad_bar_(l_), status_(l_), active_set_(l_), active_size_(l_) {}
+      : q_(q),
+        l_(q.size()),
+        tol_(tol),
+        shrinking_(shrinking),
+        max_iter_(max_iter),
+        alpha_(l_),
+        grad_(l_),
+        grad_bar_(l_),
+        status_(l_),
+        active_set_(l_),
+        active_size_(l_) {}
 
   struct Result {
     Eigen::VectorXd alpha;  // original order

@@ -23,7 +23,8 @@ OutputErrorEstimator::OutputErrorEstimator(std::vector<OeChannel> channels, OeOp
     if (c.nf < 0) throw InputError(at + ".nf must be >= 0, got " + std::to_string(c.nf));
     if (c.delay < 0) throw InputError(at + ".delay must be >= 0, got " + std::to_string(c.delay));
     const auto at_most_max_lag = [&](const char* name, int value) {
-      if (value > detail::kMaxLag) throw InputError(at + name + " must be <= 1000000, got " + std::to_string(value));
+      if (value > detail::kMaxLag)
+        throw InputError(at + name + " must be <= 1000000, got " + std::to_string(value));
     };
     at_most_max_lag(".nb", c.nb);
     at_most_max_lag(".nf", c.nf);
@@ -139,7 +140,8 @@ void OutputErrorEstimator::prony_start(std::size_t j, const Eigen::Ref<const Eig
   }
 }
 
-void OutputErrorEstimator::pole_grid_start(std::size_t j, const Eigen::Ref<const Eigen::MatrixXd>& u,
+void OutputErrorEstimator::pole_grid_start(std::size_t j,
+                                           const Eigen::Ref<const Eigen::MatrixXd>& u,
                                            const double* y, Eigen::Index skip, Eigen::Index N,
                                            OeResult& out) {
   // A Prony fit to a noisy impulse response is pulled towards a pole at 0 (noise in the
@@ -227,8 +229,10 @@ double OutputErrorEstimator::simulate(const Eigen::Ref<const Eigen::MatrixXd>& u
     const double* w = w_[j].data() + pad_;
     for (Eigen::Index k = 0; k < par.b[j].size(); ++k) {
       const ConstSegment w_k(w - k, N);  // pad_ >= nb - 1
-      if (j == 0 && k == 0) error_ = ConstSegment(y, N) - par.b[j][k] * w_k;
-      else error_ -= par.b[j][k] * w_k;
+      if (j == 0 && k == 0)
+        error_ = ConstSegment(y, N) - par.b[j][k] * w_k;
+      else
+        error_ -= par.b[j][k] * w_k;
     }
   }
   return 0.5 * error_.tail(N - skip).squaredNorm();
@@ -286,13 +290,13 @@ void OutputErrorEstimator::newton_hessian(Eigen::Index skip, Eigen::Index N, con
   }
 }
 
-void OutputErrorEstimator::throw_if_not_informative(
-    const detail::NormalEquationsSolver::Outcome& o, const char* where) const {
+void OutputErrorEstimator::throw_if_not_informative(const detail::NormalEquationsSolver::Outcome& o,
+                                                    const char* where) const {
   using Status = detail::NormalEquationsSolver::Status;
   if (o.status == Status::Ok) return;
-  throw NumericalError(std::string("data not informative for the OE structure: ") + where +
-                       (o.status == Status::ZeroColumn ? " has a regressor with no energy"
-                                                       : " is rank-deficient"));
+  throw NumericalError(
+      std::string("data not informative for the OE structure: ") + where +
+      (o.status == Status::ZeroColumn ? " has a regressor with no energy" : " is rank-deficient"));
 }
 
 void OutputErrorEstimator::fir_start(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
@@ -329,16 +333,16 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     throw InputError("u must have one column per channel (" + std::to_string(m) + "), got " +
                      std::to_string(u.cols()));
   if (u.rows() != N)
-    throw InputError("u must have as many rows as y has samples (" + std::to_string(N) +
-                     "), got " + std::to_string(u.rows()));
+    throw InputError("u must have as many rows as y has samples (" + std::to_string(N) + "), got " +
+                     std::to_string(u.rows()));
   if (skip < 0) throw InputError("skip must be >= 0");
   if (initial_impulse && initial_impulse->size() != m)
     throw InputError("initial_impulse must have one response per channel");
   const Eigen::Index n_eq = N - skip;
   if (n_eq < 2 * p_)
     throw NumericalError("window too short for the OE structure: " + std::to_string(n_eq) +
-                         " equations for " + std::to_string(p_) + " parameters (need >= " +
-                         std::to_string(2 * p_) + ")");
+                         " equations for " + std::to_string(p_) +
+                         " parameters (need >= " + std::to_string(2 * p_) + ")");
   if (check_signals_) require_informative_window(y, u);
 
   // History the lagged columns may reach before sample 0 (zero initial state).
@@ -349,8 +353,8 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
       throw NumericalError("window too short for the OE start fit: " + std::to_string(n_eq) +
                            " equations");
     // Newton's second-order term reaches lags nb - 1 + nf and 2 nf (newton_hessian).
-    pad_ = std::max<Eigen::Index>(pad_, std::max({channels_[j].nb - 1 + channels_[j].nf,
-                                                  2 * channels_[j].nf, L - 1}));
+    pad_ = std::max<Eigen::Index>(
+        pad_, std::max({channels_[j].nb - 1 + channels_[j].nf, 2 * channels_[j].nf, L - 1}));
   }
   for (std::size_t j = 0; j < m; ++j)
     for (auto* buf : {&w_[j], &v_[j], &s_[j], &r_[j]}) {
@@ -383,8 +387,8 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     const double residual_norm = std::sqrt(2.0 * cost);
     bool stationary = true;  // every sensitivity is orthogonal to the residual
     for (Eigen::Index k = 0; k < p_ && stationary; ++k)
-      stationary = std::abs(h_[k]) <=
-                   options_.gradient_tolerance * std::sqrt(G_(k, k)) * residual_norm;
+      stationary =
+          std::abs(h_[k]) <= options_.gradient_tolerance * std::sqrt(G_(k, k)) * residual_norm;
     if (stationary) {
       out.converged = true;
       break;
@@ -422,8 +426,8 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
         std::swap(out.b, candidate_.b);
         std::swap(out.f, candidate_.f);
         cost = candidate_cost;
-        if (nearly_undamped &&
-            step <= options_.step_tolerance * (theta_.cwiseAbs().maxCoeff() + options_.step_tolerance))
+        if (nearly_undamped && step <= options_.step_tolerance *
+                                           (theta_.cwiseAbs().maxCoeff() + options_.step_tolerance))
           out.converged = true;
       } else if (lambda > 1e12) {
         // No descent direction left at any damping: theta is a (numerical) minimum.

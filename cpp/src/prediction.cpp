@@ -30,7 +30,8 @@ TransferFunction predictor_weight(const TransferFunction& noise, int horizon) {
   return TransferFunction(poly_multiply(hbar, noise.den()), noise.num(), 0);
 }
 
-Eigen::VectorXd simulate_output(const ModelRow& row, const Eigen::Ref<const Eigen::MatrixXd>& inputs) {
+Eigen::VectorXd simulate_output(const ModelRow& row,
+                                const Eigen::Ref<const Eigen::MatrixXd>& inputs) {
   check_shapes(row, inputs.rows(), inputs.cols(), -1);
   Eigen::VectorXd y = Eigen::VectorXd::Zero(inputs.rows());
   for (std::size_t j = 0; j < row.size(); ++j)

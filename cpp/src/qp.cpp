@@ -31,10 +31,14 @@ namespace mpmpp {
 
 const char* to_string(QpStatus s) {
   switch (s) {
-    case QpStatus::Solved: return "solved";
-    case QpStatus::PrimalInfeasible: return "primal_infeasible";
-    case QpStatus::NonConvex: return "non_convex";
-    case QpStatus::MaxIterations: return "max_iterations";
+    case QpStatus::Solved:
+      return "solved";
+    case QpStatus::PrimalInfeasible:
+      return "primal_infeasible";
+    case QpStatus::NonConvex:
+      return "non_convex";
+    case QpStatus::MaxIterations:
+      return "max_iterations";
   }
   return "unknown";
 }
@@ -148,14 +152,18 @@ struct QpSolver::Impl {
 
   double bound(const ActiveConstraint& c) const { return c.sigma > 0 ? l[c.row] : u[c.row]; }
 
-  void load(const Eigen::Ref<const Eigen::VectorXd>& q_in, const Eigen::Ref<const Eigen::VectorXd>& l_in,
+  void load(const Eigen::Ref<const Eigen::VectorXd>& q_in,
+            const Eigen::Ref<const Eigen::VectorXd>& l_in,
             const Eigen::Ref<const Eigen::VectorXd>& u_in) {
     if (q_in.size() != n)
-      throw InputError("q has " + std::to_string(q_in.size()) + " entries, expected " + std::to_string(n));
+      throw InputError("q has " + std::to_string(q_in.size()) + " entries, expected " +
+                       std::to_string(n));
     if (l_in.size() != m)
-      throw InputError("l has " + std::to_string(l_in.size()) + " entries, expected " + std::to_string(m));
+      throw InputError("l has " + std::to_string(l_in.size()) + " entries, expected " +
+                       std::to_string(m));
     if (u_in.size() != m)
-      throw InputError("u has " + std::to_string(u_in.size()) + " entries, expected " + std::to_string(m));
+      throw InputError("u has " + std::to_string(u_in.size()) + " entries, expected " +
+                       std::to_string(m));
     if (!q_in.allFinite()) throw InputError("q has a NaN or infinite entry");
     // Placement new is how an Eigen::Map is pointed at other data.
     new (&q) ConstMap(q_in.data(), n);
@@ -221,7 +229,8 @@ struct QpSolver::Impl {
   void arm(int i) {
     const double tol = settings.feasibility_tol;
     const bool inequality = !is_equality[i];
-    lower_trigger[i] = inequality && has_lower(i) ? l[i] - tol * (1.0 + std::abs(l[i])) : -kInfinity;
+    lower_trigger[i] =
+        inequality && has_lower(i) ? l[i] - tol * (1.0 + std::abs(l[i])) : -kInfinity;
     upper_trigger[i] = inequality && has_upper(i) ? u[i] + tol * (1.0 + std::abs(u[i])) : kInfinity;
   }
   void disarm(int i) {
@@ -331,7 +340,8 @@ struct QpSolver::Impl {
       Ax.noalias() = A.middleCols(first, last - first) * x.segment(first, last - first);
     else
       Ax.setZero();
-    const auto violation = (lower_trigger - Ax).cwiseMax(Ax - upper_trigger).cwiseProduct(row_inv_norm);
+    const auto violation =
+        (lower_trigger - Ax).cwiseMax(Ax - upper_trigger).cwiseProduct(row_inv_norm);
     for (;;) {
       max_violation = violation.maxCoeff();  // one vectorised pass; the index only when needed
       if (!(max_violation > 0.0)) return -1;
@@ -349,7 +359,8 @@ struct QpSolver::Impl {
 
   bool redundant_equalities_hold() const {
     for (int i : redundant_equalities)
-      if (std::abs(At.col(i).dot(x) - l[i]) > settings.feasibility_tol * (1.0 + std::abs(l[i]))) return false;
+      if (std::abs(At.col(i).dot(x) - l[i]) > settings.feasibility_tol * (1.0 + std::abs(l[i])))
+        return false;
     return true;
   }
 
@@ -369,7 +380,8 @@ struct QpSolver::Impl {
       }
       if (!dropped) break;
     }
-    for (int j = num_active_equalities; j < static_cast<int>(active.size()); ++j) mult[j] = std::max(mult[j], 0.0);
+    for (int j = num_active_equalities; j < static_cast<int>(active.size()); ++j)
+      mult[j] = std::max(mult[j], 0.0);
   }
 
   // x_P_x holds x'Px from the last closed-form solve when `exact` (x has not moved since).
@@ -379,7 +391,8 @@ struct QpSolver::Impl {
     std::copy(x.data(), x.data() + n, result.x.data());  // sizes fixed: no Eigen set-up needed
     std::fill(result.y.data(), result.y.data() + m, 0.0);
     // P x + q = sum_j mult_j sigma_j a_j  and OSQP's  P x + q + A'y = 0  give y = -sigma mult.
-    for (int j = 0; j < static_cast<int>(active.size()); ++j) result.y[active[j].row] = -active[j].sigma * mult[j];
+    for (int j = 0; j < static_cast<int>(active.size()); ++j)
+      result.y[active[j].row] = -active[j].sigma * mult[j];
     if (!exact) {
       w.noalias() = P * x;
       x_P_x = x.dot(w);
@@ -388,7 +401,8 @@ struct QpSolver::Impl {
     return result;
   }
 
-  const QpResult& solve(const Eigen::Ref<const Eigen::VectorXd>& q_in, const Eigen::Ref<const Eigen::VectorXd>& l_in,
+  const QpResult& solve(const Eigen::Ref<const Eigen::VectorXd>& q_in,
+                        const Eigen::Ref<const Eigen::VectorXd>& l_in,
                         const Eigen::Ref<const Eigen::VectorXd>& u_in) {
     load(q_in, l_in, u_in);
     if (!positive_definite) {
@@ -431,7 +445,8 @@ struct QpSolver::Impl {
       double mult_p = 0.0;  // multiplier of the entering constraint
       // GI Step 2: move towards satisfying constraint p, dropping blocking inequalities.
       for (;;) {
-        if (iterations >= settings.max_iterations) return finish(QpStatus::MaxIterations, iterations);
+        if (iterations >= settings.max_iterations)
+          return finish(QpStatus::MaxIterations, iterations);
         ++iterations;
         const int k = factorization.size();
         factorization.J_transpose_times(At.col(p), d);
@@ -479,12 +494,14 @@ struct QpSolver::Impl {
   }
 };
 
-QpSolver::QpSolver(const Eigen::Ref<const Eigen::MatrixXd>& P, const Eigen::Ref<const Eigen::MatrixXd>& A,
-                   QpSettings settings) {
+QpSolver::QpSolver(const Eigen::Ref<const Eigen::MatrixXd>& P,
+                   const Eigen::Ref<const Eigen::MatrixXd>& A, QpSettings settings) {
   if (P.rows() != P.cols())
-    throw InputError("P must be square, got " + std::to_string(P.rows()) + "x" + std::to_string(P.cols()));
+    throw InputError("P must be square, got " + std::to_string(P.rows()) + "x" +
+                     std::to_string(P.cols()));
   if (A.cols() != P.rows() && !(A.rows() == 0))
-    throw InputError("A has " + std::to_string(A.cols()) + " columns, expected " + std::to_string(P.rows()));
+    throw InputError("A has " + std::to_string(A.cols()) + " columns, expected " +
+                     std::to_string(P.rows()));
   check_finite(P, "P");
   check_finite(A, "A");
   if (!P.isApprox(P.transpose(), 1e-12) && P.size() > 0) throw InputError("P must be symmetric");
@@ -511,8 +528,10 @@ void QpSolver::reset_warm_start() { impl_->warm = false; }
 int QpSolver::num_variables() const { return impl_->n; }
 int QpSolver::num_constraints() const { return impl_->m; }
 
-QpResult solve_qp(const Eigen::Ref<const Eigen::MatrixXd>& P, const Eigen::Ref<const Eigen::VectorXd>& q,
-                  const Eigen::Ref<const Eigen::MatrixXd>& A, const Eigen::Ref<const Eigen::VectorXd>& l,
+QpResult solve_qp(const Eigen::Ref<const Eigen::MatrixXd>& P,
+                  const Eigen::Ref<const Eigen::VectorXd>& q,
+                  const Eigen::Ref<const Eigen::MatrixXd>& A,
+                  const Eigen::Ref<const Eigen::VectorXd>& l,
                   const Eigen::Ref<const Eigen::VectorXd>& u, QpSettings settings) {
   QpSolver solver(P, A, settings);
   return solver.solve(q, l, u);

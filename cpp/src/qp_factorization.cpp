@@ -21,7 +21,6 @@ double givens(double a, double b, double& c, double& s) {
   return h;
 }
 
-
 }  // namespace
 
 ActiveSetFactorization::ActiveSetFactorization(int n)
@@ -63,7 +62,8 @@ void ActiveSetFactorization::drop(int position) {
     const int rest = k_ - 2 - j;  // columns j+1 .. k-2 of the shifted R
     // JacobiRotation(c, s) on the left and (c, -s) on the right both map (x, y) to
     // (c x + s y, -s x + c y), vectorised by Eigen.
-    if (rest > 0) R_.middleCols(j + 1, rest).applyOnTheLeft(j, j + 1, Eigen::JacobiRotation<double>(c, s));
+    if (rest > 0)
+      R_.middleCols(j + 1, rest).applyOnTheLeft(j, j + 1, Eigen::JacobiRotation<double>(c, s));
     J_.applyOnTheRight(j, j + 1, Eigen::JacobiRotation<double>(c, -s));
   }
   --k_;

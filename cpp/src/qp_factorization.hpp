@@ -27,19 +27,32 @@ template <typename Kernel>
 void with_static_size(int size, Kernel&& kernel) {
   using std::integral_constant;
   switch (size) {
-    case 1: return kernel(integral_constant<int, 1>());
-    case 2: return kernel(integral_constant<int, 2>());
-    case 3: return kernel(integral_constant<int, 3>());
-    case 4: return kernel(integral_constant<int, 4>());
-    case 5: return kernel(integral_constant<int, 5>());
-    case 6: return kernel(integral_constant<int, 6>());
-    case 7: return kernel(integral_constant<int, 7>());
-    case 8: return kernel(integral_constant<int, 8>());
-    case 9: return kernel(integral_constant<int, 9>());
-    case 10: return kernel(integral_constant<int, 10>());
-    case 11: return kernel(integral_constant<int, 11>());
-    case 12: return kernel(integral_constant<int, 12>());
-    default: return kernel(integral_constant<int, Eigen::Dynamic>());
+    case 1:
+      return kernel(integral_constant<int, 1>());
+    case 2:
+      return kernel(integral_constant<int, 2>());
+    case 3:
+      return kernel(integral_constant<int, 3>());
+    case 4:
+      return kernel(integral_constant<int, 4>());
+    case 5:
+      return kernel(integral_constant<int, 5>());
+    case 6:
+      return kernel(integral_constant<int, 6>());
+    case 7:
+      return kernel(integral_constant<int, 7>());
+    case 8:
+      return kernel(integral_constant<int, 8>());
+    case 9:
+      return kernel(integral_constant<int, 9>());
+    case 10:
+      return kernel(integral_constant<int, 10>());
+    case 11:
+      return kernel(integral_constant<int, 11>());
+    case 12:
+      return kernel(integral_constant<int, 12>());
+    default:
+      return kernel(integral_constant<int, Eigen::Dynamic>());
   }
 }
 static_assert(kSmallSize == 12, "with_static_size has one case per size up to kSmallSize");
@@ -56,7 +69,8 @@ class ActiveSetFactorization {
   // The products and solves of the method. The triangular solves are written out (column axpys
   // and dot products): k is small and Eigen's blocked triangular kernels cost more to set up.
   // out = J' a.
-  void J_transpose_times(const Eigen::Ref<const Eigen::VectorXd>& a, Eigen::Ref<Eigen::VectorXd> out) const {
+  void J_transpose_times(const Eigen::Ref<const Eigen::VectorXd>& a,
+                         Eigen::Ref<Eigen::VectorXd> out) const {
     if (n_ > kSmallSize) {
       out.noalias() = J_.transpose() * a;
       return;
@@ -69,7 +83,8 @@ class ActiveSetFactorization {
     }
   }
   // out = J(:, first .. first+c.size()-1) c (out = 0 when c is empty).
-  void J_columns_times(int first, const Eigen::Ref<const Eigen::VectorXd>& c, Eigen::Ref<Eigen::VectorXd> out) const {
+  void J_columns_times(int first, const Eigen::Ref<const Eigen::VectorXd>& c,
+                       Eigen::Ref<Eigen::VectorXd> out) const {
     if (n_ > kSmallSize) {
       out.noalias() = J_.middleCols(first, c.size()) * c;
       return;

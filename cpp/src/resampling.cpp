@@ -52,16 +52,17 @@ CoefficientStatistics coefficient_statistics(const Eigen::Ref<const RowMatrixXd>
   CoefficientStatistics s;
   s.mean = features.colwise().mean().transpose();
   const double n_k = static_cast<double>(features.rows());
-  s.std = ((features.rowwise() - s.mean.transpose()).colwise().squaredNorm().transpose() /
-           (n_k - 1.0))
-              .cwiseSqrt();
+  s.std =
+      ((features.rowwise() - s.mean.transpose()).colwise().squaredNorm().transpose() / (n_k - 1.0))
+          .cwiseSqrt();
   return s;
 }
 
 RowMatrixXd draw_gaussian_models(const Eigen::Ref<const Eigen::VectorXd>& mean,
                                  const Eigen::Ref<const Eigen::VectorXd>& std, int n, double alpha,
                                  std::uint64_t seed) {
-  if (n < 1) throw InputError("n: number of synthetic models must be >= 1, got " + std::to_string(n));
+  if (n < 1)
+    throw InputError("n: number of synthetic models must be >= 1, got " + std::to_string(n));
   if (!(alpha >= 0) || !std::isfinite(alpha))
     throw InputError("alpha: width factor must be a finite number >= 0, got " +
                      std::to_string(alpha));
@@ -84,23 +85,25 @@ Eigen::MatrixXd coefficient_covariance(const Eigen::Ref<const RowMatrixXd>& feat
 }
 
 RowMatrixXd draw_correlated_gaussian_models(const Eigen::Ref<const Eigen::VectorXd>& mean,
-                                            const Eigen::Ref<const Eigen::MatrixXd>& covariance, int n,
-                                            double alpha, std::uint64_t seed) {
+                                            const Eigen::Ref<const Eigen::MatrixXd>& covariance,
+                                            int n, double alpha, std::uint64_t seed) {
   if (!(alpha >= 0) || !std::isfinite(alpha))
-    throw InputError("alpha: width factor must be a finite number >= 0, got " + std::to_string(alpha));
+    throw InputError("alpha: width factor must be a finite number >= 0, got " +
+                     std::to_string(alpha));
   if (covariance.rows() != mean.size() || covariance.cols() != mean.size() || mean.size() < 1)
     throw InputError("covariance: must be m x m with m = length of mean (>= 1)");
   if (!covariance.allFinite()) throw InputError("covariance: must be finite");
   const Eigen::LLT<Eigen::MatrixXd> llt(covariance);
   // L_ii^2 / S_ii = 1 - R^2 of coefficient i regressed on the earlier ones: below 1e-10 the
   // covariance is singular up to rounding (e.g. fewer windows than coefficients).
-  const bool singular = llt.info() != Eigen::Success ||
-                        (llt.matrixL().toDenseMatrix().diagonal().array().square() <=
-                         1e-10 * covariance.diagonal().array())
-                            .any();
+  const bool singular =
+      llt.info() != Eigen::Success || (llt.matrixL().toDenseMatrix().diagonal().array().square() <=
+                                       1e-10 * covariance.diagonal().array())
+                                          .any();
   if (singular)
-    throw InputError("covariance: not positive definite (a coefficient that never varies, or "
-                     "fewer training windows than coefficients)");
+    throw InputError(
+        "covariance: not positive definite (a coefficient that never varies, or "
+        "fewer training windows than coefficients)");
   // Standard normals from the same stream and in the same order as the independent draws.
   const RowMatrixXd v = draw_gaussian_models(Eigen::VectorXd::Zero(mean.size()),
                                              Eigen::VectorXd::Ones(mean.size()), n, 1.0, seed);
@@ -111,7 +114,8 @@ RowMatrixXd resample(const Eigen::Ref<const RowMatrixXd>& features, int n, doubl
                      std::uint64_t seed, bool correlated) {
   const CoefficientStatistics s = coefficient_statistics(features);
   if (correlated)
-    return draw_correlated_gaussian_models(s.mean, coefficient_covariance(features), n, alpha, seed);
+    return draw_correlated_gaussian_models(s.mean, coefficient_covariance(features), n, alpha,
+                                           seed);
   return draw_gaussian_models(s.mean, s.std, n, alpha, seed);
 }
 

@@ -11,7 +11,8 @@ Eigen::VectorXd cross_correlation(const Eigen::Ref<const Eigen::VectorXd>& x,
                                   const Eigen::Ref<const Eigen::VectorXd>& y, int max_lag) {
   const Eigen::Index n = x.size();
   if (y.size() != n) throw InputError("x and y must have the same length");
-  if (max_lag < 0 || max_lag >= n) throw InputError("max_lag must be in [0, N), got " + std::to_string(max_lag));
+  if (max_lag < 0 || max_lag >= n)
+    throw InputError("max_lag must be in [0, N), got " + std::to_string(max_lag));
   const Eigen::VectorXd xc = x.array() - x.mean();
   const Eigen::VectorXd yc = y.array() - y.mean();
   const double scale = std::sqrt(xc.squaredNorm() * yc.squaredNorm());
@@ -36,15 +37,18 @@ double correlation_bound(const Eigen::Ref<const Eigen::VectorXd>& r_xx,
 
 double fit_percent(const Eigen::Ref<const Eigen::VectorXd>& measured,
                    const Eigen::Ref<const Eigen::VectorXd>& predicted) {
-  if (measured.size() != predicted.size()) throw InputError("measured and predicted must have the same length");
+  if (measured.size() != predicted.size())
+    throw InputError("measured and predicted must have the same length");
   const double spread = (measured.array() - measured.mean()).matrix().norm();
   if (spread == 0.0) return std::nan("");
   return 100.0 * (1.0 - (measured - predicted).norm() / spread);
 }
 
 Eigen::MatrixXd windowed_fit(const Eigen::Ref<const Eigen::VectorXd>& measured,
-                             const Eigen::Ref<const Eigen::VectorXd>& predicted, int window, int step) {
-  if (measured.size() != predicted.size()) throw InputError("measured and predicted must have the same length");
+                             const Eigen::Ref<const Eigen::VectorXd>& predicted, int window,
+                             int step) {
+  if (measured.size() != predicted.size())
+    throw InputError("measured and predicted must have the same length");
   if (window < 2) throw InputError("window must be >= 2 samples");
   if (step < 1) throw InputError("step must be >= 1 sample");
   const Eigen::Index n = measured.size();

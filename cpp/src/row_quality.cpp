@@ -14,7 +14,8 @@ namespace mpmpp {
 namespace {
 
 std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
 }
 
@@ -30,8 +31,8 @@ std::optional<double> as_number(const std::string& s) {
 
 }  // namespace
 
-void mask_bad_quality(DataTable& rows, const std::string& column, const std::vector<std::string>& good,
-                      const std::string& source) {
+void mask_bad_quality(DataTable& rows, const std::string& column,
+                      const std::vector<std::string>& good, const std::string& source) {
   const Eigen::Index n = rows.time_s.size();
   std::vector<bool> ok(static_cast<std::size_t>(n), false);
   const int numeric = rows.column(column);
@@ -39,25 +40,31 @@ void mask_bad_quality(DataTable& rows, const std::string& column, const std::vec
   const std::string where = source + ": quality column \"" + detail::printable(column) + "\": ";
   if (numeric >= 0) {
     if (good.empty())
-      throw InputError(where + "holds numeric codes; say which are good (--good-quality, e.g. 192 for OPC DA, "
-                       "0 for OPC UA, 100 for a PHD confidence)");
+      throw InputError(
+          where +
+          "holds numeric codes; say which are good (--good-quality, e.g. 192 for OPC DA, "
+          "0 for OPC UA, 100 for a PHD confidence)");
     std::vector<double> codes;
     for (const auto& g : good) {
       const auto x = as_number(g);
-      if (!x) throw InputError(where + "holds numeric codes but the good code \"" + detail::printable(g) + "\" is not a number");
+      if (!x)
+        throw InputError(where + "holds numeric codes but the good code \"" + detail::printable(g) +
+                         "\" is not a number");
       codes.push_back(*x);
     }
     for (Eigen::Index k = 0; k < n; ++k)
       ok[static_cast<std::size_t>(k)] =
           std::find(codes.begin(), codes.end(), rows.values(k, numeric)) != codes.end();
   } else if (text != rows.text_columns.end()) {
-    const auto& cells = rows.text_values[static_cast<std::size_t>(text - rows.text_columns.begin())];
+    const auto& cells =
+        rows.text_values[static_cast<std::size_t>(text - rows.text_columns.begin())];
     std::vector<std::string> codes;
     for (const auto& g : good) codes.push_back(lower(g));
     for (Eigen::Index k = 0; k < n; ++k) {
       const std::string code = lower(cells[static_cast<std::size_t>(k)]);
-      ok[static_cast<std::size_t>(k)] = codes.empty() ? code.rfind("good", 0) == 0
-                                                      : std::find(codes.begin(), codes.end(), code) != codes.end();
+      ok[static_cast<std::size_t>(k)] =
+          codes.empty() ? code.rfind("good", 0) == 0
+                        : std::find(codes.begin(), codes.end(), code) != codes.end();
     }
   } else {
     throw InputError(where + "no such column (columns: time, " +

@@ -50,7 +50,8 @@ StreamingDetector::StreamingDetector(Detector detector)
       window_u_(window_, detector_.model().num_inputs()),
       window_y_(window_, detector_.model().num_outputs()) {
   for (size_t k = 0; k < detector_.channels().size(); ++k)
-    indicators_.emplace_back(detector_.config().inspection_windows(), detector_.config().alarm_count());
+    indicators_.emplace_back(detector_.config().inspection_windows(),
+                             detector_.config().alarm_count());
 }
 
 StreamingDetector StreamingDetector::load(const std::string& detector_path) {
@@ -59,7 +60,8 @@ StreamingDetector StreamingDetector::load(const std::string& detector_path) {
 
 void StreamingDetector::check_sample(double time_s, double previous_time_s, bool first,
                                      const Eigen::Ref<const Eigen::VectorXd>& u,
-                                     const Eigen::Ref<const Eigen::VectorXd>& y, const std::string& where) const {
+                                     const Eigen::Ref<const Eigen::VectorXd>& y,
+                                     const std::string& where) const {
   const Model& m = detector_.model();
   if (u.size() != m.num_inputs())
     throw InputError(where + "u: " + std::to_string(u.size()) + " values, the model has " +
@@ -68,16 +70,20 @@ void StreamingDetector::check_sample(double time_s, double previous_time_s, bool
     throw InputError(where + "y: " + std::to_string(y.size()) + " values, the model has " +
                      std::to_string(m.num_outputs()) + " outputs");
   for (Eigen::Index j = 0; j < u.size(); ++j)
-    if (std::isinf(u[j])) throw InputError(where + "u: input " + m.inputs[j] + " is infinite (use NaN for missing)");
+    if (std::isinf(u[j]))
+      throw InputError(where + "u: input " + m.inputs[j] + " is infinite (use NaN for missing)");
   for (Eigen::Index i = 0; i < y.size(); ++i)
-    if (std::isinf(y[i])) throw InputError(where + "y: output " + m.outputs[i] + " is infinite (use NaN for missing)");
-  if (!std::isfinite(time_s)) throw InputError(where + "time_s: must be a finite number of seconds");
+    if (std::isinf(y[i]))
+      throw InputError(where + "y: output " + m.outputs[i] + " is infinite (use NaN for missing)");
+  if (!std::isfinite(time_s))
+    throw InputError(where + "time_s: must be a finite number of seconds");
   if (first) return;
   const double step = time_s - previous_time_s;
   if (std::abs(step - sample_time_s_) > kSpacingTolerance * sample_time_s_)
     throw InputError(where + "time_s: sample at " + seconds(time_s) + " comes " + seconds(step) +
-                     " after the previous one (" + seconds(previous_time_s) + "), expected the model's sample_time_s = " +
-                     seconds(sample_time_s_) + (step > sample_time_s_ ? "; push missing samples as NaN rows" : ""));
+                     " after the previous one (" + seconds(previous_time_s) +
+                     "), expected the model's sample_time_s = " + seconds(sample_time_s_) +
+                     (step > sample_time_s_ ? "; push missing samples as NaN rows" : ""));
 }
 
 bool StreamingDetector::push(double time_s, const Eigen::Ref<const Eigen::VectorXd>& u,
@@ -86,16 +92,18 @@ bool StreamingDetector::push(double time_s, const Eigen::Ref<const Eigen::Vector
   return take(time_s, u, y, window);
 }
 
-std::vector<StreamWindow> StreamingDetector::push_block(const Eigen::Ref<const Eigen::VectorXd>& time_s,
-                                                        const Eigen::Ref<const Eigen::MatrixXd>& u,
-                                                        const Eigen::Ref<const Eigen::MatrixXd>& y) {
+std::vector<StreamWindow> StreamingDetector::push_block(
+    const Eigen::Ref<const Eigen::VectorXd>& time_s, const Eigen::Ref<const Eigen::MatrixXd>& u,
+    const Eigen::Ref<const Eigen::MatrixXd>& y) {
   const Eigen::Index n = time_s.size();
   if (u.rows() != n || y.rows() != n)
-    throw InputError("push_block: time_s, u and y must have the same number of rows (" + std::to_string(n) + ", " +
-                     std::to_string(u.rows()) + ", " + std::to_string(y.rows()) + ")");
+    throw InputError("push_block: time_s, u and y must have the same number of rows (" +
+                     std::to_string(n) + ", " + std::to_string(u.rows()) + ", " +
+                     std::to_string(y.rows()) + ")");
   for (Eigen::Index r = 0; r < n; ++r)
-    check_sample(time_s[r], r == 0 ? last_time_ : time_s[r - 1], r == 0 && samples_ == 0, u.row(r).transpose(),
-                 y.row(r).transpose(), "push_block: row " + std::to_string(r) + ": ");
+    check_sample(time_s[r], r == 0 ? last_time_ : time_s[r - 1], r == 0 && samples_ == 0,
+                 u.row(r).transpose(), y.row(r).transpose(),
+                 "push_block: row " + std::to_string(r) + ": ");
   std::vector<StreamWindow> out;
   StreamWindow w;
   for (Eigen::Index r = 0; r < n; ++r)
@@ -181,7 +189,8 @@ std::string StreamingDetector::checkpoint_json() const {
     y.push_back(std::move(yr));
   }
   json indicators = json::array();
-  for (const auto& ind : indicators_) indicators.push_back({{"history", ind.history()}, {"alarm", ind.alarm()}});
+  for (const auto& ind : indicators_)
+    indicators.push_back({{"history", ind.history()}, {"alarm", ind.alarm()}});
   json j{{"format", "mpmpp-stream-checkpoint"},
          {"version", kCheckpointVersion},
          {"detector_fingerprint", fingerprint_},
@@ -200,13 +209,15 @@ void StreamingDetector::save_checkpoint(const std::string& path) const {
   detail::write_file_atomic(path, checkpoint_json());
 }
 
-void StreamingDetector::restore_checkpoint_json(const std::string& text, const std::string& source) {
+void StreamingDetector::restore_checkpoint_json(const std::string& text,
+                                                const std::string& source) {
   auto fail = [&](const std::string& what) -> void { throw InputError(source + ": " + what); };
   json j;
   try {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw InputError(source + ": not a complete JSON document (truncated or corrupt checkpoint?): " + e.what());
+    throw InputError(
+        source + ": not a complete JSON document (truncated or corrupt checkpoint?): " + e.what());
   }
   // Every field is read before any state changes: a bad checkpoint leaves the stream as it was.
   try {
@@ -214,8 +225,8 @@ void StreamingDetector::restore_checkpoint_json(const std::string& text, const s
       fail("format: not an mpmpp stream checkpoint (expected \"mpmpp-stream-checkpoint\")");
     const int version = j.at("version").get<int>();
     if (version < 1 || version > kCheckpointVersion)
-      fail("version: checkpoint format version " + std::to_string(version) + " is not supported (this mpmpp reads " +
-           std::to_string(kCheckpointVersion) + ")");
+      fail("version: checkpoint format version " + std::to_string(version) +
+           " is not supported (this mpmpp reads " + std::to_string(kCheckpointVersion) + ")");
     if (j.at("detector_fingerprint").get<std::uint64_t>() != fingerprint_)
       fail("detector_fingerprint: the checkpoint belongs to another detector file");
     const std::int64_t samples = j.at("samples").get<std::int64_t>();
@@ -224,20 +235,24 @@ void StreamingDetector::restore_checkpoint_json(const std::string& text, const s
     if (samples < 0) fail("samples: must be >= 0");
     const std::int64_t expected_windows = samples < window_ ? 0 : (samples - window_) / step_ + 1;
     if (windows != expected_windows)
-      fail("windows: " + std::to_string(windows) + " does not match " + std::to_string(samples) + " samples");
+      fail("windows: " + std::to_string(windows) + " does not match " + std::to_string(samples) +
+           " samples");
     const int filled = samples < window_ ? static_cast<int>(samples) : window_;
     const json &time = j.at("time"), &u = j.at("u"), &y = j.at("y"), &ind = j.at("indicators");
-    if (!time.is_array() || !u.is_array() || !y.is_array() || time.size() != static_cast<size_t>(filled) ||
-        u.size() != time.size() || y.size() != time.size())
+    if (!time.is_array() || !u.is_array() || !y.is_array() ||
+        time.size() != static_cast<size_t>(filled) || u.size() != time.size() ||
+        y.size() != time.size())
       fail("time/u/y: expected " + std::to_string(filled) + " buffered samples each");
     Eigen::VectorXd ring_time = Eigen::VectorXd::Zero(window_);
     Eigen::MatrixXd ring_u = Eigen::MatrixXd::Zero(window_, ring_u_.cols());
     Eigen::MatrixXd ring_y = Eigen::MatrixXd::Zero(window_, ring_y_.cols());
     auto read_row = [&](const json& row, Eigen::MatrixXd& into, int r, const char* name) {
       if (!row.is_array() || row.size() != static_cast<size_t>(into.cols()))
-        fail(std::string(name) + "[" + std::to_string(r) + "]: expected " + std::to_string(into.cols()) + " values");
+        fail(std::string(name) + "[" + std::to_string(r) + "]: expected " +
+             std::to_string(into.cols()) + " values");
       for (size_t c = 0; c < row.size(); ++c)
-        into(r, c) = row[c].is_null() ? std::numeric_limits<double>::quiet_NaN() : row[c].get<double>();
+        into(r, c) =
+            row[c].is_null() ? std::numeric_limits<double>::quiet_NaN() : row[c].get<double>();
     };
     for (int r = 0; r < filled; ++r) {
       ring_time[r] = time[r].get<double>();
@@ -245,15 +260,18 @@ void StreamingDetector::restore_checkpoint_json(const std::string& text, const s
       read_row(y[r], ring_y, r, "y");
     }
     // The sample count fixes where the next window ends: it must agree with the times.
-    if (filled > 0 && (ring_time[filled - 1] != last_time ||
-                       std::abs(last_time - t0 - static_cast<double>(samples - 1) * sample_time_s_) >
-                           kSpacingTolerance * sample_time_s_ * static_cast<double>(samples)))
-      fail("samples: " + std::to_string(samples) + " samples do not span t0 .. last_time at the sample time");
+    if (filled > 0 &&
+        (ring_time[filled - 1] != last_time ||
+         std::abs(last_time - t0 - static_cast<double>(samples - 1) * sample_time_s_) >
+             kSpacingTolerance * sample_time_s_ * static_cast<double>(samples)))
+      fail("samples: " + std::to_string(samples) +
+           " samples do not span t0 .. last_time at the sample time");
     if (!ind.is_array() || ind.size() != indicators_.size())
       fail("indicators: expected " + std::to_string(indicators_.size()) + " channels");
     std::vector<MismatchIndicator> indicators = indicators_;
     for (size_t k = 0; k < indicators.size(); ++k)
-      indicators[k].restore(ind[k].at("history").get<std::vector<std::uint8_t>>(), ind[k].at("alarm").get<bool>());
+      indicators[k].restore(ind[k].at("history").get<std::vector<std::uint8_t>>(),
+                            ind[k].at("alarm").get<bool>());
     // Commit: the ring is stored oldest-first from row 0, so the next write goes to row filled % W.
     ring_time_ = ring_time;
     ring_u_ = ring_u;

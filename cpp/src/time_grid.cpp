@@ -26,7 +26,8 @@ bool same_values(const Eigen::MatrixXd& v, Eigen::Index a, Eigen::Index b) {
 
 // Rows kept after dropping exact repeats; rows out of order are an error (a
 // historian does not write them; naive local time does, once a year).
-std::vector<Eigen::Index> ordered_rows(const DataTable& rows, DataRepairs& repairs, const std::string& source) {
+std::vector<Eigen::Index> ordered_rows(const DataTable& rows, DataRepairs& repairs,
+                                       const std::string& source) {
   std::vector<Eigen::Index> kept{0};
   const Eigen::VectorXd& t = rows.time_s;
   for (Eigen::Index k = 1; k < t.size(); ++k) {
@@ -35,7 +36,8 @@ std::vector<Eigen::Index> ordered_rows(const DataTable& rows, DataRepairs& repai
       kept.push_back(k);
       continue;
     }
-    const std::string where = source + ": " + row_name(k) + ", column time: " + format_time(rows, t[k]);
+    const std::string where =
+        source + ": " + row_name(k) + ", column time: " + format_time(rows, t[k]);
     if (t[k] == t[prev]) {
       if (!same_values(rows.values, k, prev))
         throw InputError(where + " repeats " + row_name(prev) + "'s time with different values");
@@ -44,7 +46,9 @@ std::vector<Eigen::Index> ordered_rows(const DataTable& rows, DataRepairs& repai
     }
     std::string hint;
     if (rows.time_kind == TimeKind::LocalTimestamp)
-      hint = "; local times without a UTC offset repeat an hour when daylight saving time ends: export with offsets or in UTC";
+      hint =
+          "; local times without a UTC offset repeat an hour when daylight saving time ends: "
+          "export with offsets or in UTC";
     throw InputError(where + " is before " + row_name(prev) + "'s " + format_time(rows, t[prev]) +
                      " (rows must be in time order" + hint + ")");
   }
@@ -88,9 +92,10 @@ DataTable regularize(const DataTable& rows, const GridOptions& options, const st
   // A file sampled slower than the model would put a missing row between every two samples:
   // a silent half-empty record. Gaps are occasional; a slower rate is a mismatch to fix.
   if (const double step = median_step(rows); step >= 1.5 * ts)
-    throw InputError(source + ": column time: samples are " + format_number(step) +
-                     " s apart (median), slower than the model's sample time of " + format_number(ts) +
-                     " s; use a model with that sample time or export the data at " + format_number(ts) + " s");
+    throw InputError(
+        source + ": column time: samples are " + format_number(step) +
+        " s apart (median), slower than the model's sample time of " + format_number(ts) +
+        " s; use a model with that sample time or export the data at " + format_number(ts) + " s");
 
   // Segments: a step longer than max_gap_s (and than a missed sample) starts a new one.
   std::vector<std::vector<Eigen::Index>> segments{{kept.front()}};
@@ -120,9 +125,10 @@ DataTable regularize(const DataTable& rows, const GridOptions& options, const st
       const long long index = std::llround((t[k] - anchor) / ts);
       const double offset = t[k] - (anchor + static_cast<double>(index) * ts);
       if (std::abs(offset) > tolerance)
-        throw InputError(source + ": " + row_name(k) + ", column time: " + format_time(rows, t[k]) + " is " +
-                         format_number(std::abs(offset)) + " s off the " + format_number(ts) +
-                         " s sample grid, more than the jitter tolerance of " + format_number(tolerance) +
+        throw InputError(source + ": " + row_name(k) + ", column time: " + format_time(rows, t[k]) +
+                         " is " + format_number(std::abs(offset)) + " s off the " +
+                         format_number(ts) + " s sample grid, more than the jitter tolerance of " +
+                         format_number(tolerance) +
                          " s (is the file sampled at another rate? see --resample)");
       if (std::abs(offset) > 1e-6 * ts) {
         ++repairs.jitter_snapped;
@@ -130,10 +136,11 @@ DataTable regularize(const DataTable& rows, const GridOptions& options, const st
       }
       if (index == previous) {
         if (!same_values(rows.values, k, source_row.back()))
-          throw InputError(source + ": " + row_name(k) + ", column time: " + format_time(rows, t[k]) +
+          throw InputError(source + ": " + row_name(k) +
+                           ", column time: " + format_time(rows, t[k]) +
                            " falls on the same sample as " + row_name(source_row.back()) +
-                           " with different values (the file is sampled faster than " + format_number(ts) +
-                           " s: see --resample)");
+                           " with different values (the file is sampled faster than " +
+                           format_number(ts) + " s: see --resample)");
         ++repairs.duplicates_dropped;
         continue;
       }
@@ -163,7 +170,8 @@ DataTable regularize(const DataTable& rows, const GridOptions& options, const st
   out.columns = rows.columns;
   out.values.resize(n, rows.values.cols());
   for (Eigen::Index r = 0; r < n; ++r) {
-    out.time_s[r] = calendar ? times[static_cast<std::size_t>(r)] - first_anchor : times[static_cast<std::size_t>(r)];
+    out.time_s[r] = calendar ? times[static_cast<std::size_t>(r)] - first_anchor
+                             : times[static_cast<std::size_t>(r)];
     const Eigen::Index k = source_row[static_cast<std::size_t>(r)];
     if (k >= 0)
       out.values.row(r) = rows.values.row(k);
@@ -172,7 +180,8 @@ DataTable regularize(const DataTable& rows, const GridOptions& options, const st
   }
   out.missing.resize(out.columns.size());
   for (std::size_t c = 0; c < out.columns.size(); ++c)
-    out.missing[c] = static_cast<int>(out.values.col(static_cast<Eigen::Index>(c)).array().isNaN().count());
+    out.missing[c] =
+        static_cast<int>(out.values.col(static_cast<Eigen::Index>(c)).array().isNaN().count());
   out.text_columns = rows.text_columns;
   out.text_values.clear();  // text cells belong to the file's rows, not to the grid
   return out;
@@ -202,9 +211,11 @@ DataTable block_average(const DataTable& grid, int factor) {
   const Eigen::Index n = static_cast<Eigen::Index>(times.size());
   out.time_s = Eigen::Map<const Eigen::VectorXd>(times.data(), n);
   out.values.resize(n, cols);
-  for (Eigen::Index r = 0; r < n; ++r) out.values.row(r) = rows[static_cast<std::size_t>(r)].transpose();
+  for (Eigen::Index r = 0; r < n; ++r)
+    out.values.row(r) = rows[static_cast<std::size_t>(r)].transpose();
   for (std::size_t c = 0; c < out.columns.size(); ++c)
-    out.missing[c] = static_cast<int>(out.values.col(static_cast<Eigen::Index>(c)).array().isNaN().count());
+    out.missing[c] =
+        static_cast<int>(out.values.col(static_cast<Eigen::Index>(c)).array().isNaN().count());
   out.repairs.resample_factor = factor;
   return out;
 }

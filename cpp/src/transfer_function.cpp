@@ -74,7 +74,8 @@ TransferFunction::TransferFunction(Eigen::VectorXd num, Eigen::VectorXd den, int
   if (!den_.allFinite()) throw InputError("den has a non-finite coefficient");
   if (den_[0] == 0.0) throw InputError("den[0] must be non-zero");
   if (delay_ < 0) throw InputError("delay must be >= 0, got " + std::to_string(delay_));
-  if (delay_ > detail::kMaxLag) throw InputError("delay must be <= 1000000 samples, got " + std::to_string(delay_));
+  if (delay_ > detail::kMaxLag)
+    throw InputError("delay must be <= 1000000 samples, got " + std::to_string(delay_));
   num_ /= den_[0];
   den_ /= den_[0];
 }
@@ -96,13 +97,15 @@ TransferFunction TransferFunction::from_foptd(double gain, double time_constant_
   if (frac < 1e-9) frac = 0.0;
   const int d = static_cast<int>(whole);
   if (time_constant_s == 0.0) {
-    if (frac == 0.0) return TransferFunction(Eigen::VectorXd::Constant(1, gain), Eigen::VectorXd::Ones(1), d);
+    if (frac == 0.0)
+      return TransferFunction(Eigen::VectorXd::Constant(1, gain), Eigen::VectorXd::Ones(1), d);
     return TransferFunction(Eigen::VectorXd::Constant(1, gain), Eigen::VectorXd::Ones(1), d + 1);
   }
   const double a = std::exp(-sample_time_s / time_constant_s);
   Eigen::VectorXd den(2);
   den << 1.0, -a;
-  if (frac == 0.0) return TransferFunction(Eigen::VectorXd::Constant(1, gain * (1.0 - a)), den, d + 1);
+  if (frac == 0.0)
+    return TransferFunction(Eigen::VectorXd::Constant(1, gain * (1.0 - a)), den, d + 1);
   // Modified z-transform of the ZOH step response with fractional delay f Ts.
   const double af = std::pow(a, 1.0 - frac);
   Eigen::VectorXd num(2);
@@ -150,12 +153,16 @@ void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
   const Eigen::Index d = std::min<Eigen::Index>(delay, n);
   out.head(d).setZero();
   if (num.size() == 1 && den.size() == 2) {  // b0 q^-d / (1 + a1 q^-1): one fused pass
-    if (num[0] == 1.0) first_order_recursion<true>(1.0, den[1], x.data(), out.data() + d, n - d);
-    else first_order_recursion<false>(num[0], den[1], x.data(), out.data() + d, n - d);
+    if (num[0] == 1.0)
+      first_order_recursion<true>(1.0, den[1], x.data(), out.data() + d, n - d);
+    else
+      first_order_recursion<false>(num[0], den[1], x.data(), out.data() + d, n - d);
     return;
   }
-  if (num.size() == 0) out.tail(n - d).setZero();
-  else out.tail(n - d) = num[0] * x.head(n - d);
+  if (num.size() == 0)
+    out.tail(n - d).setZero();
+  else
+    out.tail(n - d) = num[0] * x.head(n - d);
   for (Eigen::Index k = 1; k < num.size(); ++k) {
     const Eigen::Index shift = delay + k;
     if (shift >= n) break;
@@ -165,7 +172,8 @@ void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
   if (na == 1) return;  // FIR: no recursion
   double* y = out.data();
   if (na == 2) {
-    first_order_recursion<true>(1.0, den[1], y, y, n);  // in place: c[t] is read before y[t] is written
+    first_order_recursion<true>(1.0, den[1], y, y,
+                                n);  // in place: c[t] is read before y[t] is written
     return;
   }
   const double* a = den.data();
@@ -209,8 +217,10 @@ bool TransferFunction::is_zero() const { return (num_.array() == 0.0).all(); }
 
 TransferFunction TransferFunction::series(const TransferFunction& o) const {
   const long long delay = static_cast<long long>(delay_) + o.delay_;  // <= 2 kMaxLag: no overflow
-  if (delay > detail::kMaxLag) throw InputError("series delay must be <= 1000000 samples, got " + std::to_string(delay));
-  return TransferFunction(poly_multiply(num_, o.num_), poly_multiply(den_, o.den_), static_cast<int>(delay));
+  if (delay > detail::kMaxLag)
+    throw InputError("series delay must be <= 1000000 samples, got " + std::to_string(delay));
+  return TransferFunction(poly_multiply(num_, o.num_), poly_multiply(den_, o.den_),
+                          static_cast<int>(delay));
 }
 
 TransferFunction TransferFunction::parallel(const TransferFunction& o) const {

@@ -31,13 +31,17 @@ void fill_fir_lags(Eigen::MatrixXd& out, const Eigen::Ref<const Eigen::MatrixXd>
 
 void TwoStepCovariance::require_fir(const std::vector<OeChannel>& channels) {
   for (const OeChannel& c : channels)
-    if (c.nf != 0) throw InputError("two_step_covariance needs FIR structures (nf = 0) for every input");
+    if (c.nf != 0)
+      throw InputError("two_step_covariance needs FIR structures (nf = 0) for every input");
 }
 
-void TwoStepCovariance::compute(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,
-                                const Eigen::Ref<const Eigen::VectorXd>& yf, const Eigen::Ref<const Eigen::MatrixXd>& uf,
+void TwoStepCovariance::compute(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                const Eigen::Ref<const Eigen::VectorXd>& yf,
+                                const Eigen::Ref<const Eigen::MatrixXd>& uf,
                                 const ArxEstimator& arx_estimator, const ArxResult& arx,
-                                const std::vector<OeChannel>& fir, const OeResult& oe, Eigen::MatrixXd& covariance) {
+                                const std::vector<OeChannel>& fir, const OeResult& oe,
+                                Eigen::MatrixXd& covariance) {
   require_fir(fir);
   const Eigen::Index N = y.size(), na = arx_estimator.orders().na, p2 = oe.theta.size();
   const Eigen::Index t0 = arx_estimator.first_equation();
@@ -77,7 +81,8 @@ void TwoStepCovariance::compute(const Eigen::Ref<const Eigen::VectorXd>& y, cons
   w_.bottomRows(N - t0).noalias() += phi_ * x_;
 
   llt_.compute(z_.transpose() * z_);
-  if (llt_.info() != Eigen::Success) throw NumericalError("two-step covariance: OE regressors are singular");
+  if (llt_.info() != Eigen::Success)
+    throw NumericalError("two-step covariance: OE regressors are singular");
   zz_inv_ = llt_.solve(Eigen::MatrixXd::Identity(p2, p2));
   const double dof = static_cast<double>(N - na) / static_cast<double>(N - na - p2);
   covariance.noalias() = dof * (zz_inv_ * (w_.transpose() * w_) * zz_inv_);

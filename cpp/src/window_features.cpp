@@ -20,7 +20,8 @@ std::vector<MonitoredChannel> monitored_channels(const Model& model) {
 namespace {
 
 ArxOeConfig output_problem_config(const Model& model, const DetectorConfig& config, int i,
-                                  const std::vector<int>& inputs, std::vector<int>& fir_after_delay) {
+                                  const std::vector<int>& inputs,
+                                  std::vector<int>& fir_after_delay) {
   ArxOeConfig c;
   c.arx.na = config.arx_order_a;
   c.detrend = Detrend::Mean;
@@ -79,8 +80,9 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       if (channels_[k].kind == MonitoredChannel::Kind::Noise && channels_[k].output == i)
         noise_channel = static_cast<int>(k);
     feature_length_[noise_channel] = config.arx_order_a;
-    problems_.push_back(OutputProblem{inputs, channels, skip, noise_channel, ArxOeEstimator(std::move(c)),
-                                      Eigen::MatrixXd(window_, static_cast<Eigen::Index>(inputs.size()))});
+    problems_.push_back(
+        OutputProblem{inputs, channels, skip, noise_channel, ArxOeEstimator(std::move(c)),
+                      Eigen::MatrixXd(window_, static_cast<Eigen::Index>(inputs.size()))});
   }
 }
 
@@ -88,12 +90,14 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                              const Eigen::Ref<const Eigen::MatrixXd>& y,
                              std::vector<Eigen::VectorXd>& features, std::string* skip_reason,
                              std::vector<Eigen::MatrixXd>* covariances) {
-  if (u.rows() != window_ || y.rows() != window_ || u.cols() != num_inputs_ || y.cols() != num_outputs_)
+  if (u.rows() != window_ || y.rows() != window_ || u.cols() != num_inputs_ ||
+      y.cols() != num_outputs_)
     throw InputError("detector: a window must be " + std::to_string(window_) + " samples of " +
                      std::to_string(num_inputs_) + " inputs and " + std::to_string(num_outputs_) +
-                     " outputs, got u " + std::to_string(u.rows()) + "x" + std::to_string(u.cols()) +
-                     ", y " + std::to_string(y.rows()) + "x" + std::to_string(y.cols()));
-  // A gap makes the window unusable: FORMATS.md forbids interpolating missing values.
+                     " outputs, got u " + std::to_string(u.rows()) + "x" +
+                     std::to_string(u.cols()) + ", y " + std::to_string(y.rows()) + "x" +
+                     std::to_string(y.cols()));
+  // A gap makes the window unusable: docs/formats.md forbids interpolating missing values.
   if (!u.allFinite() || !y.allFinite()) {
     if (skip_reason) *skip_reason = "missing values in the window";
     return false;
@@ -115,7 +119,8 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
       const Eigen::VectorXd& g = result_.channels[e].fir;
       features[p.channels[e]] = g.tail(g.size() - p.skip[e]);
       const Eigen::Index d = features[p.channels[e]].size();
-      if (want_covariances) {  // symmetrised bit for bit: batch (row-major copy) and streaming agree
+      if (want_covariances) {  // symmetrised bit for bit: batch (row-major copy) and streaming
+                               // agree
         const auto block = result_.two_step_covariance.block(offset, offset, d, d);
         (*covariances)[p.channels[e]] = 0.5 * (block + block.transpose());
       }
@@ -126,9 +131,9 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
   return true;
 }
 
-WindowFeatures::Series WindowFeatures::extract_series(const Eigen::Ref<const Eigen::VectorXd>& time_s,
-                                                      const Eigen::Ref<const Eigen::MatrixXd>& u,
-                                                      const Eigen::Ref<const Eigen::MatrixXd>& y) {
+WindowFeatures::Series WindowFeatures::extract_series(
+    const Eigen::Ref<const Eigen::VectorXd>& time_s, const Eigen::Ref<const Eigen::MatrixXd>& u,
+    const Eigen::Ref<const Eigen::MatrixXd>& y) {
   const Eigen::Index n = time_s.size();
   if (u.rows() != n || y.rows() != n)
     throw InputError("detector: time, u and y must have the same number of samples (" +
@@ -156,7 +161,8 @@ WindowFeatures::Series WindowFeatures::extract_series(const Eigen::Ref<const Eig
     for (size_t k = 0; k < channels_.size(); ++k) {
       if (win.skipped) {
         s.features[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());
-        if (with_covariances_) s.covariances[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());
+        if (with_covariances_)
+          s.covariances[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());
         continue;
       }
       s.features[k].row(w) = f[k].transpose();

@@ -101,7 +101,7 @@ class DetectionResult:
         return np.array([a["start_s"] for a in self.alarms if a["channel"] == channel])
 
     def to_dict(self) -> dict:
-        """FORMATS.md ``detect --json``; skipped windows are listed apart with the reason;
+        """docs/formats.md ``detect --json``; skipped windows are listed apart with the reason;
         ``notes``: what detect estimated on the user's behalf (e.g. a disturbance model)."""
         return {**json.loads(_core.detection_json(*self.core)), "notes": list(self.notes)}
 

@@ -1,4 +1,4 @@
-"""The user's files (FORMATS.md): the model (JSON) and the operating data (CSV).
+"""The user's files (docs/formats.md): the model (JSON) and the operating data (CSV).
 
 Reading, validation and writing are done by the C++ engine, so the Python
 package and a C++ program linking ``mpmpp::mpmpp`` accept exactly the same files.

@@ -6,7 +6,7 @@ prediction-error fit with H = 1/A, which stays consistent under feedback (the di
 
 Model class of a channel: first order plus dead time, G = q^-d (b0 + b1 q^-1) / (1 - a q^-1),
 the zero-order-hold discretisation of K e^(-theta s) / (tau s + 1) (b1 carries a dead time that
-is not a whole number of samples, as in FORMATS.md's FOPTD form).
+is not a whole number of samples, as in docs/formats.md's FOPTD form).
 
 Search, per output: the delay d of every channel, its numerator length (1 or 2) and the ARX
 (noise) order na. Lag 0 is never searched when the data show feedback: a PI loop's OP reacts to
@@ -361,7 +361,7 @@ def _refine(y, U, c: _Candidate, t0, max_iterations=200, tolerance=1e-12):
 
 def _foptd(b, f, delay, ts):
     """(K, tau, theta) of G = q^-delay (b0 + b1 q^-1) / (1 + f1 q^-1), the inverse of the ZOH
-    discretisation (FORMATS.md); None when G is not of that form (pole outside (0, 1) is allowed
+    discretisation (docs/formats.md); None when G is not of that form (pole outside (0, 1) is allowed
     down to 0: tau below the sample resolution; b1 / (b0 + b1) outside [0, 1) is not a dead time)."""
     a = -f[1]
     if not (a < 1.0) or b.sum() == 0.0:

@@ -1,4 +1,4 @@
-"""Scenario files: a model file (FORMATS.md) extended with the truth, the controller,
+"""Scenario files: a model file (docs/formats.md) extended with the truth, the controller,
 the duration and scheduled events (docs/scenario.md).
 
 ``parse_scenario(dict)`` validates and returns a :class:`Scenario`; every error is one

@@ -1,6 +1,6 @@
 """Turn a model + operating-data pair into the deviation signals the numerics work on.
 
-The data are absolute engineering units (FORMATS.md), the model's transfer functions act on
+The data are absolute engineering units (docs/formats.md), the model's transfer functions act on
 deviations from an operating point. We take the operating point as the sample mean of each
 column over a reference span (the whole record unless the caller gives one) and subtract it.
 Rows with a missing value split the record into NaN-free segments; every filter restarts at the

@@ -1,4 +1,4 @@
-"""Closed-loop simulation of a scenario -> data in FORMATS.md's layout."""
+"""Closed-loop simulation of a scenario -> data in docs/formats.md's layout."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -27,7 +27,7 @@ def run(scenario: Scenario | dict | str | Path, seed: int | None = None, record_
 
 def simulate(scenario: Scenario | dict | str | Path, seed: int | None = None) -> pd.DataFrame:
     """Simulate `scenario` (a Scenario, a scenario dict or a JSON path) and return the data
-    table of FORMATS.md: time (s from 0), one column per input (the MV commands) and output,
+    table of docs/formats.md: time (s from 0), one column per input (the MV commands) and output,
     ``<output>_sp`` (CV target in force) and one column per extra measured variable.
     ``seed`` overrides the scenario's seed; the same seed gives the same data."""
     sc = as_scenario(scenario)

@@ -3,7 +3,7 @@
 The diagnosis is re-run (it is deterministic), the named findings' model changes are applied
 and the new model is returned (and written through ``mpmpp.save_model``, atomically).
 
-How each effect lands in FORMATS.md's fixed model format:
+How each effect lands in docs/formats.md's fixed model format:
 - gain / time_constant / delay: the channel is replaced by the fitted channel;
 - missing_coupling: a new channel output <- input;
 - unmodeled_input: the data column becomes a new model input with a fitted channel;

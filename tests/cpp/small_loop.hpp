@@ -39,7 +39,8 @@ struct LoopSamples {
 
 // Open-loop data of a SISO model: a random step in u every 13 samples through the model, white
 // noise (sd 0.05) through its noise model; time from t0 in steps of the model's 5 s.
-inline LoopSamples random_step_samples(const Model& m, Eigen::Index n, std::uint64_t seed, double t0 = 0.0) {
+inline LoopSamples random_step_samples(const Model& m, Eigen::Index n, std::uint64_t seed,
+                                       double t0 = 0.0) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> e(0.0, 0.05);
   std::uniform_real_distribution<double> level(-1.0, 1.0);

@@ -9,9 +9,7 @@
 
 namespace {
 
-mpmpp::Model small_model() {
-  return mpmpp::make_model("m", 5.0, {"u"}, {"y"}, {}, {});
-}
+mpmpp::Model small_model() { return mpmpp::make_model("m", 5.0, {"u"}, {"y"}, {}, {}); }
 
 std::string error_of(const std::string& csv) {
   try {
@@ -25,7 +23,8 @@ std::string error_of(const std::string& csv) {
 }  // namespace
 
 TEST(DataIo, ReadsValuesAndCountsMissing) {
-  const mpmpp::DataTable d = mpmpp::parse_csv("time,u,y,x\n0,1.5,,2\n5,NaN,2e-3,\n10,-1,3,4\n", "d.csv");
+  const mpmpp::DataTable d =
+      mpmpp::parse_csv("time,u,y,x\n0,1.5,,2\n5,NaN,2e-3,\n10,-1,3,4\n", "d.csv");
   ASSERT_EQ(d.num_samples(), 3);
   EXPECT_EQ(d.columns, (std::vector<std::string>{"u", "y", "x"}));
   EXPECT_EQ(d.missing, (std::vector<int>{1, 1, 1}));
@@ -35,20 +34,25 @@ TEST(DataIo, ReadsValuesAndCountsMissing) {
 }
 
 TEST(DataIo, IsoTimestampsAreSecondsSinceTheFirst) {
-  const mpmpp::DataTable d =
-      mpmpp::parse_csv("time,u,y\n2023-12-31T23:59:55Z,1,1\n2024-01-01T01:00:00+01:00,1,1\n", "d.csv");
+  const mpmpp::DataTable d = mpmpp::parse_csv(
+      "time,u,y\n2023-12-31T23:59:55Z,1,1\n2024-01-01T01:00:00+01:00,1,1\n", "d.csv");
   EXPECT_EQ(d.time_origin, "2023-12-31T23:59:55Z");
   EXPECT_DOUBLE_EQ(d.time_s[1], 5.0);
 }
 
 TEST(DataIo, ErrorsNameFileRowAndColumn) {
   EXPECT_EQ(error_of("time,u,y\n0,1,2\n5,x,2\n"), "d.csv: row 3, column u: \"x\" is not a number");
-  EXPECT_EQ(error_of("time,u\n0,1\n"), "d.csv: column \"y\" (model output) is missing (columns: time, u)");
+  EXPECT_EQ(error_of("time,u\n0,1\n"),
+            "d.csv: column \"y\" (model output) is missing (columns: time, u)");
   EXPECT_EQ(error_of("time,u,y\n0,1,2\n6,1,2\n"),
-            "d.csv: row 3, column time: time step 6 s from the previous row, expected the model's sample_time_s = 5 s");
-  EXPECT_EQ(error_of("time,u,y,y\n0,1,2,3\n"), "d.csv: row 1: duplicate column \"y\" (columns 3 and 4)");
+            "d.csv: row 3, column time: time step 6 s from the previous row, expected the model's "
+            "sample_time_s = 5 s");
+  EXPECT_EQ(error_of("time,u,y,y\n0,1,2,3\n"),
+            "d.csv: row 1: duplicate column \"y\" (columns 3 and 4)");
   EXPECT_EQ(error_of(""), "d.csv: file is empty");
-  EXPECT_EQ(error_of("time,u,y\n0,1,2\n0,1,2\n").rfind("d.csv: row 3, column time: 0 s is not after", 0), 0u);
+  EXPECT_EQ(
+      error_of("time,u,y\n0,1,2\n0,1,2\n").rfind("d.csv: row 3, column time: 0 s is not after", 0),
+      0u);
   EXPECT_EQ(error_of("time,u,y\n0,1,2\n5.000001,1,2\n"), "(no error)");  // within 1e-6 relative
 }
 
@@ -64,5 +68,6 @@ TEST(DataIo, WriteReadRoundTripIsExact) {
   EXPECT_TRUE(back.time_s == d.time_s);
   for (int k = 0; k < 3; ++k)
     for (int c = 0; c < 2; ++c)
-      EXPECT_TRUE(back.values(k, c) == d.values(k, c) || (std::isnan(back.values(k, c)) && std::isnan(d.values(k, c))));
+      EXPECT_TRUE(back.values(k, c) == d.values(k, c) ||
+                  (std::isnan(back.values(k, c)) && std::isnan(d.values(k, c))));
 }

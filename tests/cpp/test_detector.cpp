@@ -1,9 +1,9 @@
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 
@@ -37,7 +37,8 @@ ChannelScorer random_scorer(int d, std::mt19937_64& rng, bool decorrelated) {
     s.feature_decorrelation =
         Eigen::MatrixXd::NullaryExpr(d, d, [&] { return n(rng); }).triangularView<Eigen::Lower>();
   s.support_vectors = RowMatrixXd::NullaryExpr(7, d, [&] { return n(rng) / 3.0; });
-  s.dual_coef = Eigen::VectorXd::NullaryExpr(7, [&] { return 0.1 + 0.9 * std::abs(std::tanh(n(rng))); });
+  s.dual_coef =
+      Eigen::VectorXd::NullaryExpr(7, [&] { return 0.1 + 0.9 * std::abs(std::tanh(n(rng))); });
   s.offset = 0.123456789012345678;
   s.kernel_scale = 1.0;
   s.nu = 0.5;
@@ -54,7 +55,8 @@ Detector random_detector() {
   DetectorConfig c = DetectorConfig::paper_siso();
   WindowFeatures f(m, c);
   std::vector<ChannelScorer> scorers;
-  for (size_t k = 0; k < f.channels().size(); ++k) scorers.push_back(random_scorer(f.feature_length(k), rng, k == 0));
+  for (size_t k = 0; k < f.channels().size(); ++k)
+    scorers.push_back(random_scorer(f.feature_length(k), rng, k == 0));
   return Detector(m, c, 10800.0, scorers);
 }
 
@@ -91,7 +93,8 @@ TEST(Detector, SaveLoadRoundTripIsExact) {
     if (s.feature_decorrelation.size() != 0) z = s.feature_decorrelation * z;
     double sum = 0;
     for (int i = 0; i < s.support_vectors.rows(); ++i)
-      sum += s.dual_coef[i] * std::exp(-(s.support_vectors.row(i).transpose() - z).squaredNorm() / s.kernel_scale);
+      sum += s.dual_coef[i] *
+             std::exp(-(s.support_vectors.row(i).transpose() - z).squaredNorm() / s.kernel_scale);
     EXPECT_NEAR(a[3], (sum - s.offset) / (s.nu * s.n_train), 1e-12);
   }
   EXPECT_EQ(back.scorers()[0].feature_decorrelation, d.scorers()[0].feature_decorrelation);
@@ -107,7 +110,8 @@ void expect_required_field(nlohmann::json doc, int version, const std::string& f
     Detector::from_json(doc.dump(), "v" + std::to_string(version) + ".json");
     ADD_FAILURE() << "a version " << version << " file without " << field << " loaded";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("missing field '" + field + "'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("missing field '" + field + "'"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -128,7 +132,8 @@ TEST(Detector, VersionTwoAndThreeFilesLoadWithoutTheLaterCovariances) {
   nlohmann::json doc = nlohmann::json::parse(random_detector().to_json());
   doc["version"] = 3;
   for (auto& c : doc["channels"]) c.erase("mean_covariance");
-  const Detector v3 = Detector::from_json(doc.dump(), "v3.json");  // named: a temporary would die before the loop
+  const Detector v3 =
+      Detector::from_json(doc.dump(), "v3.json");  // named: a temporary would die before the loop
   for (const ChannelScorer& s : v3.scorers()) EXPECT_EQ(s.mean_covariance.size(), 0);
   expect_required_field(doc, 4, "mean_covariance");
   doc["version"] = 2;
@@ -151,7 +156,8 @@ TEST(Detector, MeanCovarianceAddsToTheWindowCovariance) {
   with_mean.mean_covariance = M;
   std::normal_distribution<double> n(0.0, 0.01);
   for (int r = 0; r < 10; ++r) {
-    const Eigen::VectorXd x = exact_mean.feature_mean + Eigen::VectorXd::NullaryExpr(2, [&] { return n(rng); });
+    const Eigen::VectorXd x =
+        exact_mean.feature_mean + Eigen::VectorXd::NullaryExpr(2, [&] { return n(rng); });
     EXPECT_NEAR(with_mean.score(x, C), exact_mean.score(x, C + M), 1e-12);
   }
   // A window like the training ones (C = C_ref - C_mean) is mapped onto itself.
@@ -180,10 +186,12 @@ TEST(Detector, ReferenceCovarianceMapsTheDeviationAndRoundTrips) {
   mapped.reference_covariance = L * L.transpose();
   std::normal_distribution<double> n(0.0, 0.01);
   for (int r = 0; r < 10; ++r) {
-    const Eigen::VectorXd x = plain.feature_mean + Eigen::VectorXd::NullaryExpr(3, [&] { return n(rng); });
+    const Eigen::VectorXd x =
+        plain.feature_mean + Eigen::VectorXd::NullaryExpr(3, [&] { return n(rng); });
     EXPECT_NEAR(mapped.score(x, mapped.reference_covariance), plain.score(x), 1e-12);
     const Eigen::MatrixXd quarter = mapped.reference_covariance / 4.0;
-    EXPECT_NEAR(mapped.score(x, quarter), plain.score(plain.feature_mean + 2.0 * (x - plain.feature_mean)), 1e-12);
+    EXPECT_NEAR(mapped.score(x, quarter),
+                plain.score(plain.feature_mean + 2.0 * (x - plain.feature_mean)), 1e-12);
   }
   EXPECT_THROW(mapped.score(plain.feature_mean), InputError);  // the window covariance is required
   EXPECT_THROW(mapped.score(plain.feature_mean, Eigen::MatrixXd::Identity(2, 2)), InputError);
@@ -199,7 +207,8 @@ TEST(Detector, ReferenceCovarianceMapsTheDeviationAndRoundTrips) {
     if (f.channels()[k].kind == MonitoredChannel::Kind::Process) {
       const int d = f.feature_length(static_cast<int>(k));
       const Eigen::MatrixXd a = Eigen::MatrixXd::NullaryExpr(d, d, [&] { return n(rng); });
-      scorers.back().reference_covariance = a * a.transpose() + 1e-4 * Eigen::MatrixXd::Identity(d, d);
+      scorers.back().reference_covariance =
+          a * a.transpose() + 1e-4 * Eigen::MatrixXd::Identity(d, d);
       scorers.back().mean_covariance = 0.25 * scorers.back().reference_covariance;
     }
   }
@@ -298,7 +307,8 @@ TEST(Detector, ScoreWindowEqualsBatchMonitor) {
     const int first = batch.windows[w].first;
     Eigen::VectorXd h = d.score_window(features, u.segment(first, 1440), y.segment(first, 1440));
     for (int k = 0; k < h.size(); ++k) {
-      if (batch.training[w]) EXPECT_EQ(batch.scores(w, k), 0.0);
+      if (batch.training[w])
+        EXPECT_EQ(batch.scores(w, k), 0.0);
       else {
         EXPECT_EQ(h[k], batch.scores(w, k)) << w << " " << k;  // bit-identical
         ++scored;

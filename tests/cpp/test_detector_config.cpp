@@ -39,15 +39,17 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
   EXPECT_EQ(rec_siso.to_json(), pap_siso.to_json());
   EXPECT_EQ(rec_mimo.to_json(), pap_mimo.to_json());
   EXPECT_GT(rec_siso.alpha, 1.5);
-  EXPECT_DOUBLE_EQ(rec_siso.train_duration_s, 6 * 3600.0);  // before the paper's noise change at 7 h
-  EXPECT_DOUBLE_EQ(rec_mimo.alpha, 1.25);  // below Table 3's 1.5: the window and mean covariances carry the rest
+  EXPECT_DOUBLE_EQ(rec_siso.train_duration_s,
+                   6 * 3600.0);  // before the paper's noise change at 7 h
+  EXPECT_DOUBLE_EQ(rec_mimo.alpha,
+                   1.25);  // below Table 3's 1.5: the window and mean covariances carry the rest
   EXPECT_DOUBLE_EQ(rec_mimo.train_duration_s, 8 * 3600.0);
   EXPECT_EQ(rec_mimo.oe_structure, mpmpp::OeStructure::Fir);
   EXPECT_EQ(rec_mimo.resampling, mpmpp::Resampling::Estimator);
   EXPECT_DOUBLE_EQ(rec_mimo.outlier_fraction, 0.05);  // fixed, not cross-validated
   EXPECT_DOUBLE_EQ(rec_mimo.noise_alpha, 5.0);
   EXPECT_DOUBLE_EQ(DetectorConfig::paper_mimo().noise_alpha, 0.0);  // 0: the same alpha
-  EXPECT_EQ(pap_siso.resampling, mpmpp::Resampling::Independent);  // Sec. 4.2 as printed
+  EXPECT_EQ(pap_siso.resampling, mpmpp::Resampling::Independent);   // Sec. 4.2 as printed
   EXPECT_THROW(DetectorConfig::preset("sisoo"), mpmpp::InputError);
 }
 

@@ -29,7 +29,9 @@ DetectorConfig small_config() {
 test_loops::LoopSamples plant(const Model& m, Eigen::Index n, std::uint64_t seed, double gain = 1.0,
                               Eigen::Index change = -1) {
   test_loops::LoopSamples s = test_loops::random_step_samples(m, n, seed);
-  if (change >= 0) s.y.col(0).tail(n - change) += (gain - 1.0) * m.process[0][0]->filter(s.u.col(0)).tail(n - change);
+  if (change >= 0)
+    s.y.col(0).tail(n - change) +=
+        (gain - 1.0) * m.process[0][0]->filter(s.u.col(0)).tail(n - change);
   return s;
 }
 
@@ -65,7 +67,8 @@ TEST(DetectorTraining, ChannelSeedsAreNumpySeedSequenceWords) {
 
 TEST(DetectorTraining, DirectionalMaxIsAtLeastBothAndExactWhenTheyCommute) {
   Eigen::Vector3d a(1.0, 2.0, 3.0), b(0.5, 4.0, 3.0);
-  const Eigen::MatrixXd diag = directional_max(a.asDiagonal().toDenseMatrix(), b.asDiagonal().toDenseMatrix());
+  const Eigen::MatrixXd diag =
+      directional_max(a.asDiagonal().toDenseMatrix(), b.asDiagonal().toDenseMatrix());
   EXPECT_TRUE(diag.isApprox(a.cwiseMax(b).asDiagonal().toDenseMatrix(), 1e-12));
   std::mt19937_64 rng(1);
   std::normal_distribution<double> n(0.0, 1.0);
@@ -75,7 +78,8 @@ TEST(DetectorTraining, DirectionalMaxIsAtLeastBothAndExactWhenTheyCommute) {
   const Eigen::MatrixXd B = H * H.transpose();
   const Eigen::MatrixXd V = directional_max(A, B);
   for (const Eigen::MatrixXd& lower : {A, B})
-    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(V - lower).eigenvalues().minCoeff(), -1e-10);
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(V - lower).eigenvalues().minCoeff(),
+              -1e-10);
   EXPECT_THROW(directional_max(-A, B), InputError);
 }
 
@@ -89,7 +93,8 @@ TEST(DetectorTraining, CrossValidationPicksFromTheGridWithAPermutation) {
   std::vector<int> sorted = cv.order;
   std::sort(sorted.begin(), sorted.end());
   for (int i = 0; i < 80; ++i) ASSERT_EQ(sorted[i], i);
-  EXPECT_TRUE(cv.outlier_fraction == 0.05 || cv.outlier_fraction == 0.1 || cv.outlier_fraction == 0.3);
+  EXPECT_TRUE(cv.outlier_fraction == 0.05 || cv.outlier_fraction == 0.1 ||
+              cv.outlier_fraction == 0.3);
   EXPECT_TRUE((cv.accuracy.array() >= 0).all() && (cv.accuracy.array() <= 1).all());
   EXPECT_THROW(cross_validate_outlier_fraction(X, {0.0}, 4, 9, o), InputError);
   EXPECT_THROW(cross_validate_outlier_fraction(X, {0.1}, 1, 9, o), InputError);
@@ -101,7 +106,8 @@ TEST(DetectorTraining, PlantSideTrainingStreamsLikeBatchAndRetrains) {
   const DetectorConfig c = small_config();
   const test_loops::LoopSamples first = plant(m, 1440, 11);  // 2 h, trained on the first 50 min
   const Detector d = train_detector(m, c, first.t, first.u, first.y, 3000.0);
-  EXPECT_EQ(d.to_json(), train_detector(m, c, first.t, first.u, first.y, 3000.0).to_json());  // reproducible
+  EXPECT_EQ(d.to_json(),
+            train_detector(m, c, first.t, first.u, first.y, 3000.0).to_json());  // reproducible
   for (const ChannelScorer& s : d.scorers()) EXPECT_EQ(s.training_windows, 9);
 
   const DetectionResult batch = d.monitor(first.t, first.u, first.y);
@@ -113,13 +119,15 @@ TEST(DetectorTraining, PlantSideTrainingStreamsLikeBatchAndRetrains) {
       ASSERT_TRUE(same(windows[w].scores[k], batch.scores(static_cast<Eigen::Index>(w), k)));
 
   // The plant retrains on new normal data (a model update, a new operating point) and streams on.
-  const test_loops::LoopSamples later = plant(m, 1440, 12, 3.0, 900);  // process gain tripled after 75 min
+  const test_loops::LoopSamples later =
+      plant(m, 1440, 12, 3.0, 900);  // process gain tripled after 75 min
   const Detector retrained = train_detector(m, c, later.t, later.u, later.y, 3000.0);
   EXPECT_NE(retrained.to_json(), d.to_json());
   StreamingDetector restream(retrained);
   bool alarm = false;
   for (const StreamWindow& w : restream.push_block(later.t, later.u, later.y))
-    alarm = alarm || std::find(w.alarm_starts.begin(), w.alarm_starts.end(), 0) != w.alarm_starts.end();
+    alarm =
+        alarm || std::find(w.alarm_starts.begin(), w.alarm_starts.end(), 0) != w.alarm_starts.end();
   EXPECT_TRUE(alarm);  // the tripled gain raises the process channel's alarm
 }
 

@@ -23,8 +23,9 @@ TEST(Arx, NoiseFreeArxDataGivesTheTrueParameters) {
   // (1 - 0.5 q^-1 + 0.2 q^-2) y = q^-3 (0.4 + 0.1 q^-1) u1 + q^-1 (-0.3) u2
   const Eigen::MatrixXd u = white_inputs(300, 2, 1);
   const Eigen::Vector3d a(1.0, -0.5, 0.2);
-  const Eigen::VectorXd y = TransferFunction(Eigen::Vector2d(0.4, 0.1), a, 3).filter(u.col(0)) +
-                            TransferFunction(Eigen::VectorXd::Constant(1, -0.3), a, 1).filter(u.col(1));
+  const Eigen::VectorXd y =
+      TransferFunction(Eigen::Vector2d(0.4, 0.1), a, 3).filter(u.col(0)) +
+      TransferFunction(Eigen::VectorXd::Constant(1, -0.3), a, 1).filter(u.col(1));
   const mpmpp::ArxResult r = mpmpp::arx(y, u, mpmpp::ArxOrders{2, {2, 1}, {3, 1}});
   EXPECT_FALSE(r.regularised);
   EXPECT_NEAR(r.a[1], -0.5, 1e-12);
@@ -37,8 +38,9 @@ TEST(Arx, NoiseFreeArxDataGivesTheTrueParameters) {
 
 TEST(Arx, WorksOnAViewOfALongerSeries) {
   const Eigen::MatrixXd u = white_inputs(1000, 1, 2);
-  const Eigen::VectorXd y = TransferFunction(Eigen::VectorXd::Constant(1, 0.2),
-                                             Eigen::Vector2d(1.0, -0.8), 2).filter(u.col(0));
+  const Eigen::VectorXd y =
+      TransferFunction(Eigen::VectorXd::Constant(1, 0.2), Eigen::Vector2d(1.0, -0.8), 2)
+          .filter(u.col(0));
   mpmpp::ArxEstimator est(mpmpp::ArxOrders{1, {1}, {2}});
   const auto r = est.estimate(y.segment(500, 200), u.middleRows(500, 200));
   EXPECT_NEAR(r.a[1], -0.8, 1e-12);
@@ -47,7 +49,8 @@ TEST(Arx, WorksOnAViewOfALongerSeries) {
 
 TEST(OutputError, NoiseFreeOeDataGivesTheTrueParameters) {
   const Eigen::MatrixXd u = white_inputs(400, 2, 3);
-  const TransferFunction g1(Eigen::VectorXd::Constant(1, 0.1003), Eigen::Vector2d(1.0, -0.9048), 17);
+  const TransferFunction g1(Eigen::VectorXd::Constant(1, 0.1003), Eigen::Vector2d(1.0, -0.9048),
+                            17);
   const TransferFunction g2(Eigen::Vector2d(0.3, 0.1), Eigen::Vector3d(1.0, -1.1, 0.3), 2);
   const Eigen::VectorXd y = g1.filter(u.col(0)) + g2.filter(u.col(1));
   const auto r = mpmpp::oe(y, u, {mpmpp::OeChannel::foptd(17), mpmpp::OeChannel{2, 2, 2}});
@@ -61,8 +64,9 @@ TEST(OutputError, NoiseFreeOeDataGivesTheTrueParameters) {
 TEST(OutputError, EstimatedPolesAreStable) {
   // Data from an (unstable-looking) integrator-ish input: the estimate must stay stable.
   const Eigen::MatrixXd u = white_inputs(300, 1, 4);
-  Eigen::VectorXd y = TransferFunction(Eigen::VectorXd::Constant(1, 0.05), Eigen::Vector2d(1.0, -0.999), 1)
-                          .filter(u.col(0));
+  Eigen::VectorXd y =
+      TransferFunction(Eigen::VectorXd::Constant(1, 0.05), Eigen::Vector2d(1.0, -0.999), 1)
+          .filter(u.col(0));
   y += 0.5 * white_inputs(300, 1, 5).col(0);
   const auto r = mpmpp::oe(y, u, {mpmpp::OeChannel::foptd(1)});
   EXPECT_LT(std::abs(r.f[0][1]), 1.0);
@@ -70,7 +74,8 @@ TEST(OutputError, EstimatedPolesAreStable) {
 
 TEST(ArxOe, LowNoisePipelineRecoversFoptd) {
   const Eigen::MatrixXd u = white_inputs(1440, 1, 6);
-  const TransferFunction g0(Eigen::VectorXd::Constant(1, 0.1003), Eigen::Vector2d(1.0, -0.9048), 17);
+  const TransferFunction g0(Eigen::VectorXd::Constant(1, 0.1003), Eigen::Vector2d(1.0, -0.9048),
+                            17);
   const Eigen::VectorXd clean = g0.filter(u.col(0)).array() + 23.75;
   const Eigen::VectorXd y = clean + 1e-3 * white_inputs(1440, 1, 9).col(0);
   mpmpp::ArxOeConfig c;
@@ -97,7 +102,8 @@ TEST(ArxOe, TwoStepCovarianceTendsToTheOeCovarianceInOpenLoop) {
   const Eigen::MatrixXd u = white_inputs(N, 2, 21);
   const TransferFunction g1(Eigen::Vector2d(0.5, 0.3), Eigen::VectorXd::Ones(1), 2);
   const TransferFunction g2(Eigen::Vector2d(-0.2, 0.1), Eigen::VectorXd::Ones(1), 1);
-  const Eigen::VectorXd y = g1.filter(u.col(0)) + g2.filter(u.col(1)) + 0.3 * white_inputs(N, 1, 22).col(0);
+  const Eigen::VectorXd y =
+      g1.filter(u.col(0)) + g2.filter(u.col(1)) + 0.3 * white_inputs(N, 1, 22).col(0);
   mpmpp::ArxOeConfig c;
   c.arx = {4, {4, 4}, {2, 1}};
   c.structures = {mpmpp::OeChannel::fir(3, 2), mpmpp::OeChannel::fir(3, 1)};

@@ -60,8 +60,11 @@ TEST(LaggedNormalEquations, ArxColumnsWithTheTargetAmongTheSignalsMatchPhiTransp
 TEST(LaggedNormalEquations, ColumnsUnrelatedToTheTargetMatchPhiTransposePhi) {
   const Eigen::Index N = 200, t0 = 3;
   const Eigen::VectorXd w = random_signal(N, 4), v = random_signal(N, 5), e = random_signal(N, 6);
-  const std::vector<LaggedColumn> columns = {
-      {w.data(), 0, 1.0}, {w.data(), 1, 1.0}, {v.data(), 1, -1.0}, {v.data(), 2, -1.0}, {w.data(), 3, 1.0}};
+  const std::vector<LaggedColumn> columns = {{w.data(), 0, 1.0},
+                                             {w.data(), 1, 1.0},
+                                             {v.data(), 1, -1.0},
+                                             {v.data(), 2, -1.0},
+                                             {w.data(), 3, 1.0}};
   expect_explicit_normal_equations(columns, e.data(), t0, N - t0);
 }
 
@@ -72,8 +75,9 @@ namespace {
 // apply_sensitivity is d theta / d h: (G + ridge)^-1 in original coordinates, the ridge being
 // delta/2 diag(G) when the rule engages. Checked against a dense solve of that matrix, and
 // applied to h itself it must give theta.
-void expect_sensitivity_is_the_regularised_inverse(const Eigen::MatrixXd& G, const Eigen::VectorXd& h,
-                                                   double delta, bool expect_ridge) {
+void expect_sensitivity_is_the_regularised_inverse(const Eigen::MatrixXd& G,
+                                                   const Eigen::VectorXd& h, double delta,
+                                                   bool expect_ridge) {
   mpmpp::detail::NormalEquationsSolver solver;
   Eigen::VectorXd theta;
   const auto outcome = solver.solve(G, h, delta, 1e-10, theta);
@@ -98,8 +102,10 @@ TEST(NormalEquationsSolver, SensitivityIsTheInverseOfTheSolvedMatrix) {
   Eigen::MatrixXd phi(N, p);
   for (Eigen::Index k = 0; k < p; ++k) phi.col(k) = random_signal(N, 10 + static_cast<unsigned>(k));
   const Eigen::VectorXd y = random_signal(N, 20);
-  expect_sensitivity_is_the_regularised_inverse(phi.transpose() * phi, phi.transpose() * y, 1e-4, false);
+  expect_sensitivity_is_the_regularised_inverse(phi.transpose() * phi, phi.transpose() * y, 1e-4,
+                                                false);
   // Two nearly collinear columns (scaled lambda_min ~ 1e-6 < delta/2): the ridge engages.
   phi.col(1) = phi.col(0) + 1e-3 * phi.col(1);
-  expect_sensitivity_is_the_regularised_inverse(phi.transpose() * phi, phi.transpose() * y, 1e-4, true);
+  expect_sensitivity_is_the_regularised_inverse(phi.transpose() * phi, phi.transpose() * y, 1e-4,
+                                                true);
 }

@@ -69,4 +69,3 @@ TEST(MismatchIndicator, RejectsBadArguments) {
   MismatchIndicator ind(3, 2);
   EXPECT_THROW(ind.restore({0, 1}, false), mpmpp::InputError);
 }
-

@@ -54,19 +54,24 @@ TEST(ModelIo, SaveLoadIsIdentical) {
 TEST(ModelIo, ErrorsNameFileAndPath) {
   EXPECT_EQ(error_of(with("\"delay\": 3", "\"delay\": 3, \"dely\": 1")),
             "m.json: process.y.u1.dely: unknown key (expected one of: num, den, delay)");
-  EXPECT_EQ(error_of(with("[2.0, -1.0]", "[0.0, -1.0]")), "m.json: process.y.u1: den[0] must be non-zero");
+  EXPECT_EQ(error_of(with("[2.0, -1.0]", "[0.0, -1.0]")),
+            "m.json: process.y.u1: den[0] must be non-zero");
   EXPECT_EQ(error_of(with("\"delay\": 3", "\"delay\": 2.5")),
             "m.json: process.y.u1.delay: must be an integer number of samples, got 2.5");
-  EXPECT_EQ(error_of(with("[1.0, -0.3]", "[1.0, -3.0]")).rfind("m.json: noise.y: non-minimum-phase", 0), 0u);
-  EXPECT_EQ(error_of(with("\"u2\": {\"gain\"", "\"u3\": {\"gain\"")).rfind("m.json: process.y.u3: unknown input \"u3\"", 0), 0u);
+  EXPECT_EQ(
+      error_of(with("[1.0, -0.3]", "[1.0, -3.0]")).rfind("m.json: noise.y: non-minimum-phase", 0),
+      0u);
+  EXPECT_EQ(error_of(with("\"u2\": {\"gain\"", "\"u3\": {\"gain\""))
+                .rfind("m.json: process.y.u3: unknown input \"u3\"", 0),
+            0u);
   EXPECT_EQ(error_of(""), "m.json: file is empty");
   EXPECT_EQ(error_of("{\"a\": 1, \"a\": 2}"), "m.json: a: duplicate key");
   EXPECT_EQ(error_of("not json").rfind("m.json: not valid JSON: parse error at line 1", 0), 0u);
 }
 
 TEST(ModelIo, LoadsTheExampleCases) {
-  const mpmpp::Model m =
-      mpmpp::load_model(std::string(MPMPP_SOURCE_DIR) + "/examples/mimo_missing_coupling/model.json");
+  const mpmpp::Model m = mpmpp::load_model(std::string(MPMPP_SOURCE_DIR) +
+                                           "/examples/mimo_missing_coupling/model.json");
   EXPECT_EQ(m.num_inputs(), 2);
   EXPECT_EQ(m.num_outputs(), 2);
   EXPECT_FALSE(m.has_channel(0, 1));  // the model lacks basis_weight <- steam_pressure

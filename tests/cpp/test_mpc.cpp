@@ -1,15 +1,16 @@
-#include "mpmpp/mpc.hpp"
-
 #include <gtest/gtest.h>
 
 #include "mpmpp/error.hpp"
+#include "mpmpp/mpc.hpp"
 
 namespace {
 
 using mpmpp::TransferFunction;
 using Vec = Eigen::VectorXd;
 
-Vec vec(std::initializer_list<double> v) { return Eigen::Map<const Vec>(v.begin(), static_cast<Eigen::Index>(v.size())); }
+Vec vec(std::initializer_list<double> v) {
+  return Eigen::Map<const Vec>(v.begin(), static_cast<Eigen::Index>(v.size()));
+}
 
 // Table 4's MIMO model: horizon 20 with a 23-sample delay on G22.
 mpmpp::Model mimo() {
@@ -51,13 +52,14 @@ TEST(Mpc, DynamicMatrixIsTheStepResponseFromEachOutputsSmallestDelay) {
   for (int k = 0; k < 20; ++k)
     for (int mv = 0; mv < 2; ++mv) {
       EXPECT_DOUBLE_EQ(theta(20 + k, mv * 3 + 1), s22[19 + k - mv]);  // G22 seen from sample 23 on
-      EXPECT_EQ(theta(k, mv * 3 + 2), 0.0);                            // G13 absent
+      EXPECT_EQ(theta(k, mv * 3 + 2), 0.0);                           // G13 absent
     }
 }
 
 TEST(Mpc, AtTargetWithoutDisturbanceItDoesNotMove) {
   mpmpp::Mpc mpc(mimo(), tuning(), vec({165.0, 115.0, 35.0}));
-  for (int t = 0; t < 30; ++t) EXPECT_EQ(mpc.step(vec({174.0, 2.3, 6.2})), vec({165.0, 115.0, 35.0}));
+  for (int t = 0; t < 30; ++t)
+    EXPECT_EQ(mpc.step(vec({174.0, 2.3, 6.2})), vec({165.0, 115.0, 35.0}));
 }
 
 TEST(Mpc, MovesStayWithinHardLimits) {
@@ -68,7 +70,8 @@ TEST(Mpc, MovesStayWithinHardLimits) {
     EXPECT_LE(((u - prev).array().abs() - tuning().mv_max_move.array()).maxCoeff(), 1e-9);
     prev = u;
   }
-  EXPECT_NEAR(std::abs(mpc.u()[0] - 165.0), 50 * 0.2, 1e-6);  // stock flow moved at its limit every sample
+  EXPECT_NEAR(std::abs(mpc.u()[0] - 165.0), 50 * 0.2,
+              1e-6);  // stock flow moved at its limit every sample
 }
 
 TEST(Mpc, BadTuningThrowsInputError) {

@@ -49,8 +49,10 @@ TEST(OneClassSvm, SolutionSatisfiesKktConditions) {
   const Eigen::VectorXd G = gaussian_gram(X, o.kernel_scale) * alpha;
   int n_free = 0;
   for (int i = 0; i < 120; ++i) {
-    if (alpha[i] >= 1.0) EXPECT_LE(G[i], m.rho + 1e-6);
-    else if (alpha[i] <= 0.0) EXPECT_GE(G[i], m.rho - 1e-6);
+    if (alpha[i] >= 1.0)
+      EXPECT_LE(G[i], m.rho + 1e-6);
+    else if (alpha[i] <= 0.0)
+      EXPECT_GE(G[i], m.rho - 1e-6);
     else {
       EXPECT_NEAR(G[i], m.rho, 1e-6);
       ++n_free;
@@ -108,7 +110,8 @@ TEST(Resampling, CorrelatedDrawsHaveTheSampleCovariance) {
   const Eigen::MatrixXd C = ac.transpose() * ac / 99999.0;
   const Eigen::VectorXd sd = S.diagonal().cwiseSqrt();
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) EXPECT_NEAR(C(i, j) / (sd[i] * sd[j]), 4.0 * S(i, j) / (sd[i] * sd[j]), 0.05);
+    for (int j = 0; j < 3; ++j)
+      EXPECT_NEAR(C(i, j) / (sd[i] * sd[j]), 4.0 * S(i, j) / (sd[i] * sd[j]), 0.05);
   // Fewer windows than coefficients: a singular covariance is an error, not a silent guess.
   EXPECT_THROW(mpmpp::resample(windows.topRows(3), 10, 1.5, 0, true), mpmpp::InputError);
 }

@@ -31,7 +31,8 @@ TEST(Prediction, KStepErrorOfAr1NoiseIsAnalytic) {
   mpmpp::ModelRow row{std::nullopt};
   for (int k : {1, 2, 5}) {
     Eigen::VectorXd yhat = mpmpp::predict_output(row, h, y, u, k);
-    for (int t = k; t < 400; ++t) EXPECT_NEAR(y[t] - yhat[t], y[t] - std::pow(a, k) * y[t - k], 1e-12);
+    for (int t = k; t < 400; ++t)
+      EXPECT_NEAR(y[t] - yhat[t], y[t] - std::pow(a, k) * y[t - k], 1e-12);
   }
   // Horizon 0 is simulation: with no channel the prediction is zero.
   EXPECT_EQ(mpmpp::predict_output(row, h, y, u, 0).norm(), 0.0);
@@ -43,7 +44,10 @@ TEST(Prediction, OneStepErrorOfTrueModelIsTheInnovation) {
   std::normal_distribution<double> gauss;
   Eigen::MatrixXd u(500, 1);
   Eigen::VectorXd e(500);
-  for (int t = 0; t < 500; ++t) { u(t, 0) = gauss(rng); e[t] = gauss(rng); }
+  for (int t = 0; t < 500; ++t) {
+    u(t, 0) = gauss(rng);
+    e[t] = gauss(rng);
+  }
   Eigen::VectorXd y = g.filter(u.col(0)) + h.filter(e);
   Eigen::VectorXd eps = mpmpp::prediction_error({g}, h, y, u);
   EXPECT_LT((eps - e).cwiseAbs().maxCoeff(), 1e-10);
@@ -54,7 +58,8 @@ TEST(Prediction, RejectsBadShapesAndNonMonicNoise) {
   Eigen::MatrixXd u = Eigen::MatrixXd::Zero(10, 2);
   Eigen::VectorXd y = Eigen::VectorXd::Zero(10);
   EXPECT_THROW(mpmpp::output_error({g}, y, u), mpmpp::InputError);
-  EXPECT_THROW(mpmpp::predictor_weight(TransferFunction(vec({2.0}), vec({1.0})), 1), mpmpp::InputError);
+  EXPECT_THROW(mpmpp::predictor_weight(TransferFunction(vec({2.0}), vec({1.0})), 1),
+               mpmpp::InputError);
   EXPECT_THROW(mpmpp::predictor_weight(TransferFunction(), 0), mpmpp::InputError);
 }
 

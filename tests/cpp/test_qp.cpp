@@ -14,18 +14,21 @@ namespace {
 std::atomic<bool> g_counting{false};
 std::atomic<long> g_allocations{0};
 void note_allocation() {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (g_counting.load(std::memory_order_relaxed))
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
 }
 }  // namespace
 
 #if defined(__SANITIZE_ADDRESS__)
 // Declared here (public sanitizer ABI) since GCC does not always ship the header.
-extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, size_t),
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*,
+                                                                             size_t),
                                                          void (*free_hook)(const volatile void*));
 namespace {
 void asan_malloc_hook(const volatile void*, size_t) { note_allocation(); }
 void asan_free_hook(const volatile void*) {}
-const int g_hooks_installed = __sanitizer_install_malloc_and_free_hooks(asan_malloc_hook, asan_free_hook);
+const int g_hooks_installed =
+    __sanitizer_install_malloc_and_free_hooks(asan_malloc_hook, asan_free_hook);
 }  // namespace
 #else
 extern "C" {
@@ -47,10 +50,10 @@ void* realloc(void* p, size_t size) {
 }
 #endif
 
-using mpmpp::QpSolver;
-using mpmpp::QpStatus;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+using mpmpp::QpSolver;
+using mpmpp::QpStatus;
 
 namespace {
 
@@ -64,7 +67,8 @@ VectorXd vec(std::initializer_list<double> values) {
 }
 
 // KKT in OSQP's convention: P x + q + A'y = 0.
-void expect_stationary(const MatrixXd& P, const VectorXd& q, const MatrixXd& A, const mpmpp::QpResult& r) {
+void expect_stationary(const MatrixXd& P, const VectorXd& q, const MatrixXd& A,
+                       const mpmpp::QpResult& r) {
   EXPECT_LT((P * r.x + q + A.transpose() * r.y).cwiseAbs().maxCoeff(), 1e-12);
 }
 
@@ -133,8 +137,9 @@ TEST(QpSolver, InfeasibleRowsAndEqualities) {
   // x1 >= 1, x2 >= 1, x1 + x2 <= 1.5.
   MatrixXd C(3, 2);
   C << 1, 0, 0, 1, 1, 1;
-  EXPECT_EQ(mpmpp::solve_qp(P, VectorXd::Zero(2), C, vec({1, 1, -kInf}), vec({kInf, kInf, 1.5})).status,
-            QpStatus::PrimalInfeasible);
+  EXPECT_EQ(
+      mpmpp::solve_qp(P, VectorXd::Zero(2), C, vec({1, 1, -kInf}), vec({kInf, kInf, 1.5})).status,
+      QpStatus::PrimalInfeasible);
 }
 
 TEST(QpSolver, BoundsAt1e20AreInfinite) {
@@ -181,7 +186,8 @@ TEST(QpSolver, BadInputThrowsInputError) {
   EXPECT_THROW(QpSolver(MatrixXd::Ones(2, 3), A), mpmpp::InputError);
   EXPECT_THROW(QpSolver(P, MatrixXd::Ones(2, 3)), mpmpp::InputError);
   QpSolver solver(P, A);
-  EXPECT_THROW(solver.solve(VectorXd::Zero(3), VectorXd::Zero(2), VectorXd::Zero(2)), mpmpp::InputError);
+  EXPECT_THROW(solver.solve(VectorXd::Zero(3), VectorXd::Zero(2), VectorXd::Zero(2)),
+               mpmpp::InputError);
   EXPECT_THROW(solver.solve(VectorXd::Zero(2), vec({1, 0}), vec({0, 0})), mpmpp::InputError);
 }
 

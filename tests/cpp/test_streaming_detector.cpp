@@ -27,7 +27,9 @@ namespace {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string stream_data(const std::string& name) { return std::string(MPMPP_SOURCE_DIR) + "/tests/data/stream/" + name; }
+std::string stream_data(const std::string& name) {
+  return std::string(MPMPP_SOURCE_DIR) + "/tests/data/stream/" + name;
+}
 std::string temp_path(const std::string& name) { return std::string(::testing::TempDir()) + name; }
 
 // Exact equality, NaN equal to NaN (skipped windows).
@@ -44,8 +46,9 @@ bool same_as_release_file(double a, double b) {
 }
 
 // Every window of a table of samples pushed one by one.
-std::vector<StreamWindow> stream_all(StreamingDetector& s, const Eigen::VectorXd& t, const Eigen::MatrixXd& u,
-                                     const Eigen::MatrixXd& y, Eigen::Index from = 0, Eigen::Index to = -1) {
+std::vector<StreamWindow> stream_all(StreamingDetector& s, const Eigen::VectorXd& t,
+                                     const Eigen::MatrixXd& u, const Eigen::MatrixXd& y,
+                                     Eigen::Index from = 0, Eigen::Index to = -1) {
   if (to < 0) to = t.size();
   std::vector<StreamWindow> out;
   StreamWindow w;
@@ -57,7 +60,8 @@ std::vector<StreamWindow> stream_all(StreamingDetector& s, const Eigen::VectorXd
 using Series = test_loops::LoopSamples;
 
 Series columns(const DataTable& d, const Model& m) {
-  Series s{d.time_s, Eigen::MatrixXd(d.num_samples(), m.num_inputs()), Eigen::MatrixXd(d.num_samples(), m.num_outputs())};
+  Series s{d.time_s, Eigen::MatrixXd(d.num_samples(), m.num_inputs()),
+           Eigen::MatrixXd(d.num_samples(), m.num_outputs())};
   for (int j = 0; j < m.num_inputs(); ++j) s.u.col(j) = d.values.col(d.column(m.inputs[j]));
   for (int i = 0; i < m.num_outputs(); ++i) s.y.col(i) = d.values.col(d.column(m.outputs[i]));
   return s;
@@ -120,14 +124,16 @@ TEST(StreamingDetector, PythonTrainedDetectorMatchesBatchScoresAndAlarms) {
     std::string cell;
     while (std::getline(ss, cell, ',')) cells.push_back(cell);
     cells.resize(3 + 2 * nc);
-    auto num = [](const std::string& c) { return c.empty() ? kNaN : std::strtod(c.c_str(), nullptr); };
+    auto num = [](const std::string& c) {
+      return c.empty() ? kNaN : std::strtod(c.c_str(), nullptr);
+    };
     const StreamWindow& w = windows[row];
     EXPECT_EQ(w.window, static_cast<int>(row));
     EXPECT_EQ(w.start_s, num(cells[1]));
     EXPECT_EQ(w.end_s, num(cells[2]));
     for (int k = 0; k < nc; ++k) {
-      EXPECT_TRUE(same_as_release_file(w.scores[k], num(cells[3 + k]))) << "window " << row << " channel " << k << ": "
-                                                         << w.scores[k] << " vs " << cells[3 + k];
+      EXPECT_TRUE(same_as_release_file(w.scores[k], num(cells[3 + k])))
+          << "window " << row << " channel " << k << ": " << w.scores[k] << " vs " << cells[3 + k];
       EXPECT_EQ(w.indicator[k], num(cells[3 + nc + k])) << "window " << row << " channel " << k;
     }
     skipped += w.skipped;
@@ -145,8 +151,10 @@ TEST(StreamingDetector, PythonTrainedDetectorMatchesBatchScoresAndAlarms) {
     for (int k : w.alarm_starts) {
       const MonitoredChannel& c = s.detector().channels()[k];
       char buf[256];
-      std::snprintf(buf, sizeof buf, "%s,%s,%s,%.3f", c.kind == MonitoredChannel::Kind::Process ? "process" : "noise",
-                    m.outputs[c.output].c_str(), c.input >= 0 ? m.inputs[c.input].c_str() : "", w.end_s);
+      std::snprintf(buf, sizeof buf, "%s,%s,%s,%.3f",
+                    c.kind == MonitoredChannel::Kind::Process ? "process" : "noise",
+                    m.outputs[c.output].c_str(), c.input >= 0 ? m.inputs[c.input].c_str() : "",
+                    w.end_s);
       got.push_back(buf);
     }
   EXPECT_FALSE(expected.empty());
@@ -157,8 +165,8 @@ TEST(StreamingDetector, PythonTrainedDetectorMatchesBatchScoresAndAlarms) {
 TEST(StreamingDetector, MatchesBatchMonitorWithMissingValues) {
   const Detector d = cheap_detector(3600.0);
   Series data = test_loops::random_step_samples(d.model(), 2000, 3, 1000.0);
-  data.y(100, 0) = kNaN;   // training
-  data.u(900, 0) = kNaN;   // monitoring
+  data.y(100, 0) = kNaN;  // training
+  data.u(900, 0) = kNaN;  // monitoring
   data.y(1500, 0) = kNaN;
   const DetectionResult batch = d.monitor(data.t, data.u, data.y);
   StreamingDetector s(d);
@@ -195,14 +203,16 @@ TEST(StreamingDetector, BlockPushEqualsSamplePush) {
   std::vector<StreamWindow> b;
   for (Eigen::Index r = 0; r < 700; r += 97) {  // blocks that straddle window boundaries
     const Eigen::Index n = std::min<Eigen::Index>(97, 700 - r);
-    for (auto& w : block.push_block(data.t.segment(r, n), data.u.middleRows(r, n), data.y.middleRows(r, n)))
+    for (auto& w :
+         block.push_block(data.t.segment(r, n), data.u.middleRows(r, n), data.y.middleRows(r, n)))
       b.push_back(w);
   }
   ASSERT_EQ(a.size(), b.size());
   ASSERT_EQ(a.size(), static_cast<size_t>((700 - 120) / 60 + 1));
   for (size_t w = 0; w < a.size(); ++w) {
     EXPECT_EQ(a[w].end_s, b[w].end_s);
-    for (Eigen::Index k = 0; k < a[w].scores.size(); ++k) EXPECT_TRUE(same(a[w].scores[k], b[w].scores[k]));
+    for (Eigen::Index k = 0; k < a[w].scores.size(); ++k)
+      EXPECT_TRUE(same(a[w].scores[k], b[w].scores[k]));
     EXPECT_EQ(a[w].alarm, b[w].alarm);
   }
 }
@@ -257,8 +267,10 @@ TEST(StreamingDetector, CheckpointErrorsAreClearAndLeaveStateUnchanged) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(message(good.substr(0, good.size() / 2)).find("ck.json: not a complete JSON"), std::string::npos);
-  EXPECT_NE(message("{\"format\": \"something\"}").find("not an mpmpp stream checkpoint"), std::string::npos);
+  EXPECT_NE(message(good.substr(0, good.size() / 2)).find("ck.json: not a complete JSON"),
+            std::string::npos);
+  EXPECT_NE(message("{\"format\": \"something\"}").find("not an mpmpp stream checkpoint"),
+            std::string::npos);
   std::string newer = good;
   newer.replace(newer.find("\"version\":1"), 11, "\"version\":99");
   EXPECT_NE(message(newer).find("version 99 is not supported"), std::string::npos);
@@ -296,7 +308,8 @@ TEST(StreamingDetector, TimeGapsAndBadSamplesAreClearErrors) {
   };
   EXPECT_EQ(message(100.0, u, y), "no error");
   EXPECT_EQ(message(105.0, u, y), "no error");
-  EXPECT_NE(message(120.0, u, y).find("time_s: sample at 120 s comes 15 s after the previous one (105 s)"),
+  EXPECT_NE(message(120.0, u, y)
+                .find("time_s: sample at 120 s comes 15 s after the previous one (105 s)"),
             std::string::npos);
   EXPECT_NE(message(120.0, u, y).find("push missing samples as NaN rows"), std::string::npos);
   EXPECT_NE(message(105.0, u, y).find("time_s"), std::string::npos);  // repeated time
@@ -312,7 +325,8 @@ TEST(StreamingDetector, TimeGapsAndBadSamplesAreClearErrors) {
   // A block is checked whole before any sample is taken.
   Eigen::VectorXd t(3);
   t << 115.0, 120.0, 130.0;
-  EXPECT_THROW(s.push_block(t, Eigen::MatrixXd::Zero(3, 1), Eigen::MatrixXd::Zero(3, 1)), InputError);
+  EXPECT_THROW(s.push_block(t, Eigen::MatrixXd::Zero(3, 1), Eigen::MatrixXd::Zero(3, 1)),
+               InputError);
   try {
     s.push_block(t, Eigen::MatrixXd::Zero(3, 1), Eigen::MatrixXd::Zero(3, 1));
   } catch (const InputError& e) {

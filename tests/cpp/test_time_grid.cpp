@@ -33,7 +33,9 @@ TEST(TimeGrid, JitterIsSnappedAndCounted) {
   EXPECT_EQ(d.repairs.jitter_snapped, 2);
   EXPECT_NEAR(d.repairs.max_jitter_s, 0.002, 1e-12);
   // Beyond the tolerance (a quarter sample time by default) the row is named.
-  EXPECT_EQ(error_of("time,u,y\n0,1,1\n5,1,1\n12,1,1\n15,1,1\n").rfind("d.csv: row 4, column time: 12 s is 2 s off", 0), 0u);
+  EXPECT_EQ(error_of("time,u,y\n0,1,1\n5,1,1\n12,1,1\n15,1,1\n")
+                .rfind("d.csv: row 4, column time: 12 s is 2 s off", 0),
+            0u);
 }
 
 TEST(TimeGrid, AJitteredFirstRowDoesNotShiftTheGrid) {
@@ -54,7 +56,8 @@ TEST(TimeGrid, ShortGapsBecomeMissingRowsLongGapsSplit) {
   EXPECT_EQ(d.repairs.gaps[0].missing_rows, 2);
   EXPECT_TRUE(d.repairs.gaps[1].split);
   EXPECT_EQ(d.segment_starts, (std::vector<int>{7}));
-  EXPECT_TRUE(std::isnan(d.values(2, 0)) && std::isnan(d.values(3, 1)) && std::isnan(d.values(6, 0)));
+  EXPECT_TRUE(std::isnan(d.values(2, 0)) && std::isnan(d.values(3, 1)) &&
+              std::isnan(d.values(6, 0)));
   EXPECT_DOUBLE_EQ(d.time_s[7], 100.0);
   EXPECT_EQ(d.missing, (std::vector<int>{3, 3}));
 }
@@ -65,8 +68,11 @@ TEST(TimeGrid, RepeatsAreDroppedConflictsAndDisorderNamed) {
   EXPECT_EQ(d.repairs.duplicates_dropped, 1);
   EXPECT_EQ(error_of("time,u,y\n0,1,1\n5,2,2\n5,2,3\n"),
             "d.csv: row 4, column time: 5 s repeats row 3's time with different values");
-  EXPECT_EQ(error_of("time,u,y\n0,1,1\n10,2,2\n5,2,3\n").rfind("d.csv: row 4, column time: 5 s is before row 3's 10 s", 0), 0u);
-  const std::string local = error_of("time,u,y\n2026-10-25 02:55:00,1,1\n2026-10-25 02:00:00,1,1\n");
+  EXPECT_EQ(error_of("time,u,y\n0,1,1\n10,2,2\n5,2,3\n")
+                .rfind("d.csv: row 4, column time: 5 s is before row 3's 10 s", 0),
+            0u);
+  const std::string local =
+      error_of("time,u,y\n2026-10-25 02:55:00,1,1\n2026-10-25 02:00:00,1,1\n");
   EXPECT_NE(local.find("daylight saving"), std::string::npos) << local;
 }
 
@@ -82,14 +88,17 @@ TEST(TimeGrid, CalendarTimeCountsFromTheFirstSample) {
   EXPECT_EQ(e.time_origin, "2026-03-29T00:59:55Z");
   EXPECT_DOUBLE_EQ(e.time_s[1], 5.0);
   EXPECT_EQ(mpmpp::format_time(e, 5.0), "2026-03-29T01:00:00Z");
-  EXPECT_NE(error_of("time,u,y\n1774745995000,1,1\n").find("row 2, column time: \"1774745995000\" is too large"),
+  EXPECT_NE(error_of("time,u,y\n1774745995000,1,1\n")
+                .find("row 2, column time: \"1774745995000\" is too large"),
             std::string::npos);
 }
 
 TEST(TimeGrid, QualityColumnMasksRowsAndLeavesTheData) {
   mpmpp::LoadOptions o;
   o.quality_column = "status";
-  const std::string csv = "time,u,y,status,tag\n0,1,1,Good,FIC101\n5,2,2,Bad,FIC101\n10,3,3,GOOD,FIC101\n15,4,4,,FIC101\n";
+  const std::string csv =
+      "time,u,y,status,tag\n0,1,1,Good,FIC101\n5,2,2,Bad,FIC101\n10,3,3,GOOD,FIC101\n15,4,4,,"
+      "FIC101\n";
   const auto d = load(csv, o);
   EXPECT_EQ(d.columns, (std::vector<std::string>{"u", "y"}));
   EXPECT_EQ(d.text_columns, (std::vector<std::string>{"tag"}));
@@ -97,7 +106,8 @@ TEST(TimeGrid, QualityColumnMasksRowsAndLeavesTheData) {
   EXPECT_TRUE(std::isnan(d.values(1, 0)) && std::isnan(d.values(3, 1)));
   EXPECT_DOUBLE_EQ(d.values(2, 0), 3.0);
   o.quality_column = "q";
-  EXPECT_NE(error_of("time,u,y,q\n0,1,1,192\n5,1,1,0\n", o).find("say which are good"), std::string::npos);
+  EXPECT_NE(error_of("time,u,y,q\n0,1,1,192\n5,1,1,0\n", o).find("say which are good"),
+            std::string::npos);
   o.good_quality = {"192"};
   const auto n = load("time,u,y,q\n0,1,1,192\n5,1,1,0\n", o);
   EXPECT_EQ(n.repairs.bad_quality_rows, 1);
@@ -105,7 +115,8 @@ TEST(TimeGrid, QualityColumnMasksRowsAndLeavesTheData) {
 }
 
 TEST(TimeGrid, TextInAModelColumnIsStillAnError) {
-  EXPECT_EQ(error_of("time,u,y\n0,1,abc\n5,1,def\n"), "d.csv: row 2, column y: \"abc\" is not a number");
+  EXPECT_EQ(error_of("time,u,y\n0,1,abc\n5,1,def\n"),
+            "d.csv: row 2, column y: \"abc\" is not a number");
   EXPECT_EQ(error_of("time,u,y\n0,x,1\n5,1,1\n"), "d.csv: row 2, column u: \"x\" is not a number");
 }
 
@@ -113,12 +124,13 @@ TEST(TimeGrid, ResampleAveragesBlocks) {
   mpmpp::LoadOptions o;
   o.resample_s = 5;
   std::string csv = "time,u,y\n";
-  for (int k = 0; k < 12; ++k) csv += std::to_string(k) + "," + std::to_string(k) + "," + (k == 7 ? "" : "1") + "\n";
+  for (int k = 0; k < 12; ++k)
+    csv += std::to_string(k) + "," + std::to_string(k) + "," + (k == 7 ? "" : "1") + "\n";
   const auto d = load(csv, o);
   EXPECT_EQ(d.repairs.resample_factor, 5);
   EXPECT_DOUBLE_EQ(d.repairs.raw_sample_time_s, 1.0);
   ASSERT_EQ(d.num_samples(), 3);
-  EXPECT_DOUBLE_EQ(d.values(0, 0), 2.0);  // mean of 0..4
+  EXPECT_DOUBLE_EQ(d.values(0, 0), 2.0);    // mean of 0..4
   EXPECT_TRUE(std::isnan(d.values(1, 1)));  // the block holding the missing value
   EXPECT_TRUE(std::isnan(d.values(2, 0)));  // 10, 11: a block cut short
   o.resample_s = 4;

@@ -77,7 +77,7 @@ TEST(TransferFunction, SeriesMultipliesGainsAndAddsDelays) {
 }
 
 TEST(TransferFunction, StabilityAndMinimumPhase) {
-  EXPECT_FALSE(TransferFunction(vec({1.0}), vec({1.0, -1.0})).is_stable());  // integrator
+  EXPECT_FALSE(TransferFunction(vec({1.0}), vec({1.0, -1.0})).is_stable());      // integrator
   EXPECT_TRUE(TransferFunction(vec({1.0}), vec({1.0, 0.0, 0.81})).is_stable());  // poles +-0.9i
   EXPECT_FALSE(TransferFunction(vec({1.0, -2.0}), vec({1.0})).is_minimum_phase());
   EXPECT_TRUE(std::isinf(TransferFunction(vec({1.0}), vec({1.0, -1.0})).dc_gain()));

@@ -60,7 +60,7 @@ def first_change(x, start):
 
 
 def contract_delay(channel, ts):
-    """FORMATS.md: a discrete channel's `delay`; a FOPTD channel: its dead time in samples plus
+    """docs/formats.md: a discrete channel's `delay`; a FOPTD channel: its dead time in samples plus
     the zero-order hold's one sample (the first sample after theta)."""
     if "delay" in channel:
         return channel["delay"] + (np.flatnonzero(channel["num"])[0])

@@ -97,6 +97,6 @@ ArxResult arx(const Eigen::Ref<const Eigen::VectorXd>& y,
 // window identifies nothing, and after mean removal its rounding noise would pass for
 // a regressor.
 void require_informative_window(const Eigen::Ref<const Eigen::VectorXd>& y,
-                           const Eigen::Ref<const Eigen::MatrixXd>& u);
+                                const Eigen::Ref<const Eigen::MatrixXd>& u);
 
 }  // namespace mpmpp

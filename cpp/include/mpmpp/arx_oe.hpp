@@ -37,8 +37,8 @@ struct ArxOeConfig {
 };
 
 struct ChannelEstimate {
-  Eigen::VectorXd b;    // G_j = q^-delay b(q^-1) / f(q^-1)
-  Eigen::VectorXd f;    // [1, f_1, ..., f_nf]
+  Eigen::VectorXd b;  // G_j = q^-delay b(q^-1) / f(q^-1)
+  Eigen::VectorXd f;  // [1, f_1, ..., f_nf]
   int delay = 0;
   Eigen::VectorXd fir;  // g_0 .. g_{L-1}
   double gain = 0.0;    // G_j(1)

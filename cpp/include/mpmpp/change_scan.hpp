@@ -16,17 +16,19 @@ namespace mpmpp {
 //   sum_{t>=k} (r^2 - r_without^2) + (sum_{t>=k} r_without psi)^2 / sum_{t>=k} psi^2,
 // the likelihood-ratio statistic of the candidate for a fixed onset.
 struct OnsetFit {
-  Eigen::Index onset = 0;   // first sample of the changed segment
-  double statistic = 0.0;   // drop of the residual sum of squares at that onset
-  double theta = 0.0;       // least-squares channel scale after the onset
-  double theta_se = 0.0;    // its standard error (unit noise variance)
+  Eigen::Index onset = 0;  // first sample of the changed segment
+  double statistic = 0.0;  // drop of the residual sum of squares at that onset
+  double theta = 0.0;      // least-squares channel scale after the onset
+  double theta_se = 0.0;   // its standard error (unit noise variance)
 };
 
 // Best onset among k = 0 and k = min_segment, min_segment + step, ..., N - min_segment.
 // Samples where weight == 0 are left out (gaps, filter transients, held-out blocks).
-OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
-                    const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-                    Eigen::Index min_segment, Eigen::Index step);
+OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
+                    const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                    const Eigen::Ref<const Eigen::VectorXd>& psi,
+                    const Eigen::Ref<const Eigen::VectorXd>& weight, Eigen::Index min_segment,
+                    Eigen::Index step);
 
 // Two-fold cross-validation of the scan (the held-out test of `diagnose`): sample t is in the
 // odd fold where odd(t) != 0, else in the even fold. The onset and theta are chosen on one
@@ -37,16 +39,19 @@ OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref
 struct CrossValidatedOnset {
   OnsetFit full;
   OnsetFit fold[2];
-  double heldout[2] = {0.0, 0.0};   // drop on fold 1 - k with the fit of fold k
+  double heldout[2] = {0.0, 0.0};  // drop on fold 1 - k with the fit of fold k
 };
-CrossValidatedOnset scan_onset_cross_validated(
-    const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
-    const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-    const Eigen::Ref<const Eigen::VectorXd>& odd, Eigen::Index min_segment, Eigen::Index step);
+CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::VectorXd>& r,
+                                               const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                                               const Eigen::Ref<const Eigen::VectorXd>& psi,
+                                               const Eigen::Ref<const Eigen::VectorXd>& weight,
+                                               const Eigen::Ref<const Eigen::VectorXd>& odd,
+                                               Eigen::Index min_segment, Eigen::Index step);
 // The same fit at a given onset (no scan).
-OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r, const Eigen::Ref<const Eigen::VectorXd>& r_without,
-                      const Eigen::Ref<const Eigen::VectorXd>& psi, const Eigen::Ref<const Eigen::VectorXd>& weight,
-                      Eigen::Index onset);
+OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
+                      const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                      const Eigen::Ref<const Eigen::VectorXd>& psi,
+                      const Eigen::Ref<const Eigen::VectorXd>& weight, Eigen::Index onset);
 
 // Least-squares AR(order) fit e(t) + a1 e(t-1) + ... + an e(t-n) = w(t) on rows
 // [begin, end) (lags may reach before begin). Returns the monic polynomial [1, a1, ..., an].
@@ -59,8 +64,8 @@ Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Ei
 // of separate AR(order) models (innovation variance and coefficients) before and after k.
 struct ArSplit {
   Eigen::Index onset = 0;
-  double statistic = 0.0;          // the log-likelihood gain (0 when no split is possible)
-  double variance_before = 0.0;    // AR innovation variances of the two segments
+  double statistic = 0.0;        // the log-likelihood gain (0 when no split is possible)
+  double variance_before = 0.0;  // AR innovation variances of the two segments
   double variance_after = 0.0;
   double variance_all = 0.0;
 };

@@ -1,5 +1,5 @@
 #pragma once
-// The data file (FORMATS.md "Data file"): routine operating data as CSV.
+// The data file (docs/formats.md "Data file"): routine operating data as CSV.
 //
 // A header row with a `time` column and one column per variable, then one row
 // per sample. Time is seconds (a number), Unix epoch seconds (a number of at
@@ -11,11 +11,10 @@
 // naming the file and the row and/or column, e.g.
 //   data.csv: row 7, column dry_weight: "abc" is not a number
 // Rows are numbered as in a spreadsheet: the header is row 1, the first sample row 2.
+#include <Eigen/Dense>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "mpmpp/error.hpp"
 #include "mpmpp/model.hpp"
@@ -37,32 +36,33 @@ struct DataRepairs {
     int missing_rows = 0;           // rows added as missing (0 for a split)
     bool split = false;             // longer than the largest gap bridged: a new segment
   };
-  int jitter_snapped = 0;           // rows moved onto the grid
-  double max_jitter_s = 0;          // the largest such move
-  int duplicates_dropped = 0;       // repeated rows (same time, same values)
+  int jitter_snapped = 0;      // rows moved onto the grid
+  double max_jitter_s = 0;     // the largest such move
+  int duplicates_dropped = 0;  // repeated rows (same time, same values)
   std::vector<Gap> gaps;
-  int bad_quality_rows = 0;         // rows masked by the quality column
+  int bad_quality_rows = 0;               // rows masked by the quality column
   std::vector<std::string> text_columns;  // columns without numbers, not used as data
-  int resample_factor = 1;          // raw samples averaged per sample (1: none)
-  double raw_sample_time_s = 0;     // the file's own sample time when resampled
+  int resample_factor = 1;                // raw samples averaged per sample (1: none)
+  double raw_sample_time_s = 0;           // the file's own sample time when resampled
 };
 
 struct DataTable {
   // Seconds: as written for plain numeric time; since the first row for calendar
   // time (timestamps, epoch seconds), whose start is origin_epoch_s.
   Eigen::VectorXd time_s;
-  std::string time_origin;           // the first timestamp as written (ISO-8601 for epoch seconds); empty for plain seconds
+  std::string time_origin;  // the first timestamp as written (ISO-8601 for epoch seconds); empty
+                            // for plain seconds
   TimeKind time_kind = TimeKind::Seconds;
-  double origin_epoch_s = 0;         // Unix time of time_s = 0 (local timestamps: as if UTC)
+  double origin_epoch_s = 0;  // Unix time of time_s = 0 (local timestamps: as if UTC)
   // The UTC offsets the timestamps carry: (time_s, offset_s) from that time on, the first
   // at the first row; more than one when daylight saving time starts or ends in the file.
   std::vector<std::pair<double, int>> utc_offsets;
-  std::vector<std::string> columns;  // every numeric column but `time`, in file order
-  Eigen::MatrixXd values;            // samples x columns, NaN where missing
-  std::vector<int> missing;          // number of missing values per column
-  std::vector<std::string> text_columns;               // columns with no number at all
-  std::vector<std::vector<std::string>> text_values;   // their cells, per column
-  std::vector<int> segment_starts;   // rows after a split gap (a missing row marks each break)
+  std::vector<std::string> columns;       // every numeric column but `time`, in file order
+  Eigen::MatrixXd values;                 // samples x columns, NaN where missing
+  std::vector<int> missing;               // number of missing values per column
+  std::vector<std::string> text_columns;  // columns with no number at all
+  std::vector<std::vector<std::string>> text_values;  // their cells, per column
+  std::vector<int> segment_starts;  // rows after a split gap (a missing row marks each break)
   DataRepairs repairs;
 
   int num_samples() const { return static_cast<int>(time_s.size()); }
@@ -78,7 +78,8 @@ int utc_offset_at(const DataTable& data, double time_s);
 
 // Builds a table from parts (e.g. a simulation), counting the NaNs; checks shapes,
 // names (non-empty, unique, not "time"), finite strictly increasing time.
-DataTable make_data_table(Eigen::VectorXd time_s, std::vector<std::string> columns, Eigen::MatrixXd values);
+DataTable make_data_table(Eigen::VectorXd time_s, std::vector<std::string> columns,
+                          Eigen::MatrixXd values);
 
 // `source` names the text in error messages (the file path for read_csv).
 // Time must be strictly increasing.
@@ -93,10 +94,13 @@ void validate_data(const DataTable& data, const Model& model, const std::string&
 
 // How load_data turns a historian export into the model's sample grid.
 struct LoadOptions {
-  double max_gap_s = -1;           // gaps up to this become missing rows, longer ones split; < 0: 10 sample times
-  double jitter_fraction = 0.25;   // timestamps this fraction of a sample time off the grid are snapped
-  double resample_s = 0;           // > 0: block-average faster data to this sample time (must be the model's)
-  std::string quality_column;      // rows whose quality is not good become missing
+  double max_gap_s =
+      -1;  // gaps up to this become missing rows, longer ones split; < 0: 10 sample times
+  double jitter_fraction =
+      0.25;  // timestamps this fraction of a sample time off the grid are snapped
+  double resample_s =
+      0;  // > 0: block-average faster data to this sample time (must be the model's)
+  std::string quality_column;             // rows whose quality is not good become missing
   std::vector<std::string> good_quality;  // good codes; empty: text starting with "good"
 };
 

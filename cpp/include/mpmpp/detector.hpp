@@ -27,23 +27,23 @@
 namespace mpmpp {
 
 // The trained SVM of one channel and the standardisation of its features:
-// z = D ((x - feature_mean) / feature_scale),  h(x) = (sum_i dual_coef_i k(sv_i, z) - offset) / (nu l)
-// (eq. 20 in the paper's scaling: same sign as scikit-learn's decision_function), with
-// D = feature_decorrelation (lower triangular, the inverse Cholesky factor of the resampled
+// z = D ((x - feature_mean) / feature_scale),  h(x) = (sum_i dual_coef_i k(sv_i, z) - offset) / (nu
+// l) (eq. 20 in the paper's scaling: same sign as scikit-learn's decision_function), with D =
+// feature_decorrelation (lower triangular, the inverse Cholesky factor of the resampled
 // coefficients' correlation matrix, Resampling::Covariance) or the identity when it is empty.
 struct ChannelScorer {
   Eigen::VectorXd feature_mean, feature_scale;
   Eigen::MatrixXd feature_decorrelation;  // empty or m x m
-  RowMatrixXd support_vectors;  // in the standardised space
-  Eigen::VectorXd dual_coef;    // libsvm scaling, in (0, 1]
-  double offset = 0;            // libsvm scaling, after the outlier-fraction shift
-  double kernel_scale = 1;      // c of eq. 15
+  RowMatrixXd support_vectors;            // in the standardised space
+  Eigen::VectorXd dual_coef;              // libsvm scaling, in (0, 1]
+  double offset = 0;                      // libsvm scaling, after the outlier-fraction shift
+  double kernel_scale = 1;                // c of eq. 15
   double nu = 0.5;
-  int n_train = 0;              // l: resampled models the SVM was fitted on
+  int n_train = 0;  // l: resampled models the SVM was fitted on
   // Training report (not needed to score).
   int training_windows = 0;
   double outlier_fraction = 0;
-  double cv_accuracy = -1;      // -1: the outlier fraction was fixed, not cross-validated
+  double cv_accuracy = -1;  // -1: the outlier fraction was fixed, not cross-validated
 
   // Resampling::Estimator (else empty): C_ref, the mean OE covariance of the training
   // windows' features (d x d). A monitored window's deviation is first carried into the
@@ -67,26 +67,28 @@ struct ChannelScorer {
   // takes the window's covariance (ignored without reference_covariance; NaN when C is not
   // positive definite: the window carries no usable evidence).
   double score(const Eigen::Ref<const Eigen::VectorXd>& x) const;
-  double score(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const;
+  double score(const Eigen::Ref<const Eigen::VectorXd>& x,
+               const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const;
   // NaN rows -> NaN. covariances: windows x d^2 (row-major rows, WindowFeatures::Series),
   // required with reference_covariance.
-  Eigen::VectorXd score_rows(const Eigen::Ref<const Eigen::MatrixXd>& X,
-                             const Eigen::Ref<const Eigen::MatrixXd>& covariances = Eigen::MatrixXd()) const;
+  Eigen::VectorXd score_rows(
+      const Eigen::Ref<const Eigen::MatrixXd>& X,
+      const Eigen::Ref<const Eigen::MatrixXd>& covariances = Eigen::MatrixXd()) const;
   void validate(int feature_length, const std::string& where) const;  // InputError on bad shapes
 };
 
 struct DetectionAlarm {
-  int channel = 0;      // index into channels
-  int window = 0;       // the window at which the indicator first reached s_T
-  double start_s = 0;   // that window's end time
+  int channel = 0;     // index into channels
+  int window = 0;      // the window at which the indicator first reached s_T
+  double start_s = 0;  // that window's end time
 };
 
 struct DetectionResult {
   std::vector<MonitoredChannel> channels;
   std::vector<FeatureWindow> windows;
-  std::vector<bool> training;  // per window: ends inside the training period (scores 0)
-  Eigen::MatrixXd scores;      // windows x channels
-  Eigen::MatrixXd indicator;   // windows x channels, eq. 23
+  std::vector<bool> training;          // per window: ends inside the training period (scores 0)
+  Eigen::MatrixXd scores;              // windows x channels
+  Eigen::MatrixXd indicator;           // windows x channels, eq. 23
   std::vector<DetectionAlarm> alarms;  // in window order, then channel order
 };
 
@@ -95,7 +97,8 @@ class Detector {
   // scorers[k] belongs to monitored_channels(nominal)[k]. train_end_s is counted from the
   // first sample of a monitored series: windows ending at or before time_s[0] + train_end_s
   // are training windows.
-  Detector(Model nominal, DetectorConfig config, double train_end_s, std::vector<ChannelScorer> scorers);
+  Detector(Model nominal, DetectorConfig config, double train_end_s,
+           std::vector<ChannelScorer> scorers);
 
   // Every window of (time_s, u, y): ARX-OE features, scores, indicator, alarms.
   DetectionResult monitor(const Eigen::Ref<const Eigen::VectorXd>& time_s,

@@ -37,27 +37,27 @@ enum class Resampling {
 };
 
 struct DetectorConfig {
-  double window_s = 7200.0;          // W_size: moving-window length
-  double step_s = 300.0;             // W_step: moving-window step
-  int arx_order_a = 9;               // n_a: order of each A_i(q) (high-order ARX, eq. 6 / 12)
-  int arx_order_b = 9;               // n_b: order of each B_ij(q)
-  double train_duration_s = 10800.0; // T_train: used when the caller gives no training end
-  double inspection_s = 7200.0;      // n_T as a duration: windows inspected by the indicator (eq. 23)
-  double threshold = 0.95;           // s_T: alarm when the indicator s >= s_T
-  double alpha = 1.5;                // widening of each coefficient's std in resampling (Sec. 4.2)
-  double noise_alpha = 0.0;          // the same for the noise-model channels; 0 = alpha
-  double nu = 0.5;                   // one-class SVM nu (eqs. 16-19)
-  double kernel_scale = 1.0;         // c in k(x, y) = exp(-||x - y||^2 / c) (eq. 15)
+  double window_s = 7200.0;           // W_size: moving-window length
+  double step_s = 300.0;              // W_step: moving-window step
+  int arx_order_a = 9;                // n_a: order of each A_i(q) (high-order ARX, eq. 6 / 12)
+  int arx_order_b = 9;                // n_b: order of each B_ij(q)
+  double train_duration_s = 10800.0;  // T_train: used when the caller gives no training end
+  double inspection_s = 7200.0;  // n_T as a duration: windows inspected by the indicator (eq. 23)
+  double threshold = 0.95;       // s_T: alarm when the indicator s >= s_T
+  double alpha = 1.5;            // widening of each coefficient's std in resampling (Sec. 4.2)
+  double noise_alpha = 0.0;      // the same for the noise-model channels; 0 = alpha
+  double nu = 0.5;               // one-class SVM nu (eqs. 16-19)
+  double kernel_scale = 1.0;     // c in k(x, y) = exp(-||x - y||^2 / c) (eq. 15)
   // Fraction of resampled training models allowed to score negative. Negative = choose
   // it from outlier_fraction_grid by cv_folds-fold cross-validation (as the paper does).
   double outlier_fraction = -1.0;
   std::vector<double> outlier_fraction_grid{0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3};
   int cv_folds = 10;
-  int fir_length = 0;                // m + 1 FIR coefficients per channel; 0 = until the
-                                     // nominal impulse response falls below 1% of its peak
-  bool standardise = true;           // centre and scale the SVM features (see detector.cpp)
-  int resampled_models = 300;        // synthetic models drawn per channel in resampling
-  std::uint64_t seed = 0;            // resampling and cross-validation seed
+  int fir_length = 0;          // m + 1 FIR coefficients per channel; 0 = until the
+                               // nominal impulse response falls below 1% of its peak
+  bool standardise = true;     // centre and scale the SVM features (see detector.cpp)
+  int resampled_models = 300;  // synthetic models drawn per channel in resampling
+  std::uint64_t seed = 0;      // resampling and cross-validation seed
   OeStructure oe_structure = OeStructure::Foptd;
   double arx_regularisation = 1e-4;  // delta of the paper's R_reg rule (Sec. 3.1)
   Resampling resampling = Resampling::Independent;

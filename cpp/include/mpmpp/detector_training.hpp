@@ -9,7 +9,6 @@
 // draws from std::mt19937_64 streams seeded from DetectorConfig::seed, so a training run is
 // reproducible in Python and in a plant-side C++ program alike.
 #include <Eigen/Dense>
-
 #include <cstdint>
 #include <vector>
 
@@ -39,10 +38,10 @@ Detector train_detector(const Model& model, const DetectorConfig& config,
 // covariance (rows of d^2, row-major) and mean_ratio the covariance of their mean relative to
 // one window's (mean_variance_ratio); otherwise `covariances` is empty or has 0 columns.
 // noise: a noise-model channel (widened by noise_alpha when that is set).
-ChannelScorer train_channel_scorer(const Eigen::Ref<const RowMatrixXd>& estimates,
-                                   const DetectorConfig& config, std::uint64_t seed,
-                                   const Eigen::Ref<const Eigen::MatrixXd>& covariances = Eigen::MatrixXd(),
-                                   bool noise = false, double mean_ratio = 0.0);
+ChannelScorer train_channel_scorer(
+    const Eigen::Ref<const RowMatrixXd>& estimates, const DetectorConfig& config,
+    std::uint64_t seed, const Eigen::Ref<const Eigen::MatrixXd>& covariances = Eigen::MatrixXd(),
+    bool noise = false, double mean_ratio = 0.0);
 
 // The synthetic models of one channel (Sec. 4.2) and whether they were drawn correlated.
 // reference_covariance (empty for none): C_ref of Resampling::Estimator; the draws are then
@@ -90,15 +89,16 @@ double outlier_offset(const Eigen::Ref<const Eigen::VectorXd>& scores, double fr
 // values over-fit (held-out rows fall outside a tight boundary), larger ones reject more
 // normal windows than needed.
 struct OutlierFractionCv {
-  Eigen::VectorXd fractions;   // the grid
-  Eigen::VectorXd accuracy;    // per grid value
-  double outlier_fraction = 0; // the chosen value
+  Eigen::VectorXd fractions;    // the grid
+  Eigen::VectorXd accuracy;     // per grid value
+  double outlier_fraction = 0;  // the chosen value
   double validation_accuracy = 0;
   int n_folds = 0;
-  std::vector<int> order;      // the shuffled row order the folds were cut from
+  std::vector<int> order;  // the shuffled row order the folds were cut from
 };
 OutlierFractionCv cross_validate_outlier_fraction(const Eigen::Ref<const RowMatrixXd>& X,
                                                   const std::vector<double>& fractions, int n_folds,
-                                                  std::uint64_t seed, const OneClassSvmOptions& svm);
+                                                  std::uint64_t seed,
+                                                  const OneClassSvmOptions& svm);
 
 }  // namespace mpmpp

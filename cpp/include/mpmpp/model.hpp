@@ -1,5 +1,5 @@
 #pragma once
-// The nominal MIMO model a controller uses (FORMATS.md "Model file"):
+// The nominal MIMO model a controller uses (docs/formats.md "Model file"):
 // process[i][j] is the channel output i <- input j (absent = exactly zero, the
 // model claims no coupling); noise[i] is the disturbance model H_i of output i
 // (monic, stable, inversely stable; H = 1 when the file gives none); actuators[j] is the
@@ -35,8 +35,8 @@ struct Model {
   std::vector<std::string> inputs;
   std::vector<std::string> outputs;
   std::vector<std::vector<std::optional<TransferFunction>>> process;  // [output][input]
-  std::vector<TransferFunction> noise;                                 // [output]
-  std::vector<std::optional<ActuatorSpec>> actuators;                  // [input]
+  std::vector<TransferFunction> noise;                                // [output]
+  std::vector<std::optional<ActuatorSpec>> actuators;                 // [input]
 
   int num_inputs() const { return static_cast<int>(inputs.size()); }
   int num_outputs() const { return static_cast<int>(outputs.size()); }

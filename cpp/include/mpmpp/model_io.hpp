@@ -1,5 +1,5 @@
 #pragma once
-// The model file (FORMATS.md "Model file"): read, validate, write.
+// The model file (docs/formats.md "Model file"): read, validate, write.
 //
 // Every problem is an InputError whose message is one line naming the file and
 // the JSON path, e.g.

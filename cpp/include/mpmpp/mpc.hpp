@@ -34,10 +34,9 @@
 // part of the forecast the moves cause (Table 4's "limits of CV movement": the controller may
 // not move a CV faster than this per sample; the free response is not the controller's
 // doing and is left out so noise cannot make the limit bind).
+#include <Eigen/Dense>
 #include <memory>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "mpmpp/model.hpp"
 #include "mpmpp/qp.hpp"
@@ -53,20 +52,20 @@ enum class DisturbanceModel { Bias, NoiseModel };
 // Every vector is per CV (size = outputs) or per MV (size = inputs); an empty vector takes
 // the default given. Infinite limits mean "none".
 struct MpcTuning {
-  int prediction_horizon = 20;  // Hp >= 1, samples counted from each output's smallest delay
-  int control_horizon = 2;      // 1 <= Hc <= Hp
-  Eigen::VectorXd cv_target;          // required
-  Eigen::VectorXd mv_target;          // default: the initial inputs
-  Eigen::VectorXd cv_target_weight;   // default 1
-  Eigen::VectorXd mv_target_weight;   // default 0
-  Eigen::VectorXd move_weight;        // required > 0 (keeps P positive definite)
-  Eigen::VectorXd deviation_weight;   // default 0
-  Eigen::VectorXd cv_minmax_weight;   // default 1; > 0 where a CV soft limit is finite
-  Eigen::VectorXd mv_minmax_weight;   // default 1; > 0 where an MV soft limit is finite
-  Eigen::VectorXd mv_min, mv_max;     // hard, default -inf/+inf
-  Eigen::VectorXd mv_max_move;        // hard |du|, default +inf
-  Eigen::VectorXd cv_min, cv_max;     // soft, default -inf/+inf
-  Eigen::VectorXd cv_max_move;        // soft, default +inf
+  int prediction_horizon = 20;       // Hp >= 1, samples counted from each output's smallest delay
+  int control_horizon = 2;           // 1 <= Hc <= Hp
+  Eigen::VectorXd cv_target;         // required
+  Eigen::VectorXd mv_target;         // default: the initial inputs
+  Eigen::VectorXd cv_target_weight;  // default 1
+  Eigen::VectorXd mv_target_weight;  // default 0
+  Eigen::VectorXd move_weight;       // required > 0 (keeps P positive definite)
+  Eigen::VectorXd deviation_weight;  // default 0
+  Eigen::VectorXd cv_minmax_weight;  // default 1; > 0 where a CV soft limit is finite
+  Eigen::VectorXd mv_minmax_weight;  // default 1; > 0 where an MV soft limit is finite
+  Eigen::VectorXd mv_min, mv_max;    // hard, default -inf/+inf
+  Eigen::VectorXd mv_max_move;       // hard |du|, default +inf
+  Eigen::VectorXd cv_min, cv_max;    // soft, default -inf/+inf
+  Eigen::VectorXd cv_max_move;       // soft, default +inf
   Eigen::VectorXd mv_soft_min, mv_soft_max;  // soft, default -inf/+inf
   DisturbanceModel disturbance = DisturbanceModel::Bias;
 };

@@ -13,7 +13,6 @@
 // and stopping rule, kernel columns cached in single precision as libsvm does.
 // The sign of f and h is the same: positive = inside the "normal" region.
 #include <Eigen/Dense>
-
 #include <cstdint>
 
 #include "mpmpp/eigen_types.hpp"
@@ -21,12 +20,12 @@
 namespace mpmpp {
 
 struct OneClassSvmOptions {
-  double nu = 0.5;            // (0, 1]: upper bound on the outlier fraction, lower bound on SVs
-  double kernel_scale = 1.0;  // c in eq (15); scikit-learn's gamma = 1 / c
-  double tol = 1e-3;          // stop when the maximal KKT violation m(alpha) - M(alpha) < tol
-  double cache_mb = 200.0;    // kernel-column cache budget (single-precision columns, LRU)
-  bool shrinking = true;      // libsvm shrinking heuristic
-  std::int64_t max_iter = -1; // SMO iteration limit; -1 = none
+  double nu = 0.5;             // (0, 1]: upper bound on the outlier fraction, lower bound on SVs
+  double kernel_scale = 1.0;   // c in eq (15); scikit-learn's gamma = 1 / c
+  double tol = 1e-3;           // stop when the maximal KKT violation m(alpha) - M(alpha) < tol
+  double cache_mb = 200.0;     // kernel-column cache budget (single-precision columns, LRU)
+  bool shrinking = true;       // libsvm shrinking heuristic
+  std::int64_t max_iter = -1;  // SMO iteration limit; -1 = none
 };
 
 struct OneClassSvmModel {
@@ -36,10 +35,10 @@ struct OneClassSvmModel {
   double rho = 0.0;             // libsvm offset: f(x) = dual_coef' k(sv, x) - rho
   double kernel_scale = 1.0;    // c
   double nu = 0.5;
-  int n_train = 0;              // l
+  int n_train = 0;  // l
   std::int64_t iterations = 0;
-  bool converged = true;        // false when max_iter stopped the solver
-  double objective = 0.0;       // 1/2 alpha' K alpha at the solution (libsvm scaling)
+  bool converged = true;   // false when max_iter stopped the solver
+  double objective = 0.0;  // 1/2 alpha' K alpha at the solution (libsvm scaling)
 
   // sum_i alpha_i k(sv_i, x) for each row x of X (scikit-learn's score_samples).
   Eigen::VectorXd score_samples(const Eigen::Ref<const RowMatrixXd>& X) const;
@@ -63,6 +62,7 @@ OneClassSvmModel fit_one_class_svm(const Eigen::Ref<const RowMatrixXd>& X,
 Eigen::VectorXd gaussian_kernel_expansion(const Eigen::Ref<const RowMatrixXd>& support_vectors,
                                           const Eigen::Ref<const Eigen::VectorXd>& coef,
                                           double kernel_scale,
-                                          const Eigen::Ref<const RowMatrixXd>& X, int n_threads = 1);
+                                          const Eigen::Ref<const RowMatrixXd>& X,
+                                          int n_threads = 1);
 
 }  // namespace mpmpp

@@ -35,8 +35,9 @@ struct OeChannel {
 
 struct OeOptions {
   int max_iterations = 200;
-  // Converged when an accepted step has |dtheta|_inf <= step_tolerance (|theta|_inf + step_tolerance)
-  // or every gradient component's cosine |J_k' eps| / (|J_k| |eps|) <= gradient_tolerance.
+  // Converged when an accepted step has |dtheta|_inf <= step_tolerance (|theta|_inf +
+  // step_tolerance) or every gradient component's cosine |J_k' eps| / (|J_k| |eps|) <=
+  // gradient_tolerance.
   double step_tolerance = 1e-8;
   double gradient_tolerance = 1e-12;
   double max_pole_radius = 0.9999;
@@ -82,8 +83,8 @@ class OutputErrorEstimator {
   bool linear() const { return nonlinear_channels_ == 0; }
   void fir_start(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y, Eigen::Index skip,
                  Eigen::Index N, OeResult& out);
-  void prony_start(std::size_t j, const Eigen::Ref<const Eigen::VectorXd>& g,
-                   Eigen::VectorXd& b, Eigen::VectorXd& f) const;
+  void prony_start(std::size_t j, const Eigen::Ref<const Eigen::VectorXd>& g, Eigen::VectorXd& b,
+                   Eigen::VectorXd& f) const;
   void pole_grid_start(std::size_t j, const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
                        Eigen::Index skip, Eigen::Index N, OeResult& out);
   void stabilise(Eigen::VectorXd& f) const;

@@ -9,20 +9,19 @@
 //   u(t)  = clip(u(t-1) + du(t), min, max)
 // The velocity form clips the applied output itself, so the integral cannot wind up against
 // the saturation. K carries the sign of the action: K > 0 for a process gain > 0.
+#include <Eigen/Dense>
 #include <limits>
 #include <vector>
-
-#include <Eigen/Dense>
 
 namespace mpmpp {
 
 struct PidLoop {
   int output = 0;
   int input = 0;
-  double gain = 0.0;                                                   // K
+  double gain = 0.0;                                                 // K
   double integral_time_s = std::numeric_limits<double>::infinity();  // Ti; inf = no integral
-  double derivative_time_s = 0.0;                                      // Td; 0 = PI
-  double derivative_filter = 10.0;                                     // N
+  double derivative_time_s = 0.0;                                    // Td; 0 = PI
+  double derivative_filter = 10.0;                                   // N
   double min = -std::numeric_limits<double>::infinity();             // output saturation
   double max = std::numeric_limits<double>::infinity();
 };

@@ -8,10 +8,9 @@
 // with Hbar_k the first k impulse-response terms of H (Ljung, System Identification,
 // eq. 3.31). The k-step error is therefore y - yhat(t|t-k) = W_k (y - G u); k = 1 gives the
 // innovations H^-1 (y - G u), k -> infinity the simulation error.
+#include <Eigen/Dense>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "mpmpp/transfer_function.hpp"
 
@@ -23,7 +22,8 @@ using ModelRow = std::vector<std::optional<TransferFunction>>;  // absent channe
 TransferFunction predictor_weight(const TransferFunction& noise, int horizon);
 
 // sum_j G_j u_j; inputs is N x nu with one column per entry of row.
-Eigen::VectorXd simulate_output(const ModelRow& row, const Eigen::Ref<const Eigen::MatrixXd>& inputs);
+Eigen::VectorXd simulate_output(const ModelRow& row,
+                                const Eigen::Ref<const Eigen::MatrixXd>& inputs);
 
 // Output error v = y - sum_j G_j u_j (the residual of the simulation).
 Eigen::VectorXd output_error(const ModelRow& row, const Eigen::Ref<const Eigen::VectorXd>& output,

@@ -5,7 +5,6 @@
 // Duals y follow OSQP's sign convention: y_i > 0 when the upper bound of row i
 // is active, y_i < 0 when the lower bound is active, and P x + q + A'y = 0.
 #include <Eigen/Dense>
-
 #include <memory>
 
 namespace mpmpp {
@@ -13,16 +12,16 @@ namespace mpmpp {
 enum class QpStatus {
   Solved,
   PrimalInfeasible,
-  NonConvex,       // P not positive definite (after any documented regularisation)
-  MaxIterations,   // best iterate returned: the last one, since the dual objective only grows
+  NonConvex,      // P not positive definite (after any documented regularisation)
+  MaxIterations,  // best iterate returned: the last one, since the dual objective only grows
 };
 
 const char* to_string(QpStatus s);
 
 struct QpSettings {
   int max_iterations = 1000;
-  double feasibility_tol = 1e-9;   // primal constraint violation accepted as feasible
-  double optimality_tol = 1e-9;    // dual (multiplier sign) tolerance
+  double feasibility_tol = 1e-9;  // primal constraint violation accepted as feasible
+  double optimality_tol = 1e-9;   // dual (multiplier sign) tolerance
   // A constraint normal n counts as linearly dependent on the active ones when the part of it
   // that the active set leaves free is this small: |J2'n|^2 <= dependency_tol |J'n|^2 (J'PJ = I),
   // i.e. the sine of its angle to their span in the P^{-1} metric is below sqrt(dependency_tol).
@@ -69,8 +68,10 @@ class QpSolver {
 };
 
 // One-shot convenience: builds a QpSolver and solves once.
-QpResult solve_qp(const Eigen::Ref<const Eigen::MatrixXd>& P, const Eigen::Ref<const Eigen::VectorXd>& q,
-                  const Eigen::Ref<const Eigen::MatrixXd>& A, const Eigen::Ref<const Eigen::VectorXd>& l,
+QpResult solve_qp(const Eigen::Ref<const Eigen::MatrixXd>& P,
+                  const Eigen::Ref<const Eigen::VectorXd>& q,
+                  const Eigen::Ref<const Eigen::MatrixXd>& A,
+                  const Eigen::Ref<const Eigen::VectorXd>& l,
                   const Eigen::Ref<const Eigen::VectorXd>& u, QpSettings settings = {});
 
 }  // namespace mpmpp

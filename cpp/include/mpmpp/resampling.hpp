@@ -13,7 +13,6 @@
 // sqrt and log, no trigonometry). Draws fill the output row by row. The same seed gives the same
 // draws on every run and, up to the platform's log() rounding, on every platform.
 #include <Eigen/Dense>
-
 #include <cstdint>
 
 #include "mpmpp/eigen_types.hpp"
@@ -37,8 +36,8 @@ RowMatrixXd draw_gaussian_models(const Eigen::Ref<const Eigen::VectorXd>& mean,
 // covariance = L L' (Cholesky; InputError when it is not positive definite) and v drawn from the
 // same normal stream as draw_gaussian_models.
 RowMatrixXd draw_correlated_gaussian_models(const Eigen::Ref<const Eigen::VectorXd>& mean,
-                                            const Eigen::Ref<const Eigen::MatrixXd>& covariance, int n,
-                                            double alpha, std::uint64_t seed);
+                                            const Eigen::Ref<const Eigen::MatrixXd>& covariance,
+                                            int n, double alpha, std::uint64_t seed);
 
 // Sample covariance (divisor N_k - 1) of the rows of `features` (N_k >= 2, finite).
 Eigen::MatrixXd coefficient_covariance(const Eigen::Ref<const RowMatrixXd>& features);

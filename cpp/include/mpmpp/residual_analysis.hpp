@@ -23,7 +23,8 @@ double correlation_bound(const Eigen::Ref<const Eigen::VectorXd>& r_xx,
 // started every `step` samples (window means taken inside each window).
 // Returns a (n_windows x 2) matrix: start index, fit %.
 Eigen::MatrixXd windowed_fit(const Eigen::Ref<const Eigen::VectorXd>& measured,
-                             const Eigen::Ref<const Eigen::VectorXd>& predicted, int window, int step);
+                             const Eigen::Ref<const Eigen::VectorXd>& predicted, int window,
+                             int step);
 
 double fit_percent(const Eigen::Ref<const Eigen::VectorXd>& measured,
                    const Eigen::Ref<const Eigen::VectorXd>& predicted);

@@ -15,7 +15,7 @@ namespace mpmpp {
 
 // Sets every value of a row that is not good to NaN, removes the quality column
 // from the table, and counts the rows in repairs.bad_quality_rows.
-void mask_bad_quality(DataTable& rows, const std::string& column, const std::vector<std::string>& good,
-                      const std::string& source);
+void mask_bad_quality(DataTable& rows, const std::string& column,
+                      const std::vector<std::string>& good, const std::string& source);
 
 }  // namespace mpmpp

@@ -2,14 +2,13 @@
 // Plant-side streaming front end of the trained MPM / noise-change detector.
 //
 // A StreamingDetector wraps a trained Detector (train_detector, or Detector::load of a file
-// saved by Python or C++) and is fed one sample at a time, as a historian or an MPC monitoring service
-// receives them. It keeps only the last window of samples (a ring buffer of
-// window_samples rows) plus the n_T-window ring of each channel's indicator, so memory
-// does not grow with the run length. Whenever a moving window completes (the first after
-// window_samples samples, then every step_samples samples, exactly the windows of the
-// batch Detector::monitor on the same series), it runs ARX-OE + the SVMs on that window
-// (Detector::score_window) and returns the scores, indicator values and alarm state per
-// channel. Results equal the batch path's bit for bit:
+// saved by Python or C++) and is fed one sample at a time, as a historian or an MPC monitoring
+// service receives them. It keeps only the last window of samples (a ring buffer of window_samples
+// rows) plus the n_T-window ring of each channel's indicator, so memory does not grow with the run
+// length. Whenever a moving window completes (the first after window_samples samples, then every
+// step_samples samples, exactly the windows of the batch Detector::monitor on the same series), it
+// runs ARX-OE + the SVMs on that window (Detector::score_window) and returns the scores, indicator
+// values and alarm state per channel. Results equal the batch path's bit for bit:
 //   * the first pushed sample is the series' start: windows ending at or before
 //     t0 + train_end_s (+ half a sample, as in monitor) are training windows, score 0;
 //   * a window holding a missing value (NaN) or one ARX-OE cannot estimate is skipped:
@@ -35,14 +34,14 @@ namespace mpmpp {
 
 // One completed moving window.
 struct StreamWindow {
-  int window = 0;               // index since the stream's first sample (= batch window index)
+  int window = 0;                 // index since the stream's first sample (= batch window index)
   double start_s = 0, end_s = 0;  // first sample's time; last sample's time + sample time
-  bool training = false;        // ends inside the training period: scores 0
-  bool skipped = false;         // missing values in the window or ARX-OE failed: scores NaN
+  bool training = false;          // ends inside the training period: scores 0
+  bool skipped = false;           // missing values in the window or ARX-OE failed: scores NaN
   std::string skip_reason;
-  Eigen::VectorXd scores;       // per channel (Detector::channels() order), eq. 20
-  Eigen::VectorXd indicator;    // per channel, eq. 23
-  std::vector<bool> alarm;      // per channel: alarm active after this window
+  Eigen::VectorXd scores;         // per channel (Detector::channels() order), eq. 20
+  Eigen::VectorXd indicator;      // per channel, eq. 23
+  std::vector<bool> alarm;        // per channel: alarm active after this window
   std::vector<int> alarm_starts;  // channels whose alarm started at this window
 };
 
@@ -72,8 +71,8 @@ class StreamingDetector {
   void load_checkpoint(const std::string& path);
 
   const Detector& detector() const { return detector_; }
-  std::int64_t samples() const { return samples_; }        // pushed since the stream's start
-  int windows() const { return windows_; }                  // completed since the start
+  std::int64_t samples() const { return samples_; }  // pushed since the stream's start
+  int windows() const { return windows_; }           // completed since the start
   int window_samples() const { return window_; }
   int step_samples() const { return step_; }
   // Every alarm flag, per channel, after the last completed window.
@@ -82,10 +81,11 @@ class StreamingDetector {
   static constexpr int kCheckpointVersion = 1;
 
  private:
-  void check_sample(double time_s, double previous_time_s, bool first, const Eigen::Ref<const Eigen::VectorXd>& u,
+  void check_sample(double time_s, double previous_time_s, bool first,
+                    const Eigen::Ref<const Eigen::VectorXd>& u,
                     const Eigen::Ref<const Eigen::VectorXd>& y, const std::string& where) const;
-  bool take(double time_s, const Eigen::Ref<const Eigen::VectorXd>& u, const Eigen::Ref<const Eigen::VectorXd>& y,
-            StreamWindow& window);
+  bool take(double time_s, const Eigen::Ref<const Eigen::VectorXd>& u,
+            const Eigen::Ref<const Eigen::VectorXd>& y, StreamWindow& window);
   void complete_window(StreamWindow& window);
 
   Detector detector_;

@@ -2,9 +2,8 @@
 // Discrete transfer function in the backward shift q^-1:
 //   G(q) = q^-delay * (b0 + b1 q^-1 + ... + bm q^-m) / (1 + a1 q^-1 + ... + an q^-n)
 // The denominator is normalised so that den[0] == 1 on construction.
-#include <string>
-
 #include <Eigen/Dense>
+#include <string>
 
 namespace mpmpp {
 
@@ -36,9 +35,9 @@ class TransferFunction {
   // they come only from delays and trailing zero coefficients and never decide stability.
   Eigen::VectorXcd poles() const;
   Eigen::VectorXcd zeros() const;
-  bool is_stable() const;          // all poles strictly inside the unit circle
-  bool is_minimum_phase() const;   // all zeros strictly inside the unit circle
-  bool is_zero() const;            // numerator identically zero
+  bool is_stable() const;         // all poles strictly inside the unit circle
+  bool is_minimum_phase() const;  // all zeros strictly inside the unit circle
+  bool is_zero() const;           // numerator identically zero
 
   TransferFunction series(const TransferFunction& other) const;    // G * other
   TransferFunction parallel(const TransferFunction& other) const;  // G + other

@@ -36,10 +36,12 @@ class TwoStepCovariance {
   // (both still alive); fir: the OE channels (require_fir); oe: the OE estimate (fitted
   // over t >= na). Writes the covariance of oe.theta (p x p); reuses its workspace
   // between windows.
-  void compute(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,
-               const Eigen::Ref<const Eigen::VectorXd>& yf, const Eigen::Ref<const Eigen::MatrixXd>& uf,
-               const ArxEstimator& arx_estimator, const ArxResult& arx, const std::vector<OeChannel>& fir,
-               const OeResult& oe, Eigen::MatrixXd& covariance);
+  void compute(const Eigen::Ref<const Eigen::VectorXd>& y,
+               const Eigen::Ref<const Eigen::MatrixXd>& u,
+               const Eigen::Ref<const Eigen::VectorXd>& yf,
+               const Eigen::Ref<const Eigen::MatrixXd>& uf, const ArxEstimator& arx_estimator,
+               const ArxResult& arx, const std::vector<OeChannel>& fir, const OeResult& oe,
+               Eigen::MatrixXd& covariance);
 
  private:
   Eigen::MatrixXd phi_, z_, zraw_, vhat_lags_, eps_leads_, m21_, x_, w_, zz_inv_;

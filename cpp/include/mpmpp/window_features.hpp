@@ -56,15 +56,17 @@ class WindowFeatures {
   // With Resampling::Estimator, `covariances` (when given) receives per channel the OE
   // covariance sigma^2 (J'J)^-1 of features[k] (process channels; the FIR structure makes the
   // OE parameters the features themselves) and a 0 x 0 matrix for noise channels.
-  bool extract(const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y,
-               std::vector<Eigen::VectorXd>& features, std::string* skip_reason = nullptr,
+  bool extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
+               const Eigen::Ref<const Eigen::MatrixXd>& y, std::vector<Eigen::VectorXd>& features,
+               std::string* skip_reason = nullptr,
                std::vector<Eigen::MatrixXd>* covariances = nullptr);
   bool has_covariances() const { return with_covariances_; }
 
   // All windows of a series (windows start at 0, step, 2 step, ... while they fit).
   struct Series {
     std::vector<FeatureWindow> windows;
-    std::vector<Eigen::MatrixXd> features;  // per channel: windows x feature_length, NaN rows when skipped
+    std::vector<Eigen::MatrixXd>
+        features;  // per channel: windows x feature_length, NaN rows when skipped
     // Resampling::Estimator only (else empty): per channel, windows x d^2, each row the
     // window's feature covariance in row-major order; 0 columns for noise channels.
     std::vector<Eigen::MatrixXd> covariances;
@@ -80,7 +82,7 @@ class WindowFeatures {
     std::vector<int> skip;      // leading FIR samples (the nominal delay) dropped per input
     int noise_channel = 0;
     ArxOeEstimator estimator;
-    Eigen::MatrixXd u;          // window workspace: the problem's input columns
+    Eigen::MatrixXd u;  // window workspace: the problem's input columns
   };
   double sample_time_s_;
   int num_inputs_, num_outputs_;

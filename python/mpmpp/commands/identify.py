@@ -3,7 +3,7 @@ from __future__ import annotations
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("data", metavar="DATA", help="operating data (CSV with a time column, FORMATS.md)")
+    parser.add_argument("data", metavar="DATA", help="operating data (CSV with a time column, docs/formats.md)")
     parser.add_argument("--inputs", required=True, metavar="COL[,COL...]", help="input columns (e.g. the OP)")
     parser.add_argument("--outputs", required=True, metavar="COL[,COL...]", help="output columns (e.g. the PV)")
     parser.add_argument("--setpoints", metavar="COL[,COL...]",

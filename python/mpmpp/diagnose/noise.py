@@ -146,7 +146,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
     change = ModelChange(output=out.name, noise=written)
     err = held_out_error(out, onset, change)
     # A pure level change is a real disturbance change the model file cannot hold (H is monic,
-    # the innovation variance is not in FORMATS.md), so it need not lower the error.
+    # the innovation variance is not in docs/formats.md), so it need not lower the error.
     level_driven = best.effect == "noise_change" and best.level - (1 + onset_params) * logn >= noise_gain - (
         AR_ORDER + onset_params) * logn
     if not err.improved and not level_driven:

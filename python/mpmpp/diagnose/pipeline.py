@@ -94,7 +94,7 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
 
 def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float = SEGMENT_S,
              block_s: float = BLOCK_S, min_effect: float = 0.01) -> DiagnoseResult:
-    """Ranked findings (FORMATS.md ``diagnose --json``) for ``model`` against ``data``.
+    """Ranked findings (docs/formats.md ``diagnose --json``) for ``model`` against ``data``.
 
     ``min_effect``: practical significance; a finding must remove at least this fraction of the
     (whitened) one-step error variance after its onset on held-out data. Closed-loop records are

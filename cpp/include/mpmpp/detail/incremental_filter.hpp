@@ -57,8 +57,9 @@ inline TransferFunction advanced_one_sample(const TransferFunction& g, const std
   if (g.delay() >= 1) return TransferFunction(g.num(), g.den(), g.delay() - 1);
   if (g.is_zero()) return g;
   if (g.num()[0] != 0.0 || g.num().size() < 2)
-    throw InputError(what + " must be strictly proper (delay >= 1 or num[0] == 0): a closed loop "
-                            "cannot use u(t) to produce y(t)");
+    throw InputError(what +
+                     " must be strictly proper (delay >= 1 or num[0] == 0): a closed loop "
+                     "cannot use u(t) to produce y(t)");
   return TransferFunction(g.num().tail(g.num().size() - 1), g.den(), 0);
 }
 

@@ -18,24 +18,18 @@ import argparse
 import json
 import sys
 
+from mpmpp.families import add_study_arguments, study_selection
 from mpmpp.family_study import format_table, run_study
 from mpmpp.io import atomic_output
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--seeds", type=int, default=4, help="runs per family (default 4)")
-    p.add_argument("--first-seed", type=int, default=0, help="seeds S..S+N-1 (default 0)")
-    p.add_argument("--families", help="comma-separated family names (default: all)")
-    p.add_argument("--workers", type=int, help="local processes (default: all cores)")
-    p.add_argument("--scheduler", help="Dask scheduler address instead of local processes")
-    p.add_argument("--json", metavar="OUT.json", help="also write every run and row as JSON")
+    add_study_arguments(p, "family", first_seed=0)
     p.add_argument("--config", action="append", metavar="LABEL=CONFIG",
                    help="score this detector config (preset name, file or inline JSON) under LABEL")
     args = p.parse_args(argv)
-    if args.seeds < 1 or args.first_seed < 0:
-        p.error("--seeds must be >= 1 and --first-seed >= 0")
-    names = None if args.families is None else [n.strip() for n in args.families.split(",")]
+    names, seeds = study_selection(p, args)
     configs = None
     for item in args.config or []:
         label, sep, given = item.partition("=")
@@ -46,7 +40,7 @@ def main(argv=None) -> int:
         except json.JSONDecodeError as exc:
             p.error(f"--config {label}: not valid JSON ({exc})")
     try:
-        study = run_study(names, range(args.first_seed, args.first_seed + args.seeds),
+        study = run_study(names, seeds,
                           scheduler=args.scheduler, workers=args.workers, configs=configs)
     except ValueError as exc:
         print(f"detection_families: error: {exc}", file=sys.stderr)

@@ -17,23 +17,17 @@ import json
 import sys
 
 from mpmpp.diagnosis_study import format_tables, run_study
+from mpmpp.families import add_study_arguments, study_selection
 from mpmpp.io import atomic_output
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--seeds", type=int, default=4, help="runs per family and effect (default 4)")
-    p.add_argument("--first-seed", type=int, default=100, help="seeds S..S+N-1 (default 100)")
-    p.add_argument("--families", help="comma-separated family names (default: all)")
-    p.add_argument("--workers", type=int, help="local processes (default: all cores)")
-    p.add_argument("--scheduler", help="Dask scheduler address instead of local processes")
-    p.add_argument("--json", metavar="OUT.json", help="also write every run as JSON")
+    add_study_arguments(p, "family and effect", first_seed=100)
     args = p.parse_args(argv)
-    if args.seeds < 1 or args.first_seed < 0:
-        p.error("--seeds must be >= 1 and --first-seed >= 0")
-    names = None if args.families is None else [n.strip() for n in args.families.split(",")]
+    names, seeds = study_selection(p, args)
     try:
-        study = run_study(names, range(args.first_seed, args.first_seed + args.seeds),
+        study = run_study(names, seeds,
                           scheduler=args.scheduler, workers=args.workers)
     except ValueError as exc:
         print(f"diagnosis_families: error: {exc}", file=sys.stderr)

@@ -371,3 +371,22 @@ def family(name: str) -> Family:
         if f.name == name:
             return f
     raise ValueError(f"unknown family {name!r} (known: {', '.join(f.name for f in FAMILIES)})")
+
+
+def add_study_arguments(parser, runs_per: str, first_seed: int) -> None:
+    """The options every family study takes: which seeds, which families, where to run."""
+    parser.add_argument("--seeds", type=int, default=4, help=f"runs per {runs_per} (default 4)")
+    parser.add_argument("--first-seed", type=int, default=first_seed,
+                        help=f"seeds S..S+N-1 (default {first_seed})")
+    parser.add_argument("--families", help="comma-separated family names (default: all)")
+    parser.add_argument("--workers", type=int, help="local processes (default: all cores)")
+    parser.add_argument("--scheduler", help="Dask scheduler address instead of local processes")
+    parser.add_argument("--json", metavar="OUT.json", help="also write every run as JSON")
+
+
+def study_selection(parser, args):
+    """(family names or None for all, seeds) of the options above; bad values are parser errors."""
+    if args.seeds < 1 or args.first_seed < 0:
+        parser.error("--seeds must be >= 1 and --first-seed >= 0")
+    names = None if args.families is None else [n.strip() for n in args.families.split(",")]
+    return names, range(args.first_seed, args.first_seed + args.seeds)

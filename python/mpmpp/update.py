@@ -55,12 +55,15 @@ class UpdateResult:
     process_metric: str = PROCESS_METRIC
 
     def to_dict(self) -> dict:
-        return {"applied": self.applied, "metric": self.metric, "process_metric": self.process_metric,
-                "errors": [{"output": e.output, "onset_s": e.onset_s,
-                            "error_before": _f(e.error_before), "error_after": _f(e.error_after),
-                            "process_error_before": _f(e.process_error_before),
-                            "process_error_after": _f(e.process_error_after)}
-                           for e in self.errors]}
+        doc = {"applied": self.applied, "metric": self.metric, "process_metric": self.process_metric,
+               "errors": [{"output": e.output, "onset_s": e.onset_s,
+                           "error_before": _f(e.error_before), "error_after": _f(e.error_after),
+                           "process_error_before": _f(e.process_error_before),
+                           "process_error_after": _f(e.process_error_after)}
+                          for e in self.errors]}
+        if self.diagnosis is not None and self.diagnosis.notes:
+            doc["notes"] = list(self.diagnosis.notes)  # how the data were read, as diagnose says
+        return doc
 
     def summary(self) -> str:
         lines = [f"update: applied {', '.join(self.applied)}"]

@@ -63,3 +63,19 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     assert "\n" not in err and "missing.csv" in err
     assert main(["update", model, data, "--apply", "F7", "-o", str(tmp_path / "x.json")]) == 2
     assert "F7" in capsys.readouterr().err
+
+
+def test_update_json_carries_the_diagnosis_notes_and_out_gets_update_json(tmp_path, capsys):
+    """A model file without a noise model: the diagnosis estimates one and says so; update's
+    JSON (stdout and --out DIR/update.json, the same document) carries that note."""
+    full = mpmpp.load_model(model_path(GAIN_CHANGE))
+    bare = mpmpp.Model(full.name, full.sample_time_s, full.inputs, full.outputs,
+                       process={o: {i: full.process(o, i) for i in full.inputs} for o in full.outputs})
+    model = tmp_path / "no_noise_model.json"
+    mpmpp.save_model(bare, str(model))
+    out = tmp_path / "out"
+    assert main(["update", str(model), str(data_path(GAIN_CHANGE)), "--apply", "F1", "-o",
+                 str(tmp_path / "new.json"), "--json", "--out", str(out)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert any("noise model" in n for n in doc["notes"])
+    assert json.loads((out / "update.json").read_text()) == doc

@@ -44,10 +44,17 @@ def run(args) -> int:
     end = train_end(args, clock, monitoring_s(model, data, lengths["min_segment_s"]), "update (diagnose)")
     result = update(model, data, args.apply, train_end_s=end, **lengths)
     result.save(args.output)
+    doc = {**result_document(result, clock), "model": args.output, "replaced": replaces}
     if args.out:
+        from pathlib import Path
+
+        from ..io import atomic_output
+
         result.plot(args.out)
+        with atomic_output(Path(args.out) / "update.json") as f:
+            f.write(json.dumps(doc, indent=1))
     if args.json:
-        print(json.dumps({**result_document(result, clock), "model": args.output, "replaced": replaces}))
+        print(json.dumps(doc))
     else:
         print(summary_in_data_time(result, clock))
         print(f"  {'replaced' if replaces else 'wrote'} {args.output}")

@@ -10,13 +10,14 @@
 
 namespace mpmpp::test_loops {
 
-inline Model small_siso_model() {
+// The paper's SISO MD loop at 5 s, with the given dead time in samples.
+inline Model small_siso_model(int delay = 3) {
   Eigen::VectorXd b(1), a(2), hn(2), hd(2);
   b << 0.1003;
   a << 1.0, -0.9048;
   hn << 1.0, -0.3;
   hd << 1.0, 0.6;
-  return make_model("siso", 5.0, {"u"}, {"y"}, {{"y", {{"u", TransferFunction(b, a, 3)}}}},
+  return make_model("siso", 5.0, {"u"}, {"y"}, {{"y", {{"u", TransferFunction(b, a, delay)}}}},
                     {{"y", TransferFunction(hn, hd)}});
 }
 

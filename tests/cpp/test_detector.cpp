@@ -11,20 +11,13 @@
 #include "mpmpp/error.hpp"
 #include "mpmpp/mismatch_indicator.hpp"
 #include "mpmpp/model_io.hpp"
+#include "small_loop.hpp"
 
 using namespace mpmpp;
 
 namespace {
 
-Model siso_model() {
-  Eigen::VectorXd b(1), a(2), hn(2), hd(2);
-  b << 0.1003;
-  a << 1.0, -0.9048;
-  hn << 1.0, -0.3;
-  hd << 1.0, 0.6;
-  return make_model("siso", 5.0, {"u"}, {"y"}, {{"y", {{"u", TransferFunction(b, a, 17)}}}},
-                    {{"y", TransferFunction(hn, hd)}});
-}
+Model siso_model() { return test_loops::small_siso_model(17); }
 
 // A scorer with random support vectors: the file format does not care how it was trained.
 // decorrelated: with a random lower-triangular feature_decorrelation (Resampling::Covariance).

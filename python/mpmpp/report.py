@@ -20,7 +20,8 @@ from typing import Optional
 import numpy as np
 
 from . import __version__
-from .timeaxis import format_duration, format_moment, origin_of
+from .clock import Clock
+from .timeaxis import format_duration, origin_of
 
 __all__ = ["build_report", "write_report"]
 
@@ -96,13 +97,13 @@ def _section(page: _Page, title: str, anchor: str, body, *args) -> None:
         page.para(f"Not available for this data: {exc}", "note")
 
 
-def _data_section(page: _Page, model, data, origin, data_path: str) -> None:
+def _data_section(page: _Page, model, data, clock, origin, data_path: str) -> None:
     time_s = data["time"].to_numpy(float)
     ts = model.sample_time_s
     rows = [["model", f"{model.name} ({len(model.inputs)} input(s), {len(model.outputs)} output(s))"],
             ["inputs (manipulated)", ", ".join(model.inputs)], ["outputs (controlled)", ", ".join(model.outputs)],
             ["data file", data_path], ["samples", len(data)], ["sample time", format_duration(ts)],
-            ["from", format_moment(time_s[0], origin)], ["to", format_moment(time_s[-1], origin)],
+            ["from", clock.stamp(time_s[0])], ["to", clock.stamp(time_s[-1])],
             ["span", format_duration(len(data) * ts)]]
     page.table(None, rows)
     missing = data.attrs.get("missing", {})
@@ -125,7 +126,7 @@ def _data_section(page: _Page, model, data, origin, data_path: str) -> None:
         page.figure_file(path, "signals over time")
 
 
-def _compare_section(page: _Page, model, data, origin) -> None:
+def _compare_section(page: _Page, model, data, clock, origin) -> None:
     from .compare import compare
     from .compare_plots import plot_compare
 
@@ -137,10 +138,8 @@ def _compare_section(page: _Page, model, data, origin) -> None:
                 "error white?", "where it fails"],
                [[oc.output, f"{oc.fit_simulation:.1f} %", f"{oc.fit_prediction:.1f} %", oc.rms_prediction_error,
                  "yes" if not oc.whiteness.positive_lag_violations else "no",
-                 "; ".join(f"{format_moment(p.start_s, origin)} to {format_moment(p.end_s, origin)}"
-                           if origin is not None else f"{format_duration(p.start_s - data['time'].iloc[0])} to "
-                           f"{format_duration(p.end_s - data['time'].iloc[0])} after the start"
-                           for p in oc.failing) or "nowhere"]
+                 "; ".join(f"{clock.stamp(p.start_s)} to {clock.stamp(p.end_s)}" for p in oc.failing)
+                 or "nowhere"]
                 for oc in result.outputs])
     with tempfile.TemporaryDirectory() as tmp:
         for path in plot_compare(result, Path(tmp), origin):
@@ -148,7 +147,7 @@ def _compare_section(page: _Page, model, data, origin) -> None:
                 page.figure_file(path, path.stem)
 
 
-def _diagnose_section(page: _Page, model, data, origin, train_end_s) -> Optional[object]:
+def _diagnose_section(page: _Page, model, data, clock, origin, train_end_s) -> Optional[object]:
     """Findings, and the model with all of them applied (the UpdateResult, for the next section)."""
     from .compare import compare
     from .diagnose import diagnose
@@ -161,7 +160,7 @@ def _diagnose_section(page: _Page, model, data, origin, train_end_s) -> Optional
         return None
     page.table(["id", "effect", "where", "starts", "confidence", "error before", "error after", "explanation"],
                [[f.id, f.effect.replace("_", " "), " \u2190 ".join(x for x in (f.output, f.input) if x) or "all",
-                 format_moment(f.onset_s, origin, float(data["time"].iloc[0])), f"{f.confidence:.2f}",
+                 clock.stamp(f.onset_s), f"{f.confidence:.2f}",
                  f.error_before, f.error_after, f.explanation] for f in result.findings])
     page.para(f"Error: {result.metric}.", "meta")
     ids = [f.id for f in result.findings]
@@ -194,18 +193,17 @@ def _update_section(page: _Page, updated) -> None:
     page.figure(plot_error_fall(updated.errors), "prediction error before and after the update")
 
 
-def _detect_section(page: _Page, model, data, origin, train_end_s, config) -> None:
+def _detect_section(page: _Page, model, data, clock, origin, train_end_s, config) -> None:
     from .detect import channel_label, detect
     from .detect_plots import plot_detection
     from .report_plots import plot_alarm_timeline
 
     result = detect(model, data, train_end_s, config)
-    t0 = float(result.windows["start_s"].iloc[0])
     page.para(f"The detector learnt the model's behaviour in the first {format_duration(result.train_end_s)} "
               f"(shaded), then checked every moving window. An alarm starts when at least "
               f"{100 * result.threshold:g} % of the recent windows look unlike the training period.")
     rows = [[channel_label(a), "model-plant mismatch" if a["kind"] == "process" else "disturbance change",
-             format_moment(a["start_s"], origin, t0)] for a in result.alarms]
+             clock.stamp(a["start_s"])] for a in result.alarms]
     if rows:
         page.table(["channel", "alarm", "starts"], rows)
     else:
@@ -220,18 +218,11 @@ def _detect_section(page: _Page, model, data, origin, train_end_s, config) -> No
             page.figure_file(path, f"{kind} detection")
 
 
-def build_report(model_path, data_path, train_end_s: Optional[float] = None, config=None,
-                 loaded=None) -> str:
-    """The report page (HTML text) for a model file and a data file; ``loaded``: the pair
-    already read, as (model, data), e.g. with the historian repairs of the command line."""
-    from . import load_data, load_model
-
-    if loaded is None:
-        model = load_model(model_path)
-        data = load_data(data_path, model)
-    else:
-        model, data = loaded
-    origin = origin_of(data)
+def build_report(model, data, model_path, data_path, train_end_s: Optional[float] = None, config=None) -> str:
+    """The report page (HTML text) for ``model`` and ``data`` as read from ``model_path`` and
+    ``data_path`` (named on the page)."""
+    # Times in text as every command writes them (Clock.stamp); figure axes from the origin.
+    clock, origin = Clock.of(data, model.sample_time_s), origin_of(data)
     # detect counts its training from the first sample; diagnose reads the time column itself.
     on_time_axis = None if train_end_s is None else float(data["time"].iloc[0]) + train_end_s
     page = _Page()
@@ -240,15 +231,15 @@ def build_report(model_path, data_path, train_end_s: Optional[float] = None, con
     page.para(f"{os.fspath(model_path)} against {os.fspath(data_path)}; mpmpp {__version__}, {created}", "meta")
     page.add('<nav><a href="#data">Data</a><a href="#compare">Compare</a><a href="#diagnose">Diagnose</a>'
              '<a href="#update">Update</a><a href="#detect">Detect</a></nav>')
-    _section(page, "Data", "data", _data_section, model, data, origin, os.fspath(data_path))
-    _section(page, "Compare: does the model predict the data?", "compare", _compare_section, model, data, origin)
+    _section(page, "Data", "data", _data_section, model, data, clock, origin, os.fspath(data_path))
+    _section(page, "Compare: does the model predict the data?", "compare", _compare_section, model, data, clock, origin)
     holder = {}
     _section(page, "Diagnose: what changed, where, when", "diagnose",
-             lambda p: holder.update(updated=_diagnose_section(p, model, data, origin, on_time_axis)))
+             lambda p: holder.update(updated=_diagnose_section(p, model, data, clock, origin, on_time_axis)))
     _section(page, "Update: how much the findings reduce the error", "update",
              lambda p: _update_section(p, holder.get("updated")) if "updated" in holder else
              p.para("Not available: diagnose did not complete.", "note"))
-    _section(page, "Detect: alarms over time", "detect", _detect_section, model, data, origin, train_end_s, config)
+    _section(page, "Detect: alarms over time", "detect", _detect_section, model, data, clock, origin, train_end_s, config)
     title = html.escape(f"{model.name}: model check")
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>{title}</title><link rel=\"icon\" href=\"data:,\">"

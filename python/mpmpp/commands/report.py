@@ -23,8 +23,8 @@ def run(args) -> int:
         raise ValueError(f"{args.output}: exists; choose another name or pass --force to replace it")
     model, data, clock = load_pair(args)
     end = train_end(args, clock, monitoring_s(model, data), "the report's diagnose and detect")
-    page = build_report(args.model, args.data, None if end is None else end - clock.start_s, args.config,
-                        loaded=(model, data))
+    page = build_report(model, data, args.model, args.data, None if end is None else end - clock.start_s,
+                        args.config)
     write_report(args.output, page, force=args.force)
     print(f"wrote {args.output}")
     return 0

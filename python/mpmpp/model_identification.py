@@ -325,7 +325,11 @@ def _candidate(y, U, a, delays, nb, oe_result, t0):
     e = y - sum(g.filter(U[:, j]) for j, g in enumerate(tf))
     e = np.asarray(inverse_noise.filter(e))[t0:]
     cost = float(np.mean(e**2))
-    n, k = len(e), len(a) + sum(b + 1 for b in nb)
+    # per channel K, tau and theta: the dead time is one continuous parameter whether it falls
+    # on a sample (one numerator term) or between two (two terms, docs/formats.md's ZOH form);
+    # counting b1 as an extra parameter made BIC round a fractional dead time down to the sample
+    # and tau absorb the rest
+    n, k = len(e), len(a) + 3 * len(nb)
     return _Candidate(n * np.log(cost) + k * np.log(n), cost, a, list(delays), list(nb), tf,
                       np.asarray(oe_result.theta), n)
 

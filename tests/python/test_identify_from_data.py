@@ -189,3 +189,27 @@ def test_joint_covariance_is_the_finite_difference_one():
     expected = ref.pem_ar_noise_covariance(df["PV"].to_numpy(), df["OP"].to_numpy(), 2, 1, 2,
                                            np.asarray(g.num), np.asarray(g.den), np.r_[1.0, c.a])
     assert np.allclose(cov, expected, rtol=1e-4, atol=1e-9 * np.abs(expected).max())
+
+
+def test_dead_time_between_samples_is_fitted_not_rounded():
+    """A 12 s dead time at 10 s sampling (1.2 samples) on a nearly noise-free loop: theta and tau
+    as the exact ZOH discretisation says, not theta rounded to 10 s with tau absorbing the rest."""
+    from dataclasses import replace
+
+    loop = replace(pi_loop.FLOW, noise_sd=1e-4)
+    r = model_from_data(pi_loop.simulate(loop, seed=1, setpoint_steps=True, step_size=1.0), ["OP"], ["PV"])
+    c, = r.channels
+    assert c.numerator_length == 2 and c.delay_samples == 2
+    assert c.dead_time_s == pytest.approx(12.0, abs=0.05)
+    assert c.time_constant_s == pytest.approx(25.0, rel=0.01)
+    assert c.gain == pytest.approx(1.6, rel=0.01)
+
+
+def test_fractional_dead_time_is_not_rounded_down_at_routine_noise():
+    """The same loop at its routine noise, seeds 1-6: BIC counts the dead time as one parameter,
+    so the fraction of a sample is kept (read as 10 s on every seed when the second numerator term
+    was priced as an extra parameter)."""
+    fits = [model_from_data(pi_loop.simulate(pi_loop.FLOW, seed=s, setpoint_steps=True), ["OP"], ["PV"]).channels[0]
+            for s in range(1, 7)]
+    assert abs(np.mean([c.dead_time_s for c in fits]) - 12.0) < 1.0
+    assert sum(c.numerator_length == 2 for c in fits) >= 4

@@ -4,9 +4,16 @@ Per output, y = sum_j G_j u_j + H e is fitted by the ARX-OE of ``mpmpp.identify`
 Section 3): the ARX step's A(q) whitens the disturbance, so the OE fit on A-filtered data is the
 prediction-error fit with H = 1/A, which stays consistent under feedback (the direct method).
 
-Model class of a channel: first order plus dead time, G = q^-d (b0 + b1 q^-1) / (1 - a q^-1),
-the zero-order-hold discretisation of K e^(-theta s) / (tau s + 1) (b1 carries a dead time that
-is not a whole number of samples, as in docs/formats.md's FOPTD form).
+Model classes, per output (``PROCESS_CLASSES``; every channel of an output in the same class):
+first order plus dead time, G = q^-d (b0 + b1 q^-1) / (1 - a q^-1), the zero-order-hold
+discretisation of K e^(-theta s) / (tau s + 1) (b1 carries a dead time that is not a whole number
+of samples, as in docs/formats.md's FOPTD form); and integrating, a level that integrates its
+inflows, K e^(-theta s) / s or K e^(-theta s) / (s (tau s + 1)), K the rate gain. An integrating
+output is fitted in the differenced domain, (1 - q^-1) y = G' u + e / A(q), where G' is a FIR
+(pure integrator) or first-order (with lag) channel; its model file channel is
+G = G' / (1 - q^-1), a pole at 1, which the discrete form holds as it is. The one-step
+prediction error of y is A (1 - q^-1) (y - G u) = A ((1 - q^-1) y - G' u), the same quantity the
+first-order class minimises, so the classes compete by the same BIC on the same rows.
 
 Search, per output: the delay d of every channel, its numerator length (1 or 2) and the ARX
 (noise) order na. Lag 0 is never searched when the data show feedback: a PI loop's OP reacts to
@@ -53,6 +60,27 @@ DEFAULT_MAX_DEAD_TIME_S = 600.0
 PRUNE = 5 * 3.841458820694124
 
 
+@dataclass(frozen=True)
+class ProcessClass:
+    """A channel's model class: whether the output integrates it, the denominator order nf of
+    the part that is fitted (of G, or of G' = (1 - q^-1) G for an integrating output), and the
+    parameters per channel BIC counts. A class is counted as the self-regulating family it is the
+    boundary of: K e^(-theta s) / s is K tau e^(-theta s) / (tau s + 1) as tau -> infinity, so
+    it has first order plus dead time's three (the limit is not a simpler model: on routine
+    closed-loop data a flow loop's one-step errors fit both equally, and two parameters made the
+    integrator win there); with a lag it is the limit of two lags, four."""
+    name: str
+    integrating: bool
+    nf: int
+    parameters: int
+
+
+SELF_REGULATING = ProcessClass("first order plus dead time", False, 1, 3)
+INTEGRATING = ProcessClass("integrating plus dead time", True, 0, 3)
+INTEGRATING_LAG = ProcessClass("integrating with first-order lag plus dead time", True, 1, 4)
+PROCESS_CLASSES = (SELF_REGULATING, INTEGRATING, INTEGRATING_LAG)
+
+
 class NotIdentified(ValueError):
     """The data do not identify the loop (the message says why)."""
 
@@ -70,6 +98,7 @@ class ChannelSummary:
     delay_samples: int
     numerator_length: int
     significant: bool                   # |gain| / gain_sd >= significance_z(dead times searched)
+    integrating: bool = False           # gain is then the rate gain (output units per s per input unit)
 
     @property
     def uncertain(self) -> bool:
@@ -83,8 +112,14 @@ class ChannelSummary:
         return (self.dead_time_ci95[1] - self.dead_time_ci95[0]) / (2 * Z95)
 
     def describe(self) -> str:
-        return (f"{self.output} <- {self.input}: gain {self.gain:.4g} +- {self.gain_sd:.2g}, "
-                f"time constant {self.time_constant_s:.4g} +- {self.time_constant_sd:.2g} s, "
+        if self.integrating:
+            dynamics = (f"integrating, rate gain {self.gain:.4g} +- {self.gain_sd:.2g} per s, "
+                        + (f"lag {self.time_constant_s:.4g} +- {self.time_constant_sd:.2g} s, "
+                           if self.time_constant_s > 0 else ""))
+        else:
+            dynamics = (f"gain {self.gain:.4g} +- {self.gain_sd:.2g}, "
+                        f"time constant {self.time_constant_s:.4g} +- {self.time_constant_sd:.2g} s, ")
+        return (f"{self.output} <- {self.input}: {dynamics}"
                 f"dead time {self.dead_time_s:.4g} s (95 % {self.dead_time_ci95[0]:.4g}-"
                 f"{self.dead_time_ci95[1]:.4g} s)"
                 + ("" if self.significant else ", NOT significant: left out")
@@ -101,6 +136,7 @@ class OutputFit:
     fit_simulation: float               # fit % of the simulation G u (what `compare` calls simulation)
     candidates: int                     # models compared by BIC
     feedback: str                       # controller action seen in the data (SISO): direct, reverse, none
+    process_class: str = SELF_REGULATING.name  # the ProcessClass BIC chose
 
 
 @dataclass
@@ -125,7 +161,8 @@ class IdentificationResult:
                  + (f" ({self.skipped_rows} rows skipped: missing values)" if self.skipped_rows else "")
                  + f"; orders and dead times by {self.selection}"]
         for o in self.outputs:
-            lines.append(f"  {o.output}: fit 1-step {o.fit_one_step:.1f} %, simulation {o.fit_simulation:.1f} %;"
+            lines.append(f"  {o.output} ({o.process_class}): fit 1-step {o.fit_one_step:.1f} %,"
+                         f" simulation {o.fit_simulation:.1f} %;"
                          f" noise model AR({o.noise_order}); {o.candidates} candidates"
                          + (f"; controller action {o.feedback}" if o.feedback != "none" else ""))
             for c in self.channels:
@@ -142,13 +179,15 @@ class IdentificationResult:
 
 def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None = None,
                     max_dead_time_s: float | None = None, min_delay: int = 1,
-                    na_orders=NA_ORDERS, numerator_lengths=NUMERATOR_LENGTHS) -> IdentificationResult:
+                    na_orders=NA_ORDERS, numerator_lengths=NUMERATOR_LENGTHS,
+                    classes=PROCESS_CLASSES) -> IdentificationResult:
     """Identify a model of ``outputs`` from ``inputs`` (column names) in ``data`` (a DataFrame
     with a ``time`` column in seconds, or a data file path). The sample time comes from the time
     column. ``setpoints``: one setpoint column per output (default ``<output>_sp`` where
     present), used only to read the controller's action. ``max_dead_time_s``: longest dead
     time searched (default DEFAULT_MAX_DEAD_TIME_S, at most a tenth of the record).
     ``min_delay`` 0 is refused when the data show feedback from the output to any input.
+    ``classes``: the ProcessClass candidates per output (BIC picks one).
     Raises ``NotIdentified`` when the data do not identify the loop, ``ValueError`` on bad
     input."""
     from .io import load_data
@@ -195,20 +234,30 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
         if min_delay < 1 and any(actions):
             raise ValueError(f"lag 0 cannot be searched for {out!r}: the data show feedback "
                              "(the controller reacts to the output within the sample)")
-        best, profile, count = _search(Y[:, i], U, max(min_delay, 0), max_delay, na_orders,
-                                       numerator_lengths, max_delay + max(na_orders))
+        searched, count = [], 0
+        for cls in classes:
+            try:
+                best, profile, n_fitted = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay, na_orders,
+                                                  numerator_lengths, max_delay + max(na_orders))
+            except NotIdentified:
+                continue
+            searched.append((best.bic, cls, best, profile))
+            count += n_fitted
+        if not searched:
+            raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
+        _, cls, best, profile = min(searched, key=lambda r: r[0])
         z = significance_z(max_delay - max(min_delay, 0) + 1)
-        chans = [_summarise(out, inputs[j], best, j, profile, ts, z) for j in range(len(inputs))]
+        chans = [_summarise(out, inputs[j], best, j, profile, ts, z, cls) for j in range(len(inputs))]
         _check_verdict(out, chans, action)
-        kept = {c.input: best.tf[j] for j, c in enumerate(chans) if c.significant}
-        process[out] = kept
-        noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(np.r_[1.0, best.a]), 0)
+        tf, a = _output_domain(best, cls)
+        process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.significant}
+        noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(a), 0)
         summaries += chans
-        e = _core.prediction_error(list(best.tf), noise[out], Y[:, i], U)
-        sim = _core.predict_output(list(best.tf), noise[out], Y[:, i], U, 0)
+        e = _core.prediction_error(tf, noise[out], Y[:, i], U)
+        sim = _core.predict_output(tf, noise[out], Y[:, i], U, 0)
         fits.append(OutputFit(out, len(best.a), best.bic, float(_core.fit_percent(Y[:, i], Y[:, i] - e)),
                               float(_core.fit_percent(Y[:, i], sim)), count,
-                              {1: "direct", -1: "reverse", 0: "none"}[action]))
+                              {1: "direct", -1: "reverse", 0: "none"}[action], cls.name))
     model = _core.Model(name or "identified from data", ts, inputs, outputs, process, noise)
     return IdentificationResult(model, ts, n, len(data) - n, summaries, fits)
 
@@ -220,19 +269,39 @@ class _Candidate:
     a: np.ndarray                # a_1..a_na
     delays: list[int]
     nb: list[int]
-    tf: list                     # TransferFunction per input
+    nf: int                      # denominator order of every channel (ProcessClass.nf)
+    tf: list                     # TransferFunction per input, in the fitted domain
     theta: np.ndarray            # OE parameters [b_1 f_1 b_2 f_2 ...] per channel
     rows: int                    # length of the common range
     covariance: np.ndarray | None = None  # of [theta, a] (``_joint_covariance``), for the chosen one
 
 
-def _search(y, U, min_delay, max_delay, na_orders, numerator_lengths, t0):
-    """Coordinate search over each channel's (delay, numerator length) by ARX-OE for every na.
+def _output_domain(c: _Candidate, cls: ProcessClass):
+    """c's channels and noise denominator as the model of y: for an integrating output
+    G = G' / (1 - q^-1) and H = 1 / (A (1 - q^-1))."""
+    if not cls.integrating:
+        return list(c.tf), np.r_[1.0, c.a]
+    return ([_core.TransferFunction(np.asarray(g.num), np.convolve(g.den, [1.0, -1.0]), g.delay) for g in c.tf],
+            np.convolve(np.r_[1.0, c.a], [1.0, -1.0]))
+
+
+def _differenced(y: np.ndarray) -> np.ndarray:
+    """(1 - q^-1) y with mean removed, on y's rows (the first is 0 before the mean's removal)."""
+    dy = np.r_[0.0, np.diff(y)]
+    return dy - dy.mean()
+
+
+def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_lengths, t0):
+    """Coordinate search over each channel's (delay, numerator length) by ARX-OE for every na,
+    in cls's domain (y differenced for an integrating output).
     The best of each na is refined to the joint fit (``_refine``) and the BIC-best na kept; at
     that na every candidate not clearly worse (PRUNE) is refined too, and the BIC-best refined
     candidate returned with the profile {(channel, dead time in samples): refined cost, inf for
     pruned ones} and the number of candidates fitted."""
     m = U.shape[1]
+    if cls.integrating:
+        # mean removed: a constant inflow imbalance (OP's mean is not the balancing flow)
+        y = _differenced(y)
     finalists, tried, count = [], {}, 0
     for na in na_orders:
         delays, nb = [min_delay] * m, [1] * m
@@ -243,7 +312,7 @@ def _search(y, U, min_delay, max_delay, na_orders, numerator_lengths, t0):
                     for k in numerator_lengths:
                         trial_d, trial_nb = list(delays), list(nb)
                         trial_d[j], trial_nb[j] = d, k
-                        c = _fit(y, U, na, trial_d, trial_nb, t0)
+                        c = _fit(y, U, na, trial_d, trial_nb, cls, t0)
                         count += 1
                         if c is None:
                             continue
@@ -253,23 +322,23 @@ def _search(y, U, min_delay, max_delay, na_orders, numerator_lengths, t0):
                 if current is not None:
                     delays, nb = list(current.delays), list(current.nb)
         if current is not None:
-            finalists.append(_refine(y, U, current, t0))
+            finalists.append(_refine(y, U, current, cls, t0))
     if not finalists:
         raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
     best = min(finalists, key=lambda c: c.bic)
     profile = {}
     for j, c in tried[len(best.a)]:
         if c.rows * np.log(c.cost / best.cost) <= PRUNE:
-            c = _refine(y, U, c, t0)
+            c = _refine(y, U, c, cls, t0)
             if c.bic < best.bic:
                 best = c
             cost = c.cost
         else:
             cost = np.inf
-        where = (j, _dead_time_samples(c, j))
+        where = (j, _dead_time_samples(c, j, cls))
         profile[where] = min(profile.get(where, np.inf), cost)
     for j in range(m):
-        where = (j, _dead_time_samples(best, j))
+        where = (j, _dead_time_samples(best, j, cls))
         profile[where] = min(profile.get(where, np.inf), best.cost)
     best.covariance = _joint_covariance(y, U, best)
     return best, profile, count
@@ -291,7 +360,8 @@ def _joint_covariance(y, U, c: _Candidate) -> np.ndarray:
         w = np.asarray(_core.TransferFunction(np.ones(1), np.asarray(g.den), g.delay).filter(U[:, j]))
         aw = np.asarray(A.filter(w))
         cols += [-_lag(aw, k) for k in range(c.nb[j])]
-        cols.append(_lag(np.asarray(A.filter(inv_f.filter(x[j]))), 1))
+        if c.nf:
+            cols.append(_lag(np.asarray(A.filter(inv_f.filter(x[j]))), 1))
     cols += [_lag(v, i) for i in range(1, na + 1)]
     J = np.column_stack(cols)[na:]
     eps = np.asarray(A.filter(v))[na:]
@@ -303,38 +373,37 @@ def _lag(x: np.ndarray, k: int) -> np.ndarray:
     return np.r_[np.zeros(k), x[:len(x) - k]] if k else x
 
 
-def _fit(y, U, na, delays, nb, t0):
-    """One candidate by ARX-OE, or None when it is not informative or not of first order plus
-    dead time."""
+def _fit(y, U, na, delays, nb, cls, t0):
+    """One candidate by ARX-OE, or None when it is not informative or not of cls's form."""
     try:
-        r = arx_oe(y, U, na, na + 1, delays, structure="oe", oe_nb=nb, oe_nf=1, fir_length=1,
+        r = arx_oe(y, U, na, na + 1, delays, structure="oe", oe_nb=nb, oe_nf=cls.nf, fir_length=1,
                    detrend="none")
     except RuntimeError:
         return None
-    return _candidate(y, U, np.asarray(r.noise), delays, nb, r.oe, t0)
+    return _candidate(y, U, np.asarray(r.noise), delays, nb, cls, r.oe, t0)
 
 
-def _candidate(y, U, a, delays, nb, oe_result, t0):
+def _candidate(y, U, a, delays, nb, cls, oe_result, t0):
     tf = []
     for j, d in enumerate(delays):
         b, f = np.asarray(oe_result.b[j]), np.asarray(oe_result.f[j])
-        if _foptd(b, f, d, 1.0) is None:
+        if _continuous(b, f, d, 1.0, cls) is None:
             return None
         tf.append(_core.TransferFunction(b, f, d))
     inverse_noise = _core.TransferFunction(np.r_[1.0, a], np.ones(1), 0)
     e = y - sum(g.filter(U[:, j]) for j, g in enumerate(tf))
     e = np.asarray(inverse_noise.filter(e))[t0:]
     cost = float(np.mean(e**2))
-    # per channel K, tau and theta: the dead time is one continuous parameter whether it falls
+    # per channel K, theta (and tau): the dead time is one continuous parameter whether it falls
     # on a sample (one numerator term) or between two (two terms, docs/formats.md's ZOH form);
     # counting b1 as an extra parameter made BIC round a fractional dead time down to the sample
     # and tau absorb the rest
-    n, k = len(e), len(a) + 3 * len(nb)
-    return _Candidate(n * np.log(cost) + k * np.log(n), cost, a, list(delays), list(nb), tf,
+    n, k = len(e), len(a) + cls.parameters * len(nb)
+    return _Candidate(n * np.log(cost) + k * np.log(n), cost, a, list(delays), list(nb), cls.nf, tf,
                       np.asarray(oe_result.theta), n)
 
 
-def _refine(y, U, c: _Candidate, t0, max_iterations=200, tolerance=1e-12):
+def _refine(y, U, c: _Candidate, cls, t0, max_iterations=200, tolerance=1e-12):
     """The joint prediction-error fit of G and H = 1/A for c's structure, by alternating the two
     least-squares problems it splits into: A given G (an AR fit of v = y - G u) and G given A
     (the OE fit on A-filtered data), both over t >= na. Each step lowers sum (A (y - G u))^2,
@@ -350,10 +419,10 @@ def _refine(y, U, c: _Candidate, t0, max_iterations=200, tolerance=1e-12):
         yf = np.asarray(A.filter(y))
         uf = np.column_stack([A.filter(U[:, j]) for j in range(U.shape[1])])
         try:
-            r = oe(yf, uf, best.delays, structure="oe", nb=best.nb, nf=1, skip=na)
+            r = oe(yf, uf, best.delays, structure="oe", nb=best.nb, nf=cls.nf, skip=na)
         except RuntimeError:
             return best
-        trial = _candidate(y, U, a, best.delays, best.nb, r, t0)
+        trial = _candidate(y, U, a, best.delays, best.nb, cls, r, t0)
         if trial is None or not r.cost < level:
             return best
         best, done = trial, r.cost > level * (1 - tolerance)
@@ -361,6 +430,32 @@ def _refine(y, U, c: _Candidate, t0, max_iterations=200, tolerance=1e-12):
         if done:
             break
     return best
+
+
+def _continuous(b, f, delay, ts, cls: ProcessClass):
+    """(K, tau, theta) of a fitted channel of class cls, or None when it is not of that form."""
+    return (_integrating if cls.integrating else _foptd)(b, f, delay, ts)
+
+
+def _integrating(b, f, delay, ts):
+    """(K, tau, theta) of the differenced channel G' = q^-delay (b0 + b1 q^-1) / F, F = 1 or
+    1 - a q^-1, of K e^(-theta s) / (s (tau s + 1)); K is the rate gain (per second). Without a
+    lag the ZOH gives b0 = K Ts (1 - phi), b1 = K Ts phi for theta = (delay - 1 + phi) Ts, exactly.
+    With a lag, theta matches the first moment: the mean delay of G' in samples,
+    delay + b1 / (b0 + b1) + a / (1 - a), is (theta + tau) / Ts + 1 for the continuous system
+    under a ZOH (the pulse and the sampling window each add half a sample), exact for any theta.
+    None when the pole is not in [0, 1), b1 / (b0 + b1) is outside [0, 1) or theta < 0."""
+    a = -f[1] if len(f) > 1 else 0.0
+    if not (0.0 <= a < 1.0) or b.sum() == 0.0:
+        return None
+    share = b[1] / b.sum() if len(b) > 1 else 0.0
+    if not (-1e-9 <= share < 1.0):
+        return None
+    tau = -ts / np.log(a) if a > 0 else 0.0
+    theta = (delay - 1 + share + a / (1.0 - a)) * ts - tau
+    if theta < -1e-9 * ts:
+        return None
+    return b.sum() / ((1.0 - a) * ts), tau, max(theta, 0.0)
 
 
 def _foptd(b, f, delay, ts):
@@ -382,15 +477,15 @@ def _foptd(b, f, delay, ts):
     return gain, tau, (delay - 1 + frac) * ts
 
 
-def _dead_time_samples(c: _Candidate, j: int) -> float:
+def _dead_time_samples(c: _Candidate, j: int, cls: ProcessClass) -> float:
     b, f = _channel_params(c, j)
-    return _foptd(b, f, c.delays[j], 1.0)[2]
+    return _continuous(b, f, c.delays[j], 1.0, cls)[2]
 
 
 def _channel_params(c: _Candidate, j: int):
-    k = sum(nb + 1 for nb in c.nb[:j])
+    k = sum(nb + c.nf for nb in c.nb[:j])
     nb = c.nb[j]
-    return c.theta[k:k + nb], np.r_[1.0, c.theta[k + nb:k + nb + 1]]
+    return c.theta[k:k + nb], np.r_[1.0, c.theta[k + nb:k + nb + c.nf]]
 
 
 def significance_z(dead_times: int) -> float:
@@ -399,23 +494,24 @@ def significance_z(dead_times: int) -> float:
     return NormalDist().inv_cdf(1.0 - 0.025 / max(dead_times, 1))
 
 
-def _summarise(out, inp, c: _Candidate, j: int, profile, ts, z_effect) -> ChannelSummary:
+def _summarise(out, inp, c: _Candidate, j: int, profile, ts, z_effect, cls: ProcessClass) -> ChannelSummary:
     b, f = _channel_params(c, j)
-    gain, tau, dead = _foptd(b, f, c.delays[j], ts)
-    k = sum(nb + 1 for nb in c.nb[:j])
-    idx = slice(k, k + c.nb[j] + 1)
+    gain, tau, dead = _continuous(b, f, c.delays[j], ts, cls)
+    k = sum(nb + c.nf for nb in c.nb[:j])
+    nb = c.nb[j]
+    idx = slice(k, k + nb + c.nf)
     cov = c.covariance[idx, idx]
-    p = np.r_[b, f[1]]
+    p = np.r_[b, f[1:]]
 
     def value(q, which):
-        return _foptd(q[:-1], np.r_[1.0, q[-1]], c.delays[j], ts)[which]
+        return _continuous(q[:nb], np.r_[1.0, q[nb:]], c.delays[j], ts, cls)[which]
 
     gain_sd = _delta_sd(lambda q: value(q, 0), p, cov)
     tau_sd = _delta_sd(lambda q: value(q, 1), p, cov) if tau > 0 else float("nan")
     lo, hi = _profile_interval({s: v for (jj, s), v in profile.items() if jj == j}, c.rows)
     return ChannelSummary(out, inp, float(gain), float(gain_sd), float(tau), float(tau_sd), float(dead),
                           (float(lo * ts), float(hi * ts)), int(c.delays[j]), int(c.nb[j]),
-                          bool(abs(gain) >= z_effect * gain_sd))
+                          bool(abs(gain) >= z_effect * gain_sd), cls.integrating)
 
 
 def _profile_interval(cost_at: dict, rows: int) -> tuple[float, float]:

@@ -246,21 +246,21 @@ def two_step_fir_covariance(y, u, na, nb, delays, fir, arx_theta, fir_theta):
     return ZZi @ (W.T @ W) @ ZZi * (N - na) / (N - na - Z.shape[1]), M21, Z
 
 
-def pem_ar_noise(y, u, na, nb, delay, detrend="constant"):
-    """Joint prediction-error fit of y = q^-d B/F u + e / A (single input, nf = 1, A of order
-    na): scipy least_squares on eps = A (y - G u) over t >= na, all of b, f_1, a at once, started
-    from this module's ARX-OE. Returns (b, f, a)."""
+def pem_ar_noise(y, u, na, nb, delay, detrend="constant", nf=1):
+    """Joint prediction-error fit of y = q^-d B/F u + e / A (single input, F of order nf = 0 or
+    1, A of order na): scipy least_squares on eps = A (y - G u) over t >= na, all of b, f, a at
+    once, started from this module's ARX-OE. Returns (b, f, a)."""
     y = ss.detrend(y, type=detrend)
     u = ss.detrend(u, type=detrend)
-    theta0, a0, _, _ = arx_oe(y, u[:, None], na, [na + 1], [delay], [(nb, 1, delay)], [1], detrend="constant")
+    theta0, a0, _, _ = arx_oe(y, u[:, None], na, [na + 1], [delay], [(nb, nf, delay)], [1], detrend="constant")
 
     def residual(x):
-        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], [1.0, x[nb]], u)
-        return ss.lfilter(np.r_[1.0, x[nb + 1:]], [1.0], v)[na:]
+        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], np.r_[1.0, x[nb:nb + nf]], u)
+        return ss.lfilter(np.r_[1.0, x[nb + nf:]], [1.0], v)[na:]
 
     x = so.least_squares(residual, np.r_[theta0, a0[1:]], method="lm", xtol=1e-14, ftol=1e-14,
                          gtol=1e-14, max_nfev=5000).x
-    return x[:nb], np.r_[1.0, x[nb]], np.r_[1.0, x[nb + 1:]]
+    return x[:nb], np.r_[1.0, x[nb:nb + nf]], np.r_[1.0, x[nb + nf:]]
 
 
 def pem_ar_noise_covariance(y, u, na, nb, delay, b, f, a, detrend="constant"):

@@ -4,7 +4,11 @@ A single loop sampled every Ts: process K e^(-theta s) / (tau s + 1) discretised
 zero-order hold (a dead time between samples included), an additive disturbance
 v = sigma / (1 - c q^-1) e, PV = process output + v, and a positional PI controller acting
 on the same sample's PV (OP(t) reacts to PV(t): the feedback that makes lag 0 misleading),
-OP clipped to its range. Written from the equations, independent of mpmpp's C++ simulator.
+OP clipped to its range. Integrating loops (a level): process K e^(-theta s) / (s (tau s + 1))
+(K the rate gain, PV units per s per OP unit; tau 0 for a pure integrator), simulated exactly on
+a sub-grid of the sample time, and an unmeasured inflow disturbance,
+v = sigma / ((1 - q^-1) (1 - c q^-1)) e. Written from the equations, independent of mpmpp's C++
+simulator.
 """
 from __future__ import annotations
 
@@ -23,10 +27,17 @@ class Loop:
     noise_sd: float          # sigma of the disturbance's white input (PV units)
     noise_pole: float        # c in v = sigma / (1 - c q^-1) e
     op_span: tuple = (0.0, 100.0)
+    integrating: bool = False
 
     def pi_tuning(self, ts: float) -> tuple[float, float]:
         """IMC / lambda tuning (kc = tau / (K (lambda + theta)), Ti = tau), lambda = max(tau, 2 Ts):
-        a typical moderately tuned plant loop; the sign of kc follows the process gain."""
+        a typical moderately tuned plant loop; the sign of kc follows the process gain.
+        Integrating: SIMC (Skogestad 2003), kc = 1 / (K (lambda + theta')), Ti = 4 (lambda + theta')
+        with the lag counted as dead time, theta' = theta + tau + Ts / 2, and lambda = 3 theta'
+        (a level loop tuned for averaging rather than tight control)."""
+        if self.integrating:
+            theta = self.dead_time_s + self.time_constant_s + ts / 2
+            return 1.0 / (self.gain * 4 * theta), 16 * theta
         lam = max(self.time_constant_s, 2 * ts)
         theta = self.dead_time_s + ts / 2  # the sample-and-hold adds about half a sample
         kc = self.time_constant_s / (self.gain * (lam + theta)) if self.time_constant_s > 0 else 0.2 / self.gain
@@ -39,6 +50,11 @@ FLOW = Loop("flow", 1.6, 25.0, 12.0, 0.05, 0.9)
 LEVEL = Loop("level", 0.8, 400.0, 25.0, 0.03, 0.97)
 PRESSURE = Loop("pressure", -2.5, 120.0, 35.0, 0.04, 0.95)
 LOOPS = (FLOW, LEVEL, PRESSURE)
+# Integrating levels (rate gain in % per s per OP %): a pure integrator, and one behind a 60 s lag
+# (a level fed through a vessel or a slow valve).
+TANK = Loop("tank level", 0.004, 0.0, 15.0, 0.01, 0.8, integrating=True)
+TANK_LAG = Loop("tank level, lag", 0.004, 60.0, 25.0, 0.01, 0.8, integrating=True)
+INTEGRATING_LOOPS = (TANK, TANK_LAG)
 
 
 def foptd_coefficients(loop: Loop, ts: float):
@@ -54,7 +70,6 @@ def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_
     """One record: time, OP, PV, PV_sp. With ``setpoint_steps`` the setpoint alternates +-step_size
     (default 4 disturbance sds of PV) every 20 minutes."""
     rng = np.random.default_rng(seed)
-    a, b0, b1, d = foptd_coefficients(loop, ts)
     kc, ti = loop.pi_tuning(ts)
     warm = 200  # settle the disturbance and controller before the record starts
     n = rows + warm
@@ -62,6 +77,8 @@ def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_
     v = np.zeros(n)
     for t in range(1, n):
         v[t] = loop.noise_pole * v[t - 1] + e[t]
+    if loop.integrating:
+        v = np.cumsum(v)
     sp = np.full(n, pv0)
     if setpoint_steps:
         size = step_size if step_size is not None else 4 * loop.noise_sd / np.sqrt(1 - loop.noise_pole**2)
@@ -72,8 +89,13 @@ def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_
     op = np.full(n, op0)
     pv = np.full(n, pv0)
     integral = 0.0
+    process = _Integrator(loop, ts) if loop.integrating else None
+    if process is None:
+        a, b0, b1, d = foptd_coefficients(loop, ts)
     for t in range(n):
-        if t >= 1:
+        if process is not None:
+            x[t] = process.step(op[t - 1] - op0 if t >= 1 else 0.0)
+        elif t >= 1:
             x[t] = a * x[t - 1]
             if t - d >= 0:
                 x[t] += b0 * (op[t - d] - op0)
@@ -85,3 +107,30 @@ def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_
         op[t] = np.clip(op0 + kc * err + integral, *loop.op_span)
     keep = slice(warm, n)
     return pd.DataFrame({"time": np.arange(rows) * ts, "OP": op[keep], "PV": pv[keep], "PV_sp": sp[keep]})
+
+
+class _Integrator:
+    """K e^(-theta s) / (s (tau s + 1)) driven by a zero-order hold, exact on a sub-grid of
+    SUB steps per sample (theta rounded to the sub-grid): the lag state x follows
+    x(t + h) = x e^(-h / tau) + (1 - e^(-h / tau)) K u, and the level gains the integral of x over
+    the step, K u h - tau (x(t + h) - x(t)) (from tau dx/dt = K u - x)."""
+
+    SUB = 50
+
+    def __init__(self, loop: Loop, ts: float):
+        self.h = ts / self.SUB
+        self.tau, self.gain = loop.time_constant_s, loop.gain
+        self.lag = int(round(loop.dead_time_s / self.h))
+        self.queue = [0.0] * self.lag      # input on the sub-grid, oldest first
+        self.x = self.level = 0.0
+
+    def step(self, u: float) -> float:
+        """Level at the end of the sample in which the held input was u."""
+        decay = np.exp(-self.h / self.tau) if self.tau > 0 else 0.0
+        for _ in range(self.SUB):
+            self.queue.append(u)
+            w = self.queue.pop(0)
+            x_next = self.x * decay + (1.0 - decay) * self.gain * w
+            self.level += self.gain * w * self.h - self.tau * (x_next - self.x)
+            self.x = x_next
+        return self.level

@@ -183,7 +183,8 @@ def test_joint_covariance_is_the_finite_difference_one():
     df = pi_loop.simulate(pi_loop.FLOW, seed=4)
     y = df["PV"].to_numpy() - df["PV"].mean()
     U = df[["OP"]].to_numpy() - df["OP"].mean()
-    c = mi._refine(y, U, mi._fit(y, U, 2, [2], [1], 60), 60)
+    cls = mi.SELF_REGULATING
+    c = mi._refine(y, U, mi._fit(y, U, 2, [2], [1], cls, 60), cls, 60)
     cov = mi._joint_covariance(y, U, c)
     g = c.tf[0]
     expected = ref.pem_ar_noise_covariance(df["PV"].to_numpy(), df["OP"].to_numpy(), 2, 1, 2,
@@ -213,3 +214,75 @@ def test_fractional_dead_time_is_not_rounded_down_at_routine_noise():
             for s in range(1, 7)]
     assert abs(np.mean([c.dead_time_s for c in fits]) - 12.0) < 1.0
     assert sum(c.numerator_length == 2 for c in fits) >= 4
+
+
+def _zoh_integrator_with_lag(gain, tau, ts):
+    """SciPy's ZOH discretisation of K / (s (tau s + 1)): (b, a) of q^-1 (b0 + b1 q^-1) /
+    ((1 - q^-1) (1 - a q^-1))."""
+    import scipy.signal as ss
+
+    num, den, _ = ss.cont2discrete(([gain], [tau, 1.0, 0.0]), ts, method="zoh")
+    return np.ravel(num)[1:], float(next(r for r in np.roots(den) if abs(r - 1.0) > 1e-6).real)
+
+
+def test_integrating_channel_parameters_invert_the_zoh():
+    """K e^(-theta s) / (s (tau s + 1)) at a whole number of samples of dead time: SciPy's ZOH
+    coefficients give back K, tau and theta (the first-moment dead time is exact); without a lag
+    the dead time between samples is exact too."""
+    from mpmpp.model_identification import INTEGRATING, INTEGRATING_LAG, _continuous
+
+    b, a = _zoh_integrator_with_lag(0.004, 60.0, 10.0)
+    k, tau, theta = _continuous(b, np.r_[1.0, -a], 3 + 1, 10.0, INTEGRATING_LAG)
+    assert (k, tau, theta) == pytest.approx((0.004, 60.0, 30.0), rel=1e-9)
+    # pure integrator, theta = 15 s = 1.5 samples: b0 = K Ts (1 - 0.5), b1 = K Ts 0.5 from q^-2
+    assert _continuous(np.array([0.02, 0.02]), np.ones(1), 2, 10.0, INTEGRATING) == pytest.approx((0.004, 0.0, 15.0))
+
+
+@pytest.mark.parametrize("tau, theta", [(60.0, 30.0), (0.0, 15.0)])
+def test_reference_integrating_loop_is_the_exact_zoh(tau, theta):
+    """The study's integrating process (pi_loop, sub-grid simulation) against SciPy's ZOH."""
+    import scipy.signal as ss
+
+    loop = pi_loop.Loop("tank", 0.004, tau, theta, 0.01, 0.8, integrating=True)
+    process = pi_loop._Integrator(loop, 10.0)
+    u = np.random.default_rng(0).standard_normal(60)
+    level = np.array([process.step(x) for x in u])     # level at the end of each held sample
+    if tau > 0:
+        b, a = _zoh_integrator_with_lag(loop.gain, tau, 10.0)
+        expected = ss.lfilter(np.r_[np.zeros(4), b], np.convolve([1.0, -1.0], [1.0, -a]), u)
+    else:
+        expected = ss.lfilter([0.0, 0.0, 0.02, 0.02], [1.0, -1.0], u)
+    assert np.allclose(level[:-1], expected[1:], rtol=1e-9, atol=1e-12)
+
+
+def test_integrating_level_loop_is_identified_as_integrating():
+    """A level under PI control (pure integrator, rate gain 0.004 %/s per %, dead time 15 s,
+    inflow disturbance) with setpoint steps: the integrating class wins, the rate gain and dead
+    time are recovered within their uncertainty, and the model file's channel has its pole at 1."""
+    loop = pi_loop.TANK
+    df = pi_loop.simulate(loop, seed=3, setpoint_steps=True, step_size=0.5)
+    r = model_from_data(df, ["OP"], ["PV"])
+    c, = r.channels
+    assert r.outputs[0].process_class == "integrating plus dead time" and c.integrating
+    assert abs(c.gain - loop.gain) < 4 * c.gain_sd and c.gain_sd < 0.25 * loop.gain
+    assert c.time_constant_s == 0.0
+    lo, hi = c.dead_time_ci95
+    assert lo - 10.0 <= loop.dead_time_s <= hi + 10.0
+    g = r.model.process("PV", "OP")
+    assert np.asarray(g.den) == pytest.approx([1.0, -1.0]) and np.sum(g.num) == pytest.approx(c.gain * 10.0)
+    assert "integrating, rate gain" in r.summary() and "per s" in r.summary()
+    # the same fit as SciPy's joint prediction-error fit of the differenced level
+    y = df["PV"].to_numpy() - df["PV"].mean()
+    dy = np.r_[0.0, np.diff(y)]
+    b, f, a = ref.pem_ar_noise(dy - dy.mean(), df["OP"].to_numpy(), r.outputs[0].noise_order,
+                               c.numerator_length, c.delay_samples, nf=0)
+    assert f == pytest.approx([1.0])
+    assert np.allclose(g.num, b, rtol=1e-5, atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_self_regulating_flow_loop_is_not_called_integrating(seed):
+    """Routine data of a flow loop fit an integrator's one-step errors about as well; counting the
+    integrator as first order's tau -> infinity limit keeps the first-order class."""
+    r = model_from_data(pi_loop.simulate(pi_loop.FLOW, seed=seed), ["OP"], ["PV"])
+    assert r.outputs[0].process_class == "first order plus dead time" and not r.channels[0].integrating

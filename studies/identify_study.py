@@ -12,6 +12,11 @@ and tau, in seconds for theta; "cover" is the share of seeds whose 95 % interval
 truth; seeds refused as "not identified" are counted and left out of the statistics; "flagged
 uncertain" counts identified seeds whose summary warns that the model is loosely determined.
 
+Integrating loops (tank levels, a pure integrator and one behind a 60 s lag, setpoint steps of
+0.5 %): how often the integrating class is chosen, the rate gain's bias and spread in % and the
+mean delay theta + tau in seconds (what a record of this length determines: a lag the data do
+not resolve shows as dead time); the reference is SciPy's joint fit of the differenced level.
+
     PYTHONPATH=python python studies/identify_study.py --seeds 20
 """
 from __future__ import annotations
@@ -44,8 +49,56 @@ def reference_foptd(y, u, na, delay, nb, ts):
     return gain, tau, (delay - 1 + frac) * ts
 
 
+def reference_integrating(y, u, na, delay, nb, nf, ts):
+    """SciPy's joint prediction-error fit of the differenced level (mean removed), then the rate
+    gain K and the mean delay theta + tau: the first moment of q^-d (b0 + b1 q^-1) / (1 - a q^-1)
+    in samples is (theta + tau) / Ts + 1."""
+    dy = np.r_[0.0, np.diff(y - y.mean())]
+    b, f, _ = ref.pem_ar_noise(dy - dy.mean(), u, na, nb, delay, nf=nf)
+    a = -f[1] if nf else 0.0
+    share = b[1] / b.sum() if nb == 2 else 0.0
+    return b.sum() / ((1 - a) * ts), (delay - 1 + share + a / (1 - a)) * ts
+
+
+def run_integrating(loop, seeds, ts=10.0, rows=751, step_size=0.5):
+    """Per seed (rate gain, mean delay) of mpmpp and the reference, the 95 % coverage of the
+    rate gain, the seeds refused and those where the integrating class was chosen."""
+    est, refs, covered, refused, integrating = [], [], [], 0, 0
+    for seed in seeds:
+        df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=True, step_size=step_size)
+        try:
+            r = model_from_data(df, ["OP"], ["PV"])
+        except NotIdentified:
+            refused += 1
+            continue
+        c = r.channels[0]
+        if not c.integrating:
+            continue
+        integrating += 1
+        est.append([c.gain, c.dead_time_s + c.time_constant_s])
+        covered.append(abs(c.gain - loop.gain) <= 1.96 * c.gain_sd)
+        nf = 1 if c.time_constant_s > 0 else 0
+        refs.append(reference_integrating(df["PV"].to_numpy(), df["OP"].to_numpy(), r.outputs[0].noise_order,
+                                          c.delay_samples, c.numerator_length, nf, ts))
+    return np.array(est), np.array(refs), np.array(covered), refused, integrating
+
+
+def integrating_row(label, loop, x, cover=None):
+    if len(x) == 0:
+        return f"{label:<9}" + " (none identified as integrating)"
+    truth = np.array([loop.gain, loop.dead_time_s + loop.time_constant_s])
+    scale = np.array([loop.gain / 100, 1.0])
+    bias = (x.mean(axis=0) - truth) / scale
+    sd = x.std(axis=0, ddof=1) / scale if len(x) > 1 else np.full(2, np.nan)
+    cov = "" if cover is None else f"  {cover.mean():4.2f}"
+    return f"{label:<9}" + "  ".join(f"{b:+7.1f} {s:6.1f}" for b, s in zip(bias, sd)) + cov
+
+
 def run_case(loop, steps, seeds, ts=10.0, rows=751):
-    est, refs, covered, refused, uncertain = [], [], [], 0, 0
+    """Per seed (K, tau, theta) of mpmpp and the reference, their coverage, the seeds refused and
+    flagged uncertain, and for the seeds called integrating their rate gain over the initial slope
+    K / tau (left out of the statistics)."""
+    est, refs, covered, refused, uncertain, slopes = [], [], [], 0, 0, []
     truth = np.array([loop.gain, loop.time_constant_s, loop.dead_time_s])
     for seed in seeds:
         df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=steps)
@@ -55,6 +108,9 @@ def run_case(loop, steps, seeds, ts=10.0, rows=751):
             refused += 1
             continue
         c = r.channels[0]
+        if c.integrating:
+            slopes.append(c.gain / (loop.gain / loop.time_constant_s))
+            continue
         uncertain += c.uncertain
         est.append([c.gain, c.time_constant_s, c.dead_time_s])
         lo = [c.gain - 1.96 * c.gain_sd, c.time_constant_s - 1.96 * c.time_constant_sd, c.dead_time_ci95[0]]
@@ -62,7 +118,7 @@ def run_case(loop, steps, seeds, ts=10.0, rows=751):
         covered.append((np.array(lo) <= truth) & (truth <= np.array(hi)))
         y, u = df["PV"].to_numpy(), df["OP"].to_numpy()
         refs.append(reference_foptd(y, u, r.outputs[0].noise_order, c.delay_samples, c.numerator_length, ts))
-    return truth, np.array(est), np.array(refs), np.array(covered), refused, uncertain
+    return truth, np.array(est), np.array(refs), np.array(covered), refused, uncertain, slopes
 
 
 def row(label, truth, x, cover=None):
@@ -87,17 +143,31 @@ def main(argv=None):
     print(f"{'':<28}{'K bias    sd':>16}  {'tau bias   sd':>14}  {'theta bias  sd':>14}   cover")
     for loop in pi_loop.LOOPS:
         for steps in (False, True):
-            truth, est, refs, cov, refused, uncertain = run_case(loop, steps, seeds)
+            truth, est, refs, cov, refused, uncertain, slopes = run_case(loop, steps, seeds)
             case = f"{loop.name} {'SP steps' if steps else 'routine'} ({len(est)}/{len(seeds)})"
             print(f"{case}  K={truth[0]:g} tau={truth[1]:g} s theta={truth[2]:g} s"
                   + (f", {refused} not identified" if refused else "")
-                  + (f", {uncertain} flagged uncertain" if uncertain else ""))
+                  + (f", {uncertain} flagged uncertain" if uncertain else "")
+                  + (f", {len(slopes)} called integrating (rate gain / (K / tau): "
+                     + ", ".join(f"{x:.2f}" for x in slopes) + ")" if slopes else ""))
             print("  " + row("mpmpp", truth, est, cov))
             print("  " + row("scipy-ref", truth, refs))
             if len(est):
                 print(f"  max |mpmpp - ref|: K {np.max(np.abs(est[:, 0] - refs[:, 0])):.2g}, "
                       f"tau {np.max(np.abs(est[:, 1] - refs[:, 1])):.2g} s, "
                       f"theta {np.max(np.abs(est[:, 2] - refs[:, 2])):.2g} s")
+    print("\nintegrating levels, SP steps of 0.5 %: rate gain K in % of the truth, mean delay theta + tau"
+          " in s; cover: K")
+    print(f"{'':<11}{'K bias    sd':>14}  {'delay bias  sd':>14}  cover")
+    for loop in pi_loop.INTEGRATING_LOOPS:
+        est, refs, cov, refused, integrating = run_integrating(loop, seeds)
+        print(f"{loop.name}  K={loop.gain:g}/s tau={loop.time_constant_s:g} s theta={loop.dead_time_s:g} s:"
+              f" integrating class on {integrating}/{len(seeds)}" + (f", {refused} not identified" if refused else ""))
+        print("  " + integrating_row("mpmpp", loop, est, cov))
+        print("  " + integrating_row("scipy-ref", loop, refs))
+        if len(est):
+            print(f"  max |mpmpp - ref|: K {np.max(np.abs(est[:, 0] - refs[:, 0]) / abs(loop.gain)):.2g} (relative),"
+                  f" delay {np.max(np.abs(est[:, 1] - refs[:, 1])):.2g} s")
 
 
 if __name__ == "__main__":

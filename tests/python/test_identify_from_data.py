@@ -286,3 +286,42 @@ def test_self_regulating_flow_loop_is_not_called_integrating(seed):
     integrator as first order's tau -> infinity limit keeps the first-order class."""
     r = model_from_data(pi_loop.simulate(pi_loop.FLOW, seed=seed), ["OP"], ["PV"])
     assert r.outputs[0].process_class == "first order plus dead time" and not r.channels[0].integrating
+
+
+def test_cli_integrating_level_json_and_forced_class(tmp_path, capsys):
+    data, model = tmp_path / "level.csv", tmp_path / "model.json"
+    io.save_data(data, pi_loop.simulate(pi_loop.TANK, seed=2, setpoint_steps=True, step_size=0.5))
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "-o", str(model), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    ch, = out["channels"]
+    assert ch["integrating"] is True and ch["time_constant_sd"] is None
+    assert out["outputs"][0]["process_class"] == "integrating plus dead time"
+    assert io.load_model(model).process("PV", "OP").den[-1] == pytest.approx(-1.0)
+    # forced to first order, the pole goes to 1 and the gain is lost in its uncertainty
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "-o", str(model), "--force",
+                 "--process", "self-regulating"]) == 2
+    assert "not distinguishable from 0" in capsys.readouterr().err
+
+
+def test_class_choice_prefers_first_order_unless_clearly_beaten_or_at_its_boundary():
+    from types import SimpleNamespace
+
+    from mpmpp.model_identification import CLASS_MARGIN, INTEGRATING, SELF_REGULATING, _ClassFit, _choose_class
+
+    def fit(cls, bic, significant, tau=30.0):
+        c = ChannelSummary("PV", "OP", 1.0, 0.1, tau, 5.0, 10.0, (0.0, 20.0), 2, 1, significant)
+        return _ClassFit(cls, SimpleNamespace(bic=bic), [c])
+
+    record = 7500.0
+    # integrator better, but by less than the margin: first order kept
+    assert _choose_class([fit(SELF_REGULATING, 0.0, True), fit(INTEGRATING, -CLASS_MARGIN + 0.5, True)],
+                         record)[0] is SELF_REGULATING
+    assert _choose_class([fit(SELF_REGULATING, 0.0, True), fit(INTEGRATING, -CLASS_MARGIN - 0.5, True)],
+                         record)[0] is INTEGRATING
+    # first order identifies nothing: the integrator replaces it only at first order's boundary
+    assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=1e5), fit(INTEGRATING, 2.0, True)],
+                         record)[0] is INTEGRATING
+    assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=400.0), fit(INTEGRATING, 2.0, True)],
+                         record)[0] is SELF_REGULATING
+    # forced integrating classes: plain BIC
+    assert _choose_class([fit(INTEGRATING, 1.0, True), fit(INTEGRATING, 0.0, True)], record)[1].bic == 0.0

@@ -13,6 +13,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--name", help="model name (default: from the data file)")
     parser.add_argument("--max-dead-time", type=float, metavar="SECONDS",
                         help="longest dead time searched (default 600, at most a tenth of the record)")
+    parser.add_argument("--process", choices=("auto", "self-regulating", "integrating"), default="auto",
+                        help="model class of every channel: chosen by BIC (auto, the default), first order plus "
+                             "dead time, or integrating (a level: with or without a lag)")
     parser.add_argument("--json", action="store_true", help="print one JSON document on stdout")
 
 
@@ -21,13 +24,14 @@ def run(args) -> int:
     import os
 
     from ..io import load_data
-    from ..model_identification import model_from_data
+    from ..model_identification import CLASSES_BY_NAME, model_from_data
 
     if os.path.exists(args.output) and not args.force:
         raise ValueError(f"{args.output}: exists (add --force to replace it)")
     data = load_data(args.data)
     name = args.name or f"identified from {os.path.basename(args.data)}"
-    result = model_from_data(data, args.inputs, args.outputs, setpoints=args.setpoints, name=name, max_dead_time_s=args.max_dead_time)
+    result = model_from_data(data, args.inputs, args.outputs, setpoints=args.setpoints, name=name, max_dead_time_s=args.max_dead_time,
+                             classes=CLASSES_BY_NAME[args.process])
     result.save(args.output, overwrite=args.force)
     if args.json:
         print(json.dumps({**result.to_dict(), "model": args.output}))

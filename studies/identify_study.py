@@ -12,8 +12,8 @@ and tau, in seconds for theta; "cover" is the share of seeds whose 95 % interval
 truth; seeds refused as "not identified" are counted and left out of the statistics; "flagged
 uncertain" counts identified seeds whose summary warns that the model is loosely determined.
 
-Integrating loops (tank levels, a pure integrator and one behind a 60 s lag, setpoint steps of
-0.5 %): how often the integrating class is chosen, the rate gain's bias and spread in % and the
+Integrating loops (tank levels, a pure integrator and one behind a 60 s lag, routine and with
+setpoint steps of 0.5 %): how often the integrating class is chosen, the rate gain's bias and spread in % and the
 mean delay theta + tau in seconds (what a record of this length determines: a lag the data do
 not resolve shows as dead time); the reference is SciPy's joint fit of the differenced level.
 
@@ -60,12 +60,12 @@ def reference_integrating(y, u, na, delay, nb, nf, ts):
     return b.sum() / ((1 - a) * ts), (delay - 1 + share + a / (1 - a)) * ts
 
 
-def run_integrating(loop, seeds, ts=10.0, rows=751, step_size=0.5):
+def run_integrating(loop, steps, seeds, ts=10.0, rows=751, step_size=0.5):
     """Per seed (rate gain, mean delay) of mpmpp and the reference, the 95 % coverage of the
     rate gain, the seeds refused and those where the integrating class was chosen."""
     est, refs, covered, refused, integrating = [], [], [], 0, 0
     for seed in seeds:
-        df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=True, step_size=step_size)
+        df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=steps, step_size=step_size)
         try:
             r = model_from_data(df, ["OP"], ["PV"])
         except NotIdentified:
@@ -156,18 +156,24 @@ def main(argv=None):
                 print(f"  max |mpmpp - ref|: K {np.max(np.abs(est[:, 0] - refs[:, 0])):.2g}, "
                       f"tau {np.max(np.abs(est[:, 1] - refs[:, 1])):.2g} s, "
                       f"theta {np.max(np.abs(est[:, 2] - refs[:, 2])):.2g} s")
-    print("\nintegrating levels, SP steps of 0.5 %: rate gain K in % of the truth, mean delay theta + tau"
+    print("\nintegrating levels (SP steps of 0.5 %): rate gain K in % of the truth, mean delay theta + tau"
           " in s; cover: K")
     print(f"{'':<11}{'K bias    sd':>14}  {'delay bias  sd':>14}  cover")
     for loop in pi_loop.INTEGRATING_LOOPS:
-        est, refs, cov, refused, integrating = run_integrating(loop, seeds)
-        print(f"{loop.name}  K={loop.gain:g}/s tau={loop.time_constant_s:g} s theta={loop.dead_time_s:g} s:"
-              f" integrating class on {integrating}/{len(seeds)}" + (f", {refused} not identified" if refused else ""))
-        print("  " + integrating_row("mpmpp", loop, est, cov))
-        print("  " + integrating_row("scipy-ref", loop, refs))
-        if len(est):
-            print(f"  max |mpmpp - ref|: K {np.max(np.abs(est[:, 0] - refs[:, 0]) / abs(loop.gain)):.2g} (relative),"
-                  f" delay {np.max(np.abs(est[:, 1] - refs[:, 1])):.2g} s")
+        for steps in (False, True):
+            print_integrating(loop, steps, seeds)
+
+
+def print_integrating(loop, steps, seeds):
+    est, refs, cov, refused, integrating = run_integrating(loop, steps, seeds)
+    print(f"{loop.name} {'SP steps' if steps else 'routine'}  K={loop.gain:g}/s tau={loop.time_constant_s:g} s"
+          f" theta={loop.dead_time_s:g} s: integrating class on {integrating}/{len(seeds)}"
+          + (f", {refused} not identified" if refused else ""))
+    print("  " + integrating_row("mpmpp", loop, est, cov))
+    print("  " + integrating_row("scipy-ref", loop, refs))
+    if len(est):
+        print(f"  max |mpmpp - ref|: K {np.max(np.abs(est[:, 0] - refs[:, 0]) / abs(loop.gain)):.2g} (relative),"
+              f" delay {np.max(np.abs(est[:, 1] - refs[:, 1])):.2g} s")
 
 
 if __name__ == "__main__":

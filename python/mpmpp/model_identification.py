@@ -39,6 +39,8 @@ the sign opposite to the controller's action (the feedback path fitted as the pr
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, fields
 from statistics import NormalDist
 
@@ -185,14 +187,15 @@ class IdentificationResult:
 def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None = None,
                     max_dead_time_s: float | None = None, min_delay: int = 1,
                     na_orders=NA_ORDERS, numerator_lengths=NUMERATOR_LENGTHS,
-                    classes=PROCESS_CLASSES) -> IdentificationResult:
+                    classes=PROCESS_CLASSES, workers: int | None = None) -> IdentificationResult:
     """Identify a model of ``outputs`` from ``inputs`` (column names) in ``data`` (a DataFrame
     with a ``time`` column in seconds, or a data file path). The sample time comes from the time
     column. ``setpoints``: one setpoint column per output (default ``<output>_sp`` where
     present), used only to read the controller's action. ``max_dead_time_s``: longest dead
     time searched (default DEFAULT_MAX_DEAD_TIME_S, at most a tenth of the record).
     ``min_delay`` 0 is refused when the data show feedback from the output to any input.
-    ``classes``: the ProcessClass candidates per output (BIC picks one).
+    ``classes``: the ProcessClass candidates per output (BIC picks one). ``workers``: threads
+    for the search (default: one per core, up to one per noise order; the result is the same).
     Raises ``NotIdentified`` when the data do not identify the loop, ``ValueError`` on bad
     input."""
     from .io import load_data
@@ -232,37 +235,39 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
         raise ValueError(f"max_dead_time_s must be >= 0, got {max_dead_time_s}")
     sp = {o: data[c].to_numpy(dtype=float)[a:b] if c else None for o, c in zip(outputs, setpoints)}
     process, noise, summaries, fits = {}, {}, [], []
-    for i, out in enumerate(outputs):
-        actions = [_controller_action(U[:, j], raw[:, len(inputs) + i], sp[out]) for j in range(len(inputs))]
-        # the sign guard needs the loop's pairing, known only for a single input
-        action = actions[0] if len(inputs) == 1 else 0
-        if min_delay < 1 and any(actions):
-            raise ValueError(f"lag 0 cannot be searched for {out!r}: the data show feedback "
-                             "(the controller reacts to the output within the sample)")
-        z = significance_z(max_delay - max(min_delay, 0) + 1)
-        fitted, count = [], 0
-        for cls in classes:
-            try:
-                best, profile, n_fitted = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay, na_orders,
-                                                  numerator_lengths, max_delay + max(na_orders))
-            except NotIdentified:
-                continue
-            count += n_fitted
-            chans = [_summarise(out, inputs[j], best, j, profile, ts, z, cls) for j in range(len(inputs))]
-            fitted.append(_ClassFit(cls, best, chans))
-        if not fitted:
-            raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
-        cls, best, chans = _choose_class(fitted, n * ts)
-        _check_verdict(out, chans, action)
-        tf, a = _output_domain(best, cls)
-        process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.significant}
-        noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(a), 0)
-        summaries += chans
-        e = _core.prediction_error(tf, noise[out], Y[:, i], U)
-        sim = _core.predict_output(tf, noise[out], Y[:, i], U, 0)
-        fits.append(OutputFit(out, len(best.a), best.bic, float(_core.fit_percent(Y[:, i], Y[:, i] - e)),
-                              float(_core.fit_percent(Y[:, i], sim)), count,
-                              {1: "direct", -1: "reverse", 0: "none"}[action], cls.name))
+    workers = min(os.cpu_count() or 1, len(na_orders)) if workers is None else int(workers)
+    with ThreadPoolExecutor(workers) if workers > 1 else nullcontext() as pool:
+        for i, out in enumerate(outputs):
+            actions = [_controller_action(U[:, j], raw[:, len(inputs) + i], sp[out]) for j in range(len(inputs))]
+            # the sign guard needs the loop's pairing, known only for a single input
+            action = actions[0] if len(inputs) == 1 else 0
+            if min_delay < 1 and any(actions):
+                raise ValueError(f"lag 0 cannot be searched for {out!r}: the data show feedback "
+                                 "(the controller reacts to the output within the sample)")
+            z = significance_z(max_delay - max(min_delay, 0) + 1)
+            fitted, count = [], 0
+            for cls in classes:
+                try:
+                    best, profile, n_fitted = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay, na_orders,
+                                                      numerator_lengths, max_delay + max(na_orders), pool)
+                except NotIdentified:
+                    continue
+                count += n_fitted
+                chans = [_summarise(out, inputs[j], best, j, profile, ts, z, cls) for j in range(len(inputs))]
+                fitted.append(_ClassFit(cls, best, chans))
+            if not fitted:
+                raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
+            cls, best, chans = _choose_class(fitted, n * ts)
+            _check_verdict(out, chans, action)
+            tf, a = _output_domain(best, cls)
+            process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.significant}
+            noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(a), 0)
+            summaries += chans
+            e = _core.prediction_error(tf, noise[out], Y[:, i], U)
+            sim = _core.predict_output(tf, noise[out], Y[:, i], U, 0)
+            fits.append(OutputFit(out, len(best.a), best.bic, float(_core.fit_percent(Y[:, i], Y[:, i] - e)),
+                                  float(_core.fit_percent(Y[:, i], sim)), count,
+                                  {1: "direct", -1: "reverse", 0: "none"}[action], cls.name))
     model = _core.Model(name or "identified from data", ts, inputs, outputs, process, noise)
     return IdentificationResult(model, ts, n, len(data) - n, summaries, fits)
 
@@ -326,38 +331,47 @@ def _differenced(y: np.ndarray) -> np.ndarray:
     return dy - dy.mean()
 
 
-def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_lengths, t0):
-    """Coordinate search over each channel's (delay, numerator length) by ARX-OE for every na,
-    in cls's domain (y differenced for an integrating output).
-    The best of each na is refined to the joint fit (``_refine``) and the BIC-best na kept; at
-    that na every candidate not clearly worse (PRUNE) is refined too, and the BIC-best refined
-    candidate returned with the profile {(channel, dead time in samples): refined cost, inf for
-    pruned ones} and the number of candidates fitted."""
+def _sweep(y, U, cls: ProcessClass, na, min_delay, max_delay, numerator_lengths, t0):
+    """Coordinate search at noise order na over each channel's (delay, numerator length) by
+    ARX-OE: (the BIC-best candidate refined to the joint fit, or None when none could be fitted;
+    every candidate fitted as (channel, candidate); the number of fits)."""
+    m = U.shape[1]
+    delays, nb = [min_delay] * m, [1] * m
+    current, tried, count = None, [], 0
+    for _round in range(1 if m == 1 else 2):
+        for j in range(m):
+            for d in range(min_delay, max_delay + 1):
+                for k in numerator_lengths:
+                    trial_d, trial_nb = list(delays), list(nb)
+                    trial_d[j], trial_nb[j] = d, k
+                    c = _fit(y, U, na, trial_d, trial_nb, cls, t0)
+                    count += 1
+                    if c is None:
+                        continue
+                    tried.append((j, c))
+                    if current is None or c.bic < current.bic:
+                        current = c
+            if current is not None:
+                delays, nb = list(current.delays), list(current.nb)
+    return (None if current is None else _refine(y, U, current, cls, t0)), tried, count
+
+
+def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_lengths, t0, pool=None):
+    """``_sweep`` for every na, in cls's domain (y differenced for an integrating output), on
+    ``pool``'s threads when given (the ARX-OE fits release the GIL; each sweep is independent, so
+    the result does not depend on the threads). The BIC-best na is kept; at that na every
+    candidate not clearly worse (PRUNE) is refined too, and the BIC-best refined candidate
+    returned with the profile {(channel, dead time in samples): refined cost, inf for pruned ones}
+    and the number of candidates fitted."""
     m = U.shape[1]
     if cls.integrating:
         # mean removed: a constant inflow imbalance (OP's mean is not the balancing flow)
         y = _differenced(y)
-    finalists, tried, count = [], {}, 0
-    for na in na_orders:
-        delays, nb = [min_delay] * m, [1] * m
-        current, tried[na] = None, []
-        for _sweep in range(1 if m == 1 else 2):
-            for j in range(m):
-                for d in range(min_delay, max_delay + 1):
-                    for k in numerator_lengths:
-                        trial_d, trial_nb = list(delays), list(nb)
-                        trial_d[j], trial_nb[j] = d, k
-                        c = _fit(y, U, na, trial_d, trial_nb, cls, t0)
-                        count += 1
-                        if c is None:
-                            continue
-                        tried[na].append((j, c))
-                        if current is None or c.bic < current.bic:
-                            current = c
-                if current is not None:
-                    delays, nb = list(current.delays), list(current.nb)
-        if current is not None:
-            finalists.append(_refine(y, U, current, cls, t0))
+    sweeps = list((pool.map if pool else map)(
+        lambda na: _sweep(y, U, cls, na, min_delay, max_delay, numerator_lengths, t0), na_orders))
+    finalists = [s[0] for s in sweeps if s[0] is not None]
+    tried = {na: s[1] for na, s in zip(na_orders, sweeps)}
+    count = sum(s[2] for s in sweeps)
     if not finalists:
         raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
     best = min(finalists, key=lambda c: c.bic)

@@ -325,3 +325,10 @@ def test_class_choice_prefers_first_order_unless_clearly_beaten_or_at_its_bounda
                          record)[0] is SELF_REGULATING
     # forced integrating classes: plain BIC
     assert _choose_class([fit(INTEGRATING, 1.0, True), fit(INTEGRATING, 0.0, True)], record)[1].bic == 0.0
+
+
+def test_threads_do_not_change_the_result():
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=5, setpoint_steps=True)
+    one = model_from_data(df, ["OP"], ["PV"], workers=1).to_dict()
+    three = model_from_data(df, ["OP"], ["PV"], workers=3).to_dict()
+    assert one == three

@@ -1,0 +1,81 @@
+"""Speed of ``mpmpp identify`` (model_from_data).
+
+Cases:
+  search, threads   the whole search (every process class, noise order, dead time and numerator
+                    length) on one thread against ``--workers`` threads, wall time: the sweeps
+                    per noise order are independent and their ARX-OE fits release the GIL
+  one candidate     one structure's joint prediction-error fit (ARX-OE start, then the
+                    alternating refinement) against SciPy's least_squares on the same criterion
+                    from its own ARX-OE (tests/python/identification_reference.pem_ar_noise),
+                    CPU time
+Records: a 751-row PI pressure loop with setpoint steps (tests/python/pi_loop.py, 2 h at 10 s)
+and the example siso_gain_change (5 s, 16 h).
+Run: PYTHONPATH=python python bench/bench_identify.py [--repeat R] [--workers W]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import sys
+import time
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "python"))
+sys.path.insert(0, str(ROOT / "bench"))
+
+import identification_reference as ref  # noqa: E402
+import pi_loop  # noqa: E402
+from timing import best_of  # noqa: E402
+
+import mpmpp.model_identification as mi  # noqa: E402
+from mpmpp.io import load_data  # noqa: E402
+
+
+def records():
+    yield "PI loop, 751 rows", pi_loop.simulate(pi_loop.PRESSURE, 4, setpoint_steps=True), "OP", "PV"
+    example = ROOT / "examples" / "siso_gain_change"
+    yield "siso_gain_change", load_data(example / "data.csv"), "stock_flow", "dry_weight"
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=1)
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args(argv)
+    print(f"{os.cpu_count()} cores seen; least of {args.repeat} run(s)")
+    for label, df, u, y in records():
+        one, r1 = best_of(lambda: mi.model_from_data(df, [u], [y], workers=1), args.repeat)
+        many, rw = best_of(lambda: mi.model_from_data(df, [u], [y], workers=args.workers), args.repeat)
+        assert r1.to_dict() == rw.to_dict()
+        print(f"search, threads  {label} ({len(df)} rows, {r1.outputs[0].candidates} candidates): "
+              f"1 thread {one:.2f} s, {args.workers} threads {many:.2f} s, ratio {one / many:.2f}")
+        c = r1.channels[0]
+        if c.integrating:
+            continue
+        yv = df[y].to_numpy(dtype=float)
+        uv = df[u].to_numpy(dtype=float)
+        yd, ud = yv - yv.mean(), (uv - uv.mean())[:, None]
+        na, t0 = r1.outputs[0].noise_order, 1 + max(mi.NA_ORDERS)
+
+        def ours():
+            c0 = mi._fit(yd, ud, na, [c.delay_samples], [c.numerator_length], mi.SELF_REGULATING, t0)
+            return mi._refine(yd, ud, c0, mi.SELF_REGULATING, t0)
+
+        def scipy_peer():
+            return ref.pem_ar_noise(yv, uv, na, c.numerator_length, c.delay_samples)
+
+        t_ours, fit = best_of(ours, 3 * args.repeat, clock=time.process_time)
+        t_ref, (b, _, _) = best_of(scipy_peer, 3 * args.repeat, clock=time.process_time)
+        assert np.allclose(np.asarray(fit.tf[0].num), b, rtol=1e-4, atol=1e-8)
+        print(f"one candidate    {label}: mpmpp {t_ours * 1e3:.1f} ms, SciPy {t_ref * 1e3:.1f} ms CPU, "
+              f"ratio {t_ref / t_ours:.1f}")
+
+
+if __name__ == "__main__":
+    main()

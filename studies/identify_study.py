@@ -62,8 +62,9 @@ def reference_integrating(y, u, na, delay, nb, nf, ts):
 
 def run_integrating(loop, steps, seeds, ts=10.0, rows=751, step_size=0.5):
     """Per seed (rate gain, mean delay) of mpmpp and the reference, the 95 % coverage of the
-    rate gain, the seeds refused and those where the integrating class was chosen."""
-    est, refs, covered, refused, integrating = [], [], [], 0, 0
+    rate gain, the seeds refused, those where an integrating class was chosen and those where it
+    was the one with a lag."""
+    est, refs, covered, refused, integrating, lagged = [], [], [], 0, 0, 0
     for seed in seeds:
         df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=steps, step_size=step_size)
         try:
@@ -75,12 +76,13 @@ def run_integrating(loop, steps, seeds, ts=10.0, rows=751, step_size=0.5):
         if not c.integrating:
             continue
         integrating += 1
+        lagged += c.time_constant_s > 0
         est.append([c.gain, c.dead_time_s + c.time_constant_s])
         covered.append(abs(c.gain - loop.gain) <= 1.96 * c.gain_sd)
         nf = 1 if c.time_constant_s > 0 else 0
         refs.append(reference_integrating(df["PV"].to_numpy(), df["OP"].to_numpy(), r.outputs[0].noise_order,
                                           c.delay_samples, c.numerator_length, nf, ts))
-    return np.array(est), np.array(refs), np.array(covered), refused, integrating
+    return np.array(est), np.array(refs), np.array(covered), refused, integrating, lagged
 
 
 def integrating_row(label, loop, x, cover=None):
@@ -136,9 +138,21 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--first-seed", type=int, default=1)
+    parser.add_argument("--integrating-only", action="store_true", help="only the integrating levels")
     args = parser.parse_args(argv)
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     print(f"PI loops, 751 rows at 10 s (2.1 h), seeds {seeds.start}..{seeds.stop - 1}")
+    if not args.integrating_only:
+        print_self_regulating(seeds)
+    print("\nintegrating levels (routine; SP steps of 0.5 %): rate gain K in % of the truth, mean delay theta + tau"
+          " in s; cover: K")
+    print(f"{'':<11}{'K bias    sd':>14}  {'delay bias  sd':>14}  cover")
+    for loop in pi_loop.INTEGRATING_LOOPS:
+        for steps in (False, True):
+            print_integrating(loop, steps, seeds)
+
+
+def print_self_regulating(seeds):
     print("bias / spread: K and tau in % of the truth, theta in s; cover: K tau theta 95 % coverage")
     print(f"{'':<28}{'K bias    sd':>16}  {'tau bias   sd':>14}  {'theta bias  sd':>14}   cover")
     for loop in pi_loop.LOOPS:
@@ -156,18 +170,13 @@ def main(argv=None):
                 print(f"  max |mpmpp - ref|: K {np.max(np.abs(est[:, 0] - refs[:, 0])):.2g}, "
                       f"tau {np.max(np.abs(est[:, 1] - refs[:, 1])):.2g} s, "
                       f"theta {np.max(np.abs(est[:, 2] - refs[:, 2])):.2g} s")
-    print("\nintegrating levels (SP steps of 0.5 %): rate gain K in % of the truth, mean delay theta + tau"
-          " in s; cover: K")
-    print(f"{'':<11}{'K bias    sd':>14}  {'delay bias  sd':>14}  cover")
-    for loop in pi_loop.INTEGRATING_LOOPS:
-        for steps in (False, True):
-            print_integrating(loop, steps, seeds)
 
 
 def print_integrating(loop, steps, seeds):
-    est, refs, cov, refused, integrating = run_integrating(loop, steps, seeds)
+    est, refs, cov, refused, integrating, lagged = run_integrating(loop, steps, seeds)
     print(f"{loop.name} {'SP steps' if steps else 'routine'}  K={loop.gain:g}/s tau={loop.time_constant_s:g} s"
           f" theta={loop.dead_time_s:g} s: integrating class on {integrating}/{len(seeds)}"
+          f" ({lagged} with a lag)"
           + (f", {refused} not identified" if refused else ""))
     print("  " + integrating_row("mpmpp", loop, est, cov))
     print("  " + integrating_row("scipy-ref", loop, refs))

@@ -258,7 +258,10 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
             if not fitted:
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
             cls, best, chans = _choose_class(fitted, n * ts)
-            _check_verdict(out, chans, action)
+            try:
+                _check_verdict(out, chans, action)
+            except NotIdentified as refusal:
+                raise NotIdentified(str(refusal) + _integrating_alternative(fitted, cls)) from None
             tf, a = _output_domain(best, cls)
             process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.significant}
             noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(a), 0)
@@ -285,21 +288,38 @@ class _ClassFit:
 
 def _choose_class(fitted: list[_ClassFit], duration_s: float):
     """(class, candidate, channel summaries) of the BIC-best class, except that first order plus
-    dead time (the default, fitted first) gives way only to a BIC better by CLASS_MARGIN, and
-    when it identifies nothing because it ran to its integrating boundary (every time constant
-    longer than the record: no settling seen, the gain lost in the trade-off with tau) the best
-    other class takes its place. Without excitation a PI loop's one-step errors hardly tell the
-    classes apart (the noise model absorbs the difference: routine data of a flow loop fit an
-    integrator with theta = 0 within a BIC of 3 on 3 of 20 seeds)."""
+    dead time (the default, fitted first) gives way to another class only by a BIC better by
+    CLASS_MARGIN when it identifies something; when it identifies nothing, the best identified
+    other class takes its place if its BIC is lower, or if first order ran to its integrating
+    boundary (every time constant longer than the record: no settling seen, the gain lost in the
+    trade-off with tau). Without excitation a PI loop's one-step errors hardly tell the classes
+    apart (the noise model absorbs the difference: routine data of a flow loop fit an integrator
+    with theta = 0 within a BIC of 3 on 3 of 20 seeds)."""
     default, best = fitted[0], min(fitted, key=lambda f: f.best.bic)
-    if default.cls is SELF_REGULATING:
-        others = [f for f in fitted[1:] if f.identified]
-        at_boundary = not default.identified and all(c.time_constant_s > duration_s for c in default.channels)
-        if best is not default and default.identified and best.best.bic > default.best.bic - CLASS_MARGIN:
+    if default.cls is not SELF_REGULATING:
+        return best.cls, best.best, best.channels
+    if default.identified:
+        if best is not default and best.best.bic > default.best.bic - CLASS_MARGIN:
             best = default
-        elif best is default and at_boundary and others:
+    else:
+        others = [f for f in fitted[1:] if f.identified]
+        at_boundary = all(c.time_constant_s > duration_s for c in default.channels)
+        if others and (at_boundary or min(f.best.bic for f in others) < default.best.bic):
             best = min(others, key=lambda f: f.best.bic)
     return best.cls, best.best, best.channels
+
+
+def _integrating_alternative(fitted: list[_ClassFit], chosen: ProcessClass) -> str:
+    """For a refusal: what an identified integrating class would say, when the data leave the
+    class open (a slow lag and an integrator look alike in a short closed-loop record)."""
+    others = [f for f in fitted if f.cls.integrating and f.cls is not chosen and f.identified]
+    if chosen.integrating or not others:
+        return ""
+    chans = [c for c in min(others, key=lambda f: f.best.bic).channels if c.significant]
+    return ("; as an integrating process: "
+            + ", ".join(f"rate gain {c.gain:.3g} +- {c.gain_sd:.2g} per s from {c.input!r}, dead time "
+                        f"{c.dead_time_s:.3g} s" for c in chans)
+            + " (--process integrating writes that model)")
 
 
 @dataclass

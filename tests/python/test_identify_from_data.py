@@ -332,3 +332,36 @@ def test_threads_do_not_change_the_result():
     one = model_from_data(df, ["OP"], ["PV"], workers=1).to_dict()
     three = model_from_data(df, ["OP"], ["PV"], workers=3).to_dict()
     assert one == three
+
+
+def _cpp_level_loop(seed, n=1500):
+    """A level (0.05 PV units per s per % OP, 3 samples' delay at 1 s) under PI control in the
+    project's C++ closed-loop simulator, setpoint steps every 200 s and an integrated AR(1)
+    inflow disturbance: a generator independent of pi_loop."""
+    import pandas as pd
+    import scipy.signal as ss
+
+    from mpmpp.stiction.loop import Process, simulate_pi_loop
+
+    rng = np.random.default_rng(seed)
+    disturbance = np.cumsum(ss.lfilter([1.0], [1.0, -0.7], 0.01 * rng.standard_normal(n)))
+    sp = np.where((np.arange(n) // 200) % 2 == 1, 1.0, 0.0)
+    r = simulate_pi_loop(Process(b=(0.05,), a=(1.0, -1.0), delay=3), 2.0, 40.0, n,
+                         disturbance=disturbance, setpoint=sp)
+    return pd.DataFrame(dict(time=np.arange(n) * 1.0, OP=r["op"], PV=r["pv"], PV_sp=r["sp"]))
+
+
+@pytest.mark.parametrize("seed", [2, 3, 4])
+def test_level_from_the_cpp_simulator_is_integrating_with_its_rate_gain(seed):
+    r = model_from_data(_cpp_level_loop(seed), ["OP"], ["PV"], max_dead_time_s=40)
+    c, = r.channels
+    assert c.integrating and c.time_constant_s == 0.0
+    assert abs(c.gain - 0.05) < 4 * c.gain_sd
+    assert c.dead_time_s == pytest.approx(2.0, abs=0.1)   # q^-3 at 1 s: 2 s after the hold
+
+
+def test_refusal_names_the_integrating_reading_when_the_class_is_open():
+    """Seed 1: a first-order fit with a 200 s lag scores better than the integrator but its gain is
+    not determined; the refusal says what the integrating class reads."""
+    with pytest.raises(NotIdentified, match=r"as an integrating process: rate gain 0\.05.* per s from 'OP'"):
+        model_from_data(_cpp_level_loop(1), ["OP"], ["PV"], max_dead_time_s=40)

@@ -365,3 +365,14 @@ def test_refusal_names_the_integrating_reading_when_the_class_is_open():
     not determined; the refusal says what the integrating class reads."""
     with pytest.raises(NotIdentified, match=r"as an integrating process: rate gain 0\.05.* per s from 'OP'"):
         model_from_data(_cpp_level_loop(1), ["OP"], ["PV"], max_dead_time_s=40)
+
+
+def test_identified_level_model_goes_through_diagnose(tmp_path, capsys):
+    """identify then diagnose on a 751-row level record: the integrating channel (pole at 1) is a
+    normal input for diagnose, and the right model gives no finding."""
+    data, model = tmp_path / "level.csv", tmp_path / "model.json"
+    io.save_data(data, pi_loop.simulate(pi_loop.TANK, seed=3, setpoint_steps=True, step_size=0.5))
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "-o", str(model)]) == 0
+    capsys.readouterr()
+    assert main(["diagnose", str(model), str(data)]) == 0
+    assert "no finding" in capsys.readouterr().out

@@ -186,9 +186,11 @@ class ShapeResponses:
 
 
 def first_order_with_time_constant(g: TransferFunction, factor: float) -> TransferFunction | None:
-    """g with every real pole p moved to p^(1/factor) (time constant times factor), DC gain kept."""
+    """g with every real pole p moved to p^(1/factor) (time constant times factor), DC gain kept;
+    None without such poles or with a pole at 1 (an integrator has no time constant to scale)."""
     poles = g.poles()
-    if len(poles) == 0 or np.any(np.abs(poles.imag) > 1e-9) or np.any(poles.real <= 0):
+    if (len(poles) == 0 or np.any(np.abs(poles.imag) > 1e-9) or np.any(poles.real <= 0)
+            or np.any(poles.real >= 1.0 - 1e-12)):
         return None
     new_den = np.real(np.poly(poles.real ** (1.0 / factor)))
     scale = g.dc_gain() * new_den.sum() / g.num.sum()

@@ -247,6 +247,8 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
             z = significance_z(max_delay - max(min_delay, 0) + 1)
             fitted, count = [], 0
             for cls in classes:
+                if cls is INTEGRATING_LAG and not _lag_worth_searching(fitted):
+                    continue
                 try:
                     best, profile, n_fitted = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay, na_orders,
                                                       numerator_lengths, max_delay + max(na_orders), pool)
@@ -307,6 +309,15 @@ def _choose_class(fitted: list[_ClassFit], duration_s: float):
         if others and (at_boundary or min(f.best.bic for f in others) < default.best.bic):
             best = min(others, key=lambda f: f.best.bic)
     return best.cls, best.best, best.channels
+
+
+def _lag_worth_searching(fitted: list[_ClassFit]) -> bool:
+    """Whether to search the integrator with a lag: not when the pure integrator trails first order
+    by more than PRUNE. First order reaches the pure integrator as tau -> infinity, and neither
+    has a second lag, so a lagged integrator leaves the two close; a wide gap says the output
+    settles, which a lag on an integrator cannot make up."""
+    bic = {f.cls: f.best.bic for f in fitted}
+    return not (SELF_REGULATING in bic and INTEGRATING in bic and bic[INTEGRATING] > bic[SELF_REGULATING] + PRUNE)
 
 
 def _integrating_alternative(fitted: list[_ClassFit], chosen: ProcessClass) -> str:

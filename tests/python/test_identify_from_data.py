@@ -376,3 +376,16 @@ def test_identified_level_model_goes_through_diagnose(tmp_path, capsys):
     capsys.readouterr()
     assert main(["diagnose", str(model), str(data)]) == 0
     assert "no finding" in capsys.readouterr().out
+
+
+def test_lag_class_is_skipped_only_when_the_output_clearly_settles():
+    from types import SimpleNamespace
+
+    from mpmpp.model_identification import PRUNE, INTEGRATING, SELF_REGULATING, _ClassFit, _lag_worth_searching
+
+    def fit(cls, bic):
+        return _ClassFit(cls, SimpleNamespace(bic=bic), [])
+
+    assert _lag_worth_searching([fit(SELF_REGULATING, 0.0), fit(INTEGRATING, PRUNE - 1.0)])
+    assert not _lag_worth_searching([fit(SELF_REGULATING, 0.0), fit(INTEGRATING, PRUNE + 1.0)])
+    assert _lag_worth_searching([fit(INTEGRATING, 5.0)])  # forced integrating classes

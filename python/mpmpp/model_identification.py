@@ -23,7 +23,9 @@ controller, with the sign of the gain flipped) instead of the process.
 Selection: BIC on the one-step prediction errors A (y - G u) over one common sample range. BIC
 rather than a held-out fit because a historian export is short (a 2 h export at 10 s is 751
 rows) and halving it for validation doubles the spread of every estimate, and because the
-candidates are nested low orders, where BIC is consistent.
+candidates are nested low orders, where BIC is consistent. A channel counts K, theta and tau
+whatever its numerator length (the dead time is continuous), and first order stays the class
+unless an integrating one wins clearly (``_choose_class``).
 
 Uncertainty: K and tau by the delta method on the joint covariance of G's and H's parameters
 (under feedback they are correlated: the OE covariance, H held fixed, understates the spread of

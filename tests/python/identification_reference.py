@@ -264,14 +264,16 @@ def pem_ar_noise(y, u, na, nb, delay, detrend="constant", nf=1):
 
 
 def pem_ar_noise_covariance(y, u, na, nb, delay, b, f, a, detrend="constant"):
-    """sigma^2 (J'J)^-1 of [b, f_1, a_1..a_na] with J the finite-difference Jacobian of the
-    pem_ar_noise residual (scipy.optimize's approx_fprime-style central differences)."""
+    """sigma^2 (J'J)^-1 of [b, f_1..f_nf, a_1..a_na] (nf = len(f) - 1, 0 or 1) with J the
+    finite-difference Jacobian of the pem_ar_noise residual (scipy.optimize's approx_fprime-style
+    central differences)."""
     y = ss.detrend(y, type=detrend)
     u = ss.detrend(u, type=detrend)
+    nf = len(f) - 1
 
     def residual(x):
-        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], [1.0, x[nb]], u)
-        return ss.lfilter(np.r_[1.0, x[nb + 1:]], [1.0], v)[na:]
+        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], np.r_[1.0, x[nb:nb + nf]], u)
+        return ss.lfilter(np.r_[1.0, x[nb + nf:]], [1.0], v)[na:]
 
     x0 = np.r_[b, f[1:], a[1:]]
     J = np.column_stack([(residual(x0 + h) - residual(x0 - h)) / (2 * h[i])

@@ -389,3 +389,20 @@ def test_lag_class_is_skipped_only_when_the_output_clearly_settles():
     assert _lag_worth_searching([fit(SELF_REGULATING, 0.0), fit(INTEGRATING, PRUNE - 1.0)])
     assert not _lag_worth_searching([fit(SELF_REGULATING, 0.0), fit(INTEGRATING, PRUNE + 1.0)])
     assert _lag_worth_searching([fit(INTEGRATING, 5.0)])  # forced integrating classes
+
+
+def test_joint_covariance_of_an_integrating_channel_is_the_finite_difference_one():
+    """The pure integrator's differenced fit (FIR channel, no denominator parameter)."""
+    import mpmpp.model_identification as mi
+
+    df = pi_loop.simulate(pi_loop.TANK, seed=4, setpoint_steps=True, step_size=0.5)
+    dy = mi._differenced(df["PV"].to_numpy() - df["PV"].mean())
+    U = df[["OP"]].to_numpy() - df["OP"].mean()
+    cls = mi.INTEGRATING
+    c = mi._refine(dy, U, mi._fit(dy, U, 2, [2], [2], cls, 60), cls, 60)
+    cov = mi._joint_covariance(dy, U, c)
+    g = c.tf[0]
+    expected = ref.pem_ar_noise_covariance(dy, df["OP"].to_numpy(), 2, 2, 2, np.asarray(g.num), np.ones(1),
+                                           np.r_[1.0, c.a])
+    assert cov.shape == (4, 4)
+    assert np.allclose(cov, expected, rtol=1e-4, atol=1e-9 * np.abs(expected).max())

@@ -205,6 +205,9 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     if not hasattr(data, "columns"):
         data = load_data(data)
     inputs, outputs = _names(inputs, "inputs"), _names(outputs, "outputs")
+    classes = tuple(classes)
+    if not classes or not all(isinstance(c, ProcessClass) for c in classes):
+        raise ValueError(f"classes: give one or more ProcessClass (e.g. PROCESS_CLASSES), got {classes!r}")
     both = set(inputs) & set(outputs)
     if both:
         raise ValueError(f"column(s) {sorted(both)} given as both input and output")

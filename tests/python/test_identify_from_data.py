@@ -406,3 +406,8 @@ def test_joint_covariance_of_an_integrating_channel_is_the_finite_difference_one
                                            np.r_[1.0, c.a])
     assert cov.shape == (4, 4)
     assert np.allclose(cov, expected, rtol=1e-4, atol=1e-9 * np.abs(expected).max())
+
+
+def test_no_process_class_is_a_value_error():
+    with pytest.raises(ValueError, match="classes: give one or more ProcessClass"):
+        model_from_data(pi_loop.simulate(pi_loop.FLOW, seed=1, rows=200), ["OP"], ["PV"], classes=())

@@ -12,8 +12,8 @@ and tau, in seconds for theta; "cover" is the share of seeds whose 95 % interval
 truth; seeds refused as "not identified" are counted and left out of the statistics; "flagged
 uncertain" counts identified seeds whose summary warns that the model is loosely determined.
 
-Integrating loops (tank levels, a pure integrator and one behind a 60 s lag, routine and with
-setpoint steps of 0.5 %): how often the integrating class is chosen, the rate gain's bias and spread in % and the
+Integrating loops (tank levels: a pure integrator and one behind a 60 s lag with an inflow
+disturbance, a pure integrator with transmitter noise; routine and with setpoint steps of 0.5 %): how often the integrating class is chosen, the rate gain's bias and spread in % and the
 mean delay theta + tau in seconds (what a record of this length determines: a lag the data do
 not resolve shows as dead time); the reference is SciPy's joint fit of the differenced level.
 
@@ -49,12 +49,16 @@ def reference_foptd(y, u, na, delay, nb, ts):
     return gain, tau, (delay - 1 + frac) * ts
 
 
-def reference_integrating(y, u, na, delay, nb, nf, ts):
-    """SciPy's joint prediction-error fit of the differenced level (mean removed), then the rate
+def reference_integrating(y, u, na, delay, nb, nf, ts, noise_integrates=True):
+    """SciPy's joint prediction-error fit of the differenced level (mean removed), or of the level
+    against the integrated input when the disturbance does not integrate, then the rate
     gain K and the mean delay theta + tau: the first moment of q^-d (b0 + b1 q^-1) / (1 - a q^-1)
     in samples is (theta + tau) / Ts + 1."""
-    dy = np.r_[0.0, np.diff(y - y.mean())]
-    b, f, _ = ref.pem_ar_noise(dy - dy.mean(), u, na, nb, delay, nf=nf)
+    if noise_integrates:
+        dy = np.r_[0.0, np.diff(y - y.mean())]
+        b, f, _ = ref.pem_ar_noise(dy - dy.mean(), u, na, nb, delay, nf=nf)
+    else:  # the output against the integrated input
+        b, f, _ = ref.pem_ar_noise(y, np.cumsum(u - u.mean()), na, nb, delay, nf=nf)
     a = -f[1] if nf else 0.0
     share = b[1] / b.sum() if nb == 2 else 0.0
     return b.sum() / ((1 - a) * ts), (delay - 1 + share + a / (1 - a)) * ts
@@ -81,7 +85,8 @@ def run_integrating(loop, steps, seeds, ts=10.0, rows=751, step_size=0.5):
         covered.append(abs(c.gain - loop.gain) <= 1.96 * c.gain_sd)
         nf = 1 if c.time_constant_s > 0 else 0
         refs.append(reference_integrating(df["PV"].to_numpy(), df["OP"].to_numpy(), r.outputs[0].noise_order,
-                                          c.delay_samples, c.numerator_length, nf, ts))
+                                          c.delay_samples, c.numerator_length, nf, ts,
+                                          "disturbance at the output" not in r.outputs[0].process_class))
     return np.array(est), np.array(refs), np.array(covered), refused, integrating, lagged
 
 

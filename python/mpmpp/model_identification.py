@@ -75,19 +75,27 @@ class ProcessClass:
     boundary of: K e^(-theta s) / s is K tau e^(-theta s) / (tau s + 1) as tau -> infinity, so
     it has first order plus dead time's three (the limit is not a simpler model: on routine
     closed-loop data a flow loop's one-step errors fit both equally, and two parameters made the
-    integrator win there); with a lag it is the limit of two lags, four."""
+    integrator win there); with a lag it is the limit of two lags, four.
+
+    An integrating output's disturbance either integrates too (an unmeasured inflow: H = 1 /
+    (A (1 - q^-1)), fitted on the differenced output) or does not (transmitter noise, waves on the
+    surface: H = 1 / A, fitted on the output with the input integrated, y = G' (u / (1 - q^-1)));
+    ``noise_integrates`` says which."""
     name: str
     integrating: bool
     nf: int
     parameters: int
+    noise_integrates: bool = True
 
 
 SELF_REGULATING = ProcessClass("first order plus dead time", False, 1, 3)
 INTEGRATING = ProcessClass("integrating plus dead time", True, 0, 3)
 INTEGRATING_LAG = ProcessClass("integrating with first-order lag plus dead time", True, 1, 4)
-PROCESS_CLASSES = (SELF_REGULATING, INTEGRATING, INTEGRATING_LAG)
+INTEGRATING_OUTPUT_NOISE = ProcessClass("integrating plus dead time, disturbance at the output", True, 0, 3,
+                                        noise_integrates=False)
+PROCESS_CLASSES = (SELF_REGULATING, INTEGRATING, INTEGRATING_LAG, INTEGRATING_OUTPUT_NOISE)
 CLASSES_BY_NAME = {"auto": PROCESS_CLASSES, "self-regulating": (SELF_REGULATING,),
-                   "integrating": (INTEGRATING, INTEGRATING_LAG)}
+                   "integrating": (INTEGRATING, INTEGRATING_LAG, INTEGRATING_OUTPUT_NOISE)}
 
 
 class NotIdentified(ValueError):
@@ -358,7 +366,14 @@ def _output_domain(c: _Candidate, cls: ProcessClass):
     if not cls.integrating:
         return list(c.tf), np.r_[1.0, c.a]
     return ([_core.TransferFunction(np.asarray(g.num), np.convolve(g.den, [1.0, -1.0]), g.delay) for g in c.tf],
-            np.convolve(np.r_[1.0, c.a], [1.0, -1.0]))
+            np.convolve(np.r_[1.0, c.a], [1.0, -1.0]) if cls.noise_integrates else np.r_[1.0, c.a])
+
+
+def _integrated(U: np.ndarray) -> np.ndarray:
+    """u / (1 - q^-1) per input (running sums of the deviations from the mean), mean removed: the
+    level the inflows alone would give, around y's mean."""
+    s = np.cumsum(U, axis=0)
+    return s - s.mean(axis=0)
 
 
 def _differenced(y: np.ndarray) -> np.ndarray:
@@ -400,9 +415,11 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
     returned with the profile {(channel, dead time in samples): refined cost, inf for pruned ones}
     and the number of candidates fitted."""
     m = U.shape[1]
-    if cls.integrating:
+    if cls.integrating and cls.noise_integrates:
         # mean removed: a constant inflow imbalance (OP's mean is not the balancing flow)
         y = _differenced(y)
+    elif cls.integrating:
+        U = _integrated(U)
     sweeps = list((pool.map if pool else map)(
         lambda na: _sweep(y, U, cls, na, min_delay, max_delay, numerator_lengths, t0), na_orders))
     finalists = [s[0] for s in sweeps if s[0] is not None]

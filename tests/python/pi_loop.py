@@ -7,7 +7,8 @@ on the same sample's PV (OP(t) reacts to PV(t): the feedback that makes lag 0 mi
 OP clipped to its range. Integrating loops (a level): process K e^(-theta s) / (s (tau s + 1))
 (K the rate gain, PV units per s per OP unit; tau 0 for a pure integrator), simulated exactly on
 a sub-grid of the sample time, and an unmeasured inflow disturbance,
-v = sigma / ((1 - q^-1) (1 - c q^-1)) e. Written from the equations, independent of mpmpp's C++
+v = sigma / ((1 - q^-1) (1 - c q^-1)) e, or (``inflow_disturbance`` false) the stationary one
+above, as transmitter noise or a wavy surface gives. Written from the equations, independent of mpmpp's C++
 simulator.
 """
 from __future__ import annotations
@@ -28,6 +29,7 @@ class Loop:
     noise_pole: float        # c in v = sigma / (1 - c q^-1) e
     op_span: tuple = (0.0, 100.0)
     integrating: bool = False
+    inflow_disturbance: bool = True  # integrating loops: the disturbance integrates too
 
     def pi_tuning(self, ts: float) -> tuple[float, float]:
         """IMC / lambda tuning (kc = tau / (K (lambda + theta)), Ti = tau), lambda = max(tau, 2 Ts):
@@ -54,7 +56,9 @@ LOOPS = (FLOW, LEVEL, PRESSURE)
 # (a level fed through a vessel or a slow valve).
 TANK = Loop("tank level", 0.004, 0.0, 15.0, 0.01, 0.8, integrating=True)
 TANK_LAG = Loop("tank level, lag", 0.004, 60.0, 25.0, 0.01, 0.8, integrating=True)
-INTEGRATING_LOOPS = (TANK, TANK_LAG)
+TANK_NOISY = Loop("tank level, transmitter noise", 0.004, 0.0, 15.0, 0.1, 0.8, integrating=True,
+                  inflow_disturbance=False)
+INTEGRATING_LOOPS = (TANK, TANK_LAG, TANK_NOISY)
 
 
 def foptd_coefficients(loop: Loop, ts: float):
@@ -77,7 +81,7 @@ def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_
     v = np.zeros(n)
     for t in range(1, n):
         v[t] = loop.noise_pole * v[t - 1] + e[t]
-    if loop.integrating:
+    if loop.integrating and loop.inflow_disturbance:
         v = np.cumsum(v)
     sp = np.full(n, pv0)
     if setpoint_steps:

@@ -411,3 +411,22 @@ def test_joint_covariance_of_an_integrating_channel_is_the_finite_difference_one
 def test_no_process_class_is_a_value_error():
     with pytest.raises(ValueError, match="classes: give one or more ProcessClass"):
         model_from_data(pi_loop.simulate(pi_loop.FLOW, seed=1, rows=200), ["OP"], ["PV"], classes=())
+
+
+def test_level_with_transmitter_noise_gets_a_stationary_disturbance_model():
+    """A tank whose disturbance is at the output (stationary AR(1), not an inflow): the integrating
+    class with the output disturbance wins, fitted as the level against the integrated input; its
+    noise model has no unit root, and the fit is SciPy's joint fit of that structure."""
+    loop = pi_loop.TANK_NOISY
+    df = pi_loop.simulate(loop, seed=2, setpoint_steps=True, step_size=0.5)
+    r = model_from_data(df, ["OP"], ["PV"])
+    c, = r.channels
+    assert r.outputs[0].process_class == "integrating plus dead time, disturbance at the output"
+    assert c.integrating and abs(c.gain - loop.gain) < 4 * c.gain_sd
+    assert np.max(np.abs(np.roots(r.model.noise("PV").den))) < 0.95
+    assert np.asarray(r.model.process("PV", "OP").den) == pytest.approx([1.0, -1.0])
+    u = df["OP"].to_numpy()
+    b, f, a = ref.pem_ar_noise(df["PV"].to_numpy(), np.cumsum(u - u.mean()), r.outputs[0].noise_order,
+                               c.numerator_length, c.delay_samples, nf=0)
+    assert np.allclose(r.model.process("PV", "OP").num, b, rtol=1e-5, atol=1e-9)
+    assert np.allclose(r.model.noise("PV").den, a, rtol=1e-4, atol=1e-6)

@@ -13,7 +13,9 @@ output is fitted in the differenced domain, (1 - q^-1) y = G' u + e / A(q), wher
 (pure integrator) or first-order (with lag) channel; its model file channel is
 G = G' / (1 - q^-1), a pole at 1, which the discrete form holds as it is. The one-step
 prediction error of y is A (1 - q^-1) (y - G u) = A ((1 - q^-1) y - G' u), the same quantity the
-first-order class minimises, so the classes compete by the same BIC on the same rows.
+first-order class minimises, so the classes compete by the same BIC on the same rows. When the
+disturbance is at the output (transmitter noise) rather than an inflow, H = 1 / A and the level
+is fitted against the integrated input, y = G' (u / (1 - q^-1)) + e / A.
 
 Search, per output: the delay d of every channel, its numerator length (1 or 2) and the ARX
 (noise) order na. Lag 0 is never searched when the data show feedback: a PI loop's OP reacts to
@@ -60,6 +62,10 @@ CHI2_1_95 = 3.841458820694124    # 95 % quantile of chi-square(1): profile-likel
 # BIC difference (2 log Bayes factor) an integrating class needs over an identified first-order
 # fit: "strong" evidence on Kass & Raftery's scale (JASA 1995)
 CLASS_MARGIN = 6.0
+# BIC difference the disturbance at the output needs over an inflow disturbance for an integrating
+# output: "very strong" on the same scale (on routine tank records the two forms are confused
+# within 8)
+OUTPUT_NOISE_MARGIN = 10.0
 SIGN_FLIP_Z = 5.0                # "overwhelming evidence" for a gain against the controller's action
 DEFAULT_MAX_DEAD_TIME_S = 600.0
 # Candidates whose search criterion is this far above the best (n log(V / V_best)) are not
@@ -302,7 +308,9 @@ class _ClassFit:
 
 
 def _choose_class(fitted: list[_ClassFit], duration_s: float):
-    """(class, candidate, channel summaries) of the BIC-best class, except that first order plus
+    """(class, candidate, channel summaries) of the BIC-best class, except that an integrating
+    output's disturbance is an inflow (it integrates) unless the disturbance at the output scores
+    better by OUTPUT_NOISE_MARGIN, and that first order plus
     dead time (the default, fitted first) gives way to another class only by a BIC better by
     CLASS_MARGIN when it identifies something; when it identifies nothing, the best identified
     other class takes its place if its BIC is lower, or if first order ran to its integrating
@@ -310,6 +318,9 @@ def _choose_class(fitted: list[_ClassFit], duration_s: float):
     trade-off with tau). Without excitation a PI loop's one-step errors hardly tell the classes
     apart (the noise model absorbs the difference: routine data of a flow loop fit an integrator
     with theta = 0 within a BIC of 3 on 3 of 20 seeds)."""
+    inflow = [f.best.bic for f in fitted if f.cls.integrating and f.cls.noise_integrates and f.identified]
+    if inflow:
+        fitted = [f for f in fitted if f.cls.noise_integrates or f.best.bic < min(inflow) - OUTPUT_NOISE_MARGIN]
     default, best = fitted[0], min(fitted, key=lambda f: f.best.bic)
     if default.cls is not SELF_REGULATING:
         return best.cls, best.best, best.channels
@@ -362,7 +373,7 @@ class _Candidate:
 
 def _output_domain(c: _Candidate, cls: ProcessClass):
     """c's channels and noise denominator as the model of y: for an integrating output
-    G = G' / (1 - q^-1) and H = 1 / (A (1 - q^-1))."""
+    G = G' / (1 - q^-1), and H = 1 / (A (1 - q^-1)) when the disturbance integrates too."""
     if not cls.integrating:
         return list(c.tf), np.r_[1.0, c.a]
     return ([_core.TransferFunction(np.asarray(g.num), np.convolve(g.den, [1.0, -1.0]), g.delay) for g in c.tf],

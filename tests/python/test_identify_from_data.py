@@ -430,3 +430,23 @@ def test_level_with_transmitter_noise_gets_a_stationary_disturbance_model():
                                c.numerator_length, c.delay_samples, nf=0)
     assert np.allclose(r.model.process("PV", "OP").num, b, rtol=1e-5, atol=1e-9)
     assert np.allclose(r.model.noise("PV").den, a, rtol=1e-4, atol=1e-6)
+
+
+def test_integrating_disturbance_is_an_inflow_unless_the_output_form_wins_clearly():
+    from types import SimpleNamespace
+
+    from mpmpp.model_identification import (INTEGRATING, INTEGRATING_OUTPUT_NOISE, OUTPUT_NOISE_MARGIN,
+                                            SELF_REGULATING, _ClassFit, _choose_class)
+
+    def fit(cls, bic, significant=True):
+        c = ChannelSummary("PV", "OP", 1.0, 0.1, 0.0, float("nan"), 10.0, (0.0, 20.0), 2, 1, significant)
+        return _ClassFit(cls, SimpleNamespace(bic=bic), [c])
+
+    first = fit(SELF_REGULATING, 0.0, significant=False)
+    close = [first, fit(INTEGRATING, -5.0), fit(INTEGRATING_OUTPUT_NOISE, -5.0 - OUTPUT_NOISE_MARGIN + 1)]
+    clear = [first, fit(INTEGRATING, -5.0), fit(INTEGRATING_OUTPUT_NOISE, -5.0 - OUTPUT_NOISE_MARGIN - 1)]
+    assert _choose_class(close, 7500.0)[0] is INTEGRATING
+    assert _choose_class(clear, 7500.0)[0] is INTEGRATING_OUTPUT_NOISE
+    # no identified inflow form: the output form stands on its own
+    alone = [first, fit(INTEGRATING, -5.0, significant=False), fit(INTEGRATING_OUTPUT_NOISE, -6.0)]
+    assert _choose_class(alone, 7500.0)[0] is INTEGRATING_OUTPUT_NOISE

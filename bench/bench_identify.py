@@ -4,9 +4,9 @@ Cases:
   search, threads   the whole search (every process class, noise order, dead time and numerator
                     length) on one thread against ``--workers`` threads, wall time: the sweeps
                     per noise order are independent and their ARX-OE fits release the GIL
-  classes           the whole search over first order plus dead time only, against all three
-                    classes (first order, integrating, integrating with a lag), one thread:
-                    what recognising integrating processes costs
+  classes           the whole search over first order plus dead time only, against every class
+                    (first order; integrating, with a lag, with the disturbance at the output),
+                    one thread: what recognising integrating processes costs
   one candidate     one structure's joint prediction-error fit (ARX-OE start, then the
                     alternating refinement) against SciPy's least_squares on the same criterion
                     from its own ARX-OE (tests/python/identification_reference.pem_ar_noise),
@@ -60,7 +60,7 @@ def main(argv=None):
               f"1 thread {one:.2f} s, {args.workers} threads {many:.2f} s, ratio {one / many:.2f}")
         fo, _ = best_of(lambda: mi.model_from_data(df, [u], [y], workers=1, classes=(mi.SELF_REGULATING,)),
                         args.repeat)
-        print(f"classes          {label}: first order only {fo:.2f} s, all three {one:.2f} s, ratio {one / fo:.2f}")
+        print(f"classes          {label}: first order only {fo:.2f} s, all classes {one:.2f} s, ratio {one / fo:.2f}")
         c = r1.channels[0]
         if c.integrating:
             continue

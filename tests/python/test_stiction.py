@@ -263,6 +263,9 @@ def test_external_oscillation_is_a_linear_valve_with_an_oscillating_disturbance(
         assert not res.verdict and res.confidence < 0.5
         linear = next(c for c in res.ranking if c.kind == "linear")
         assert linear.params["disturbance_period"] == pytest.approx(period, rel=0.03)
+        assert res.disturbance_period == pytest.approx(period, rel=0.03)
         sticky = simulate_pi_loop(FLOW, 0.7, 1.5, 751, disturbance=d,
                                   valve=ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
         assert fit_valve(sticky["op"], sticky["pv"]).verdict
+    # without an oscillation entering the loop, no oscillating disturbance is reported
+    assert fit_valve(*(loop(21)[k] for k in ("op", "pv"))).disturbance_period is None

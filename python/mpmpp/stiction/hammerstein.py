@@ -32,6 +32,7 @@ from math import exp
 import numpy as np
 
 from .._core import ActuatorNonlinearity, StictionLaw, actuator_positions
+from .oscillation import is_oscillating
 
 # ARX orders shared by every candidate (so the valve parameters are the only difference):
 # y lags 1..N_Y carry the process poles and the disturbance colour, valve lags 1..N_U cover a
@@ -64,6 +65,9 @@ class HammersteinResult:
     params: dict             # its parameters in OP units (S, J for stick-slip kinds)
     gain_per_sample: float   # held-out log-likelihood gain of the best hysteresis candidate
     confidence: float        # calibrated P(stiction | gain)
+    # period (samples) of a loop oscillation (the OP regular by Thornhill's test) that a linear
+    # valve with an oscillating disturbance predicts better than without it
+    disturbance_period: float | None = None
     ranking: list = field(repr=False, default_factory=list)
 
     def size_text(self) -> str:
@@ -161,10 +165,10 @@ def fit_valve(op, pv) -> HammersteinResult:
         return Candidate(kind, params, float(_held_out_losses(phi, target).sum()))
 
     frequency = dominant_frequency(y_s)
-    linear = min(evaluate("linear", ActuatorNonlinearity(), {}),
-                 evaluate("linear", ActuatorNonlinearity(), {"disturbance_period": 1.0 / frequency},
-                          frequency),
-                 key=lambda c: c.cv_sse)
+    plain = evaluate("linear", ActuatorNonlinearity(), {})
+    oscillating = evaluate("linear", ActuatorNonlinearity(), {"disturbance_period": 1.0 / frequency}, frequency)
+    linear = min(plain, oscillating, key=lambda c: c.cv_sse)
+    periodic = oscillating.cv_sse < plain.cv_sse and is_oscillating(u)
     ranking = [linear] + [evaluate(*c) for c in _candidate_grid(u)]
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")
@@ -181,5 +185,6 @@ def fit_valve(op, pv) -> HammersteinResult:
         params=best.params if nonlinear else {},
         gain_per_sample=float(gain),
         confidence=float(confidence),
+        disturbance_period=1.0 / frequency if periodic else None,
         ranking=ranking,
     )

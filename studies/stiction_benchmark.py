@@ -134,10 +134,10 @@ def scores(rec: dict) -> dict:
 
 
 def calibration(rows: list) -> tuple[float, float]:
-    """Logistic fit of P(stiction | gain) on rows: (slope, gain at probability 1/2)."""
+    """Logistic fit of P(stiction | max(gain, 0)) on rows: (slope, gain at probability 1/2)."""
     from sklearn.linear_model import LogisticRegression
 
-    g = np.array([[r["_report"].mpmpp.gain_per_sample] for r in rows])
+    g = np.array([[max(r["_report"].mpmpp.gain_per_sample, 0.0)] for r in rows])
     y = np.array([r["case"] == "stiction" for r in rows])
     fit = LogisticRegression(C=1e6, max_iter=10000).fit(g, y)
     slope = float(fit.coef_[0, 0])

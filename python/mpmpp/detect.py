@@ -23,6 +23,7 @@ import pandas as pd
 from . import _core
 from ._core import DetectorConfig
 from .disturbance import describe, disturbance_orders
+from .signals import through_actuators
 
 __all__ = ["DetectorConfig", "Detector", "DetectionResult", "detect", "make_config"]
 
@@ -57,13 +58,15 @@ def make_config(config: ConfigLike = None, model=None) -> DetectorConfig:
 
 
 def _arrays(model, data: pd.DataFrame):
-    """time (s), u (N x inputs), y (N x outputs) in the model's column order."""
+    """time (s), u (N x inputs), y (N x outputs) in the model's column order. An input with a
+    valve in the model file's actuators block is its simulated valve position: the valve is
+    there throughout, so the windows' ARX-OE estimates the linear part seen through it."""
     missing = [c for c in ["time", *model.inputs, *model.outputs] if c not in data.columns]
     if missing:
         raise ValueError(f"data: column '{missing[0]}' of the model is missing")
     as_float = lambda cols: np.ascontiguousarray(data[cols].to_numpy(dtype=float))  # noqa: E731
-    return (np.ascontiguousarray(data["time"].to_numpy(dtype=float)), as_float(list(model.inputs)),
-            as_float(list(model.outputs)))
+    u = np.ascontiguousarray(through_actuators(model, as_float(list(model.inputs))))
+    return np.ascontiguousarray(data["time"].to_numpy(dtype=float)), u, as_float(list(model.outputs))
 
 
 def _channel_dicts(model, core_channels):

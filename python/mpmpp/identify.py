@@ -175,9 +175,12 @@ def arx_oe_model(model, data, output: str, *, na: int = 9, nb: IntOrList | None 
     (default na + 1, the paper's equal orders). fir_length: impulse-response length per
     channel (default: until the nominal response falls below 1% of its peak).
     Without ``window`` one estimate from the whole record (an ``ArxOeResult``); with
-    ``window`` and ``step`` (samples) a list of ``WindowEstimate``.
+    ``window`` and ``step`` (samples) a list of ``WindowEstimate``. An input with a valve in
+    the model's actuators block enters as its simulated valve position (the channel is the
+    linear part behind the valve, docs/stiction.md "Model file").
     """
     from .io import load_data, load_model
+    from .signals import through_actuators
 
     if not hasattr(model, "process"):
         model = load_model(model)
@@ -200,7 +203,7 @@ def arx_oe_model(model, data, output: str, *, na: int = 9, nb: IntOrList | None 
     else:
         oe_nb, oe_nf = 1, 1
     y = data[output].to_numpy(dtype=float)
-    u = data[inputs].to_numpy(dtype=float)
+    u = through_actuators(model, data[inputs].to_numpy(dtype=float), inputs=inputs)
     options = dict(structure=structure, oe_nb=oe_nb, oe_nf=oe_nf, fir_length=lengths,
                    detrend=detrend, delta=delta, two_step_covariance=two_step_covariance)
     nb = na + 1 if nb is None else nb

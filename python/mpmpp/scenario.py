@@ -17,7 +17,7 @@ import numpy as np
 
 from . import _core
 
-MODEL_KEYS = {"name", "sample_time_s", "inputs", "outputs", "process", "noise"}
+MODEL_KEYS = {"name", "sample_time_s", "inputs", "outputs", "process", "noise", "actuators"}
 MAX_SAMPLES = 100_000_000  # ~16 years at 5 s
 TOP_KEYS = MODEL_KEYS | {"truth", "controller", "duration_s", "seed", "events", "notes"}
 TRUTH_KEYS = {"process", "noise", "sigma", "extra", "actuators", "outliers"}
@@ -104,9 +104,11 @@ def parse_transfer_function(value, where: str, sample_time_s: float) -> _core.Tr
         raise ValueError(f"{where}: {detail}") from None
 
 
-def _model(spec: dict, where: str, process, noise) -> _core.Model:
+def _model(spec: dict, where: str, process, noise, actuators=None) -> _core.Model:
     """A Model through the model-file reader; `where` prefixes its error paths."""
     doc = {k: spec[k] for k in ("name", "sample_time_s", "inputs", "outputs") if k in spec}
+    if actuators is not None:
+        doc["actuators"] = actuators
     doc["process"] = process
     if noise is not None:
         doc["noise"] = noise
@@ -401,7 +403,7 @@ def parse_scenario(spec: dict) -> Scenario:
     """Validate a scenario document (see docs/scenario.md)."""
     _obj(spec, "", TOP_KEYS, {"sample_time_s", "inputs", "outputs", "process", "truth", "controller",
                               "duration_s"})
-    model = _model(spec, "", spec["process"], spec.get("noise"))
+    model = _model(spec, "", spec["process"], spec.get("noise"), spec.get("actuators"))
     ts, inputs, outputs = model.sample_time_s, list(model.inputs), list(model.outputs)
     truth = _obj(spec["truth"], "truth", TRUTH_KEYS, {"sigma"})
     truth_model = _model(spec, "truth.", truth.get("process", spec["process"]),
@@ -433,6 +435,12 @@ def parse_scenario(spec: dict) -> Scenario:
         acts = _obj(truth["actuators"], "truth.actuators", set(inputs))
         actuators = [_actuator(_obj(acts.get(n, {}), f"truth.actuators.{n}", ACTUATOR_KEYS),
                                f"truth.actuators.{n}") for n in inputs]
+    elif model.actuators_dict():
+        # no true valves given: the plant has the valves the model file describes
+        from .stiction.valve import nonlinearity
+
+        valves = model.actuators_dict()
+        actuators = [nonlinearity(valves[n]) if n in valves else _core.ActuatorNonlinearity() for n in inputs]
     controller = spec["controller"]
     kind = controller.get("kind", "mpc") if isinstance(controller, dict) else "mpc"
     if kind not in ("mpc", "pid"):

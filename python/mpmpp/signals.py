@@ -62,7 +62,7 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     nu, ny = len(inputs), len(outputs)
     valid = np.all(np.isfinite(np.column_stack([raw_u, raw_y])), axis=1)
     segments, skipped = _segments(valid, min_segment)
-    raw_u = _through_actuators(model, raw_u, segments)
+    raw_u = through_actuators(model, raw_u, segments)
     both = np.column_stack([raw_u, raw_y, raw_z])
     means = np.nanmean(both[ref], axis=0) if ref.any() else np.nanmean(both, axis=0)
     dev = both - means
@@ -77,20 +77,23 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     )
 
 
-def _through_actuators(model, raw_u: np.ndarray, segments) -> np.ndarray:
+def through_actuators(model, raw_u: np.ndarray, segments=None, inputs=None) -> np.ndarray:
     """The inputs the channels see: an input with an actuator in the model (its valve model,
     docs/stiction.md "Model file") is replaced by the simulated valve position, per segment
-    (the valve starts at rest at each segment's first row); rows outside the segments are NaN."""
+    (the valve starts at rest at each segment's first row); rows outside the segments are NaN.
+    ``raw_u``'s columns are ``inputs`` (default: the model's); without ``segments``, each
+    column's own runs of finite values."""
     actuators = model.actuators_dict()
     if not actuators:
         return raw_u
     from .stiction.valve import valve_position
 
     out = raw_u.copy()
-    for j, name in enumerate(model.inputs):
+    for j, name in enumerate(model.inputs if inputs is None else inputs):
         if name in actuators:
+            runs = segments if segments is not None else _segments(np.isfinite(raw_u[:, j]), 1)[0]
             out[:, j] = np.nan
-            for a, b in segments:
+            for a, b in runs:
                 out[a:b, j] = valve_position(actuators[name], raw_u[a:b, j])
     return out
 

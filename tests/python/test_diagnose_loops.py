@@ -182,6 +182,12 @@ def test_external_oscillation_through_a_linear_valve_is_not_stiction(seed):
     data = stiction_study_loop(seed, oscillation=1.0)
     res = diagnose(model_from_data(data, ["OP"], ["PV"]).model, data)
     assert not any(f.effect == "input_nonlinearity" for f in res.findings)
+    # the period drawn in stiction_study_loop, in seconds
+    rng = np.random.default_rng(seed)
+    rng.standard_normal(951), rng.standard_normal(751)
+    period_s = 10.0 * rng.uniform(25, 60)
+    note = next(n for n in res.notes if "oscillates with a period" in n)
+    assert float(note.split("period of ")[1].split(" s")[0]) == pytest.approx(period_s, rel=0.03)
 
 
 # ---- the valve in the model file --------------------------------------------------------------

@@ -237,3 +237,35 @@ def test_coloured_noise_is_the_ar1_filter():
     x = coloured_noise(rng_a, 500, 2.0, 0.8)
     ref = lfilter([1.0], [1.0, -0.8], rng_b.standard_normal(700))[200:]
     np.testing.assert_allclose(x, 2.0 * ref / np.std(ref), rtol=1e-12)
+
+
+def test_dominant_frequency_is_the_periodogram_peak():
+    from mpmpp.stiction.hammerstein import dominant_frequency
+    from scipy.signal import periodogram
+    rng = np.random.default_rng(3)
+    x = np.sin(2 * np.pi * np.arange(751) / 41.3 + 0.7) + 0.5 * rng.standard_normal(751)
+    f, p = periodogram(x, window="hann", nfft=16 * 751, detrend="constant")
+    band = (f >= 4 / 751) & (f <= 0.25)
+    assert dominant_frequency(x) == pytest.approx(f[band][np.argmax(p[band])], abs=1e-12)
+    assert 1 / dominant_frequency(x) == pytest.approx(41.3, rel=0.01)
+
+
+def test_external_oscillation_is_a_linear_valve_with_an_oscillating_disturbance():
+    """A sinusoid entering the loop is explained by the linear valve's sinusoidal disturbance
+    term, not by a hysteresis valve; a sticking valve in the same loop still is."""
+    for seed in (31, 32, 33):
+        rng = np.random.default_rng(seed)
+        period = rng.uniform(25, 60)
+        d = (coloured_noise(rng, 751, 0.3, 0.8) + 0.05 * rng.standard_normal(751)
+             + np.sin(2 * np.pi * np.arange(751) / period + rng.uniform(0, 2 * np.pi)))
+        rec = simulate_pi_loop(FLOW, 0.7, 1.5, 751, disturbance=d)
+        res = fit_valve(rec["op"], rec["pv"])
+        assert not res.verdict and res.confidence < 0.5
+        linear = next(c for c in res.ranking if c.kind == "linear")
+        assert linear.params["disturbance_period"] == pytest.approx(period, rel=0.03)
+        assert res.disturbance_period == pytest.approx(period, rel=0.03)
+        sticky = simulate_pi_loop(FLOW, 0.7, 1.5, 751, disturbance=d,
+                                  valve=ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
+        assert fit_valve(sticky["op"], sticky["pv"]).verdict
+    # without an oscillation entering the loop, no oscillating disturbance is reported
+    assert fit_valve(*(loop(21)[k] for k in ("op", "pv"))).disturbance_period is None

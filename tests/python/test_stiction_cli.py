@@ -9,11 +9,13 @@ from mpmpp.cli import main
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
 
 
-def write_loop(path, n=751, valve=None, seed=3):
+def write_loop(path, n=751, valve=None, seed=3, oscillation_period=None):
     p = np.exp(-10 / 15)
     rng = np.random.default_rng(seed)
-    rec = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p)), 0.7, 1.5, n, valve=valve,
-                           disturbance=coloured_noise(rng, n, 0.3, 0.8))
+    d = coloured_noise(rng, n, 0.3, 0.8)
+    if oscillation_period is not None:
+        d = d + np.sin(2 * np.pi * np.arange(n) / oscillation_period)
+    rec = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p)), 0.7, 1.5, n, valve=valve, disturbance=d)
     pd.DataFrame({"time": 10.0 * np.arange(n), "FIC101.OP": rec["op"], "FIC101.PV": rec["pv"],
                   "FIC101.SP": rec["sp"]}).to_csv(path, index=False)
 
@@ -30,6 +32,16 @@ def test_stiction_command_on_a_sticky_loop(tmp_path, capsys):
     main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
     doc = json.loads(capsys.readouterr().out)
     assert doc["mpmpp"]["stiction"] is True and 2.0 < doc["mpmpp"]["size"]["S"] < 8.0
+    assert doc["mpmpp"]["oscillating_disturbance_period_samples"] is None
+
+
+def test_stiction_command_names_an_external_oscillation(tmp_path, capsys):
+    data = tmp_path / "loop.csv"
+    write_loop(data, oscillation_period=37.0)
+    assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV"]) == 0
+    out = capsys.readouterr().out
+    assert "no actuator nonlinearity" in out or "no stiction" in out
+    assert "period of 37" in out and "linear valve with an oscillating disturbance" in out
 
 
 @pytest.mark.parametrize("args, n, message", [

@@ -48,7 +48,8 @@ def run(args) -> int:
             "samples": len(op),
             "mpmpp": {"stiction": h.verdict, "kind": h.kind,
                       "size": {k: _plain(v) for k, v in h.params.items()},
-                      "confidence": h.confidence, "gain_per_sample": h.gain_per_sample},
+                      "confidence": h.confidence, "gain_per_sample": h.gain_per_sample,
+                      "oscillating_disturbance_period_samples": h.disturbance_period},
             "baselines": {name: {"stiction": verdict, **{k: _plain(v) for k, v in details.items()}}
                           for name, (verdict, details) in report.baselines.items()},
         }, indent=2))
@@ -64,6 +65,9 @@ def run(args) -> int:
         print(f"mpmpp: no actuator nonlinearity found, stiction confidence {h.confidence:.2f}")
     print(f"  held-out log-likelihood gain of the best stick-slip valve over a linear one: "
           f"{h.gain_per_sample:.4f} per sample")
+    if h.disturbance_period is not None:
+        print(f"  the loop oscillates regularly with a period of {h.disturbance_period:.1f} samples, which a linear "
+              f"valve with an oscillating disturbance predicts better than without it")
     print("baselines:")
     for name, (verdict, details) in report.baselines.items():
         text = ", ".join(f"{k} {v:.3g}" for k, v in details.items())

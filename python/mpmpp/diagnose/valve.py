@@ -56,6 +56,10 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
             notes.append(f"{out.name} <- {name}: valve fit not possible ({exc})")
             continue
         if not fit.verdict:
+            if fit.disturbance_period is not None:
+                notes.append(f"{out.name} <- {name}: the loop oscillates with a period of "
+                             f"{fit.disturbance_period * sig.sample_time_s:.0f} s, which a linear valve "
+                             f"with an oscillating disturbance explains (not the valve)")
             continue
         finding = _finding(out, sig, lp, fit, logn)
         # as every finding: the model update must predict the held-out blocks better (and the

@@ -269,3 +269,15 @@ def test_external_oscillation_is_a_linear_valve_with_an_oscillating_disturbance(
         assert fit_valve(sticky["op"], sticky["pv"]).verdict
     # without an oscillation entering the loop, no oscillating disturbance is reported
     assert fit_valve(*(loop(21)[k] for k in ("op", "pv"))).disturbance_period is None
+
+
+def test_an_op_too_jumpy_for_any_valve_size_gives_no_valve_finding():
+    # An OP alternating every sample: its median move exceeds every hysteresis size of the
+    # grid (fractions of its spread), so only static candidates remain; the fit must say
+    # "no valve", not fail (it raised StopIteration on such slow PID loops).
+    rng = np.random.default_rng(4)
+    op = np.where(np.arange(800) % 2, 1.0, -1.0) + 0.05 * rng.standard_normal(800)
+    pv = lfilter([0.0, 0.3], [1.0, -0.7], op) + 0.1 * rng.standard_normal(800)
+    r = fit_valve(op, pv)
+    assert not r.verdict
+    assert r.gain_per_sample == 0.0 and not any(c.kind == "stick_slip" for c in r.ranking)

@@ -172,8 +172,10 @@ def fit_valve(op, pv) -> HammersteinResult:
     ranking = [linear] + [evaluate(*c) for c in _candidate_grid(u)]
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")
-    hysteresis = next(c for c in ranking if c.kind in HYSTERESIS_KINDS)
-    gain = 0.5 * np.log(linear.cv_sse / hysteresis.cv_sse)
+    # An OP that moves more per sample than the grid's largest valve leaves no hysteresis
+    # candidate (the valve cannot be resolved): no evidence for one.
+    hysteresis = next((c for c in ranking if c.kind in HYSTERESIS_KINDS), None)
+    gain = 0.5 * np.log(linear.cv_sse / hysteresis.cv_sse) if hysteresis else 0.0
     confidence = calibrated_confidence(gain)
     # a static nonlinearity (saturation) that explains the data better wins
     verdict = bool(confidence > 0.5 and best.kind in HYSTERESIS_KINDS)

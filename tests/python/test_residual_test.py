@@ -38,6 +38,7 @@ def _directions(g, x, terms):
 
 
 def _lstsq(Z, z):
+    """Least squares on the column-scaled regressors by a truncated SVD, and sigma^2 (Z'Z)^+."""
     scale = np.sqrt((Z**2).mean(0))
     scale[scale == 0] = 1.0
     U, s, Vt = np.linalg.svd(Z / scale, full_matrices=False)

@@ -5,7 +5,10 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "mpmpp/chi_square.hpp"
+#include "mpmpp/error.hpp"
 #include "mpmpp/mismatch_indicator.hpp"
+#include "mpmpp/residual_regression.hpp"
 
 namespace py = pybind11;
 
@@ -32,6 +35,24 @@ py::list windows_list(const std::vector<FeatureWindow>& ws) {
 }  // namespace
 
 void bind_detector(py::module_& m) {
+  m.def("chi_square_survival", &chi_square_survival, py::arg("x"), py::arg("dof"),
+        "P(X > x) for X ~ chi-square(dof)");
+  m.def(
+      "residual_regression",
+      [](const Model& model, int output, std::vector<int> inputs, const DetectorConfig& config,
+         const Eigen::VectorXd& y, const Eigen::MatrixXd& u) {
+        const ResidualRegression r(model, output, std::move(inputs), config);
+        std::vector<Eigen::VectorXd> beta;
+        std::vector<Eigen::MatrixXd> covariance;
+        std::string reason;
+        if (!r.estimate(y, u, beta, covariance, &reason)) throw NumericalError(reason);
+        return py::make_tuple(beta, covariance, r.settling_samples());
+      },
+      py::arg("model"), py::arg("output"), py::arg("inputs"), py::arg("config"), py::arg("y"),
+      py::arg("u"),
+      "One window's residual regression (residual_regression.hpp): per input the coefficients, "
+      "their covariance, and the settling samples dropped");
+
   py::class_<DetectorConfig>(
       m, "DetectorConfig",
       "Every detector parameter (paper Tables 1 and 3); see detector_config.hpp")
@@ -64,6 +85,15 @@ void bind_detector(py::module_& m) {
           "resampling",
           [](const DetectorConfig& c) { return std::string(to_string(c.resampling)); },
           [](DetectorConfig& c, const std::string& s) { c.resampling = resampling_from_string(s); })
+      .def_property(
+          "process_test",
+          [](const DetectorConfig& c) { return std::string(to_string(c.process_test)); },
+          [](DetectorConfig& c, const std::string& s) {
+            c.process_test = process_test_from_string(s);
+          })
+      .def_readwrite("window_significance", &DetectorConfig::window_significance)
+      .def_readwrite("laguerre_terms", &DetectorConfig::laguerre_terms)
+      .def_readwrite("residual_ar_order", &DetectorConfig::residual_ar_order)
       .def_readwrite("arx_regularisation", &DetectorConfig::arx_regularisation)
       .def_static("paper_siso", &DetectorConfig::paper_siso)
       .def_static("paper_mimo", &DetectorConfig::paper_mimo)
@@ -132,6 +162,7 @@ void bind_detector(py::module_& m) {
       .def_readwrite("feature_decorrelation", &ChannelScorer::feature_decorrelation)
       .def_readwrite("reference_covariance", &ChannelScorer::reference_covariance)
       .def_readwrite("mean_covariance", &ChannelScorer::mean_covariance)
+      .def_readwrite("significance", &ChannelScorer::significance)
       .def_readwrite("support_vectors", &ChannelScorer::support_vectors)
       .def_readwrite("dual_coef", &ChannelScorer::dual_coef)
       .def_readwrite("offset", &ChannelScorer::offset)

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "detector_config_json.hpp"
+#include "mpmpp/chi_square.hpp"
 #include "mpmpp/error.hpp"
 #include "mpmpp/mismatch_indicator.hpp"
 #include "mpmpp/model_io.hpp"
@@ -41,8 +42,45 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   return score(x, Eigen::MatrixXd());
 }
 
+double ChannelScorer::wald_p_value(
+    const Eigen::Ref<const Eigen::VectorXd>& x,
+    const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const {
+  const Eigen::VectorXd deviation = x - feature_mean;
+  const Eigen::MatrixXd S = window_covariance + mean_covariance;
+  // In correlation form, so that the rank cut does not depend on the directions' units.
+  const Eigen::Index n = deviation.size();
+  const Eigen::VectorXd sd = S.diagonal().cwiseMax(0.0).cwiseSqrt();
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(n);
+  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(n, n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    if (!(sd[r] > 0)) continue;
+    z[r] = deviation[r] / sd[r];
+    for (Eigen::Index c = 0; c < n; ++c)
+      if (sd[c] > 0) R(r, c) = S(r, c) / (sd[r] * sd[c]);
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(R);
+  if (eig.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::VectorXd& lambda = eig.eigenvalues();
+  const double cut = kWaldRankTolerance * lambda.maxCoeff();
+  double T = 0;
+  int dof = 0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (!(lambda[k] > cut)) continue;
+    const double proj = eig.eigenvectors().col(k).dot(z);
+    T += proj * proj / lambda[k];
+    ++dof;
+  }
+  return dof == 0 ? std::numeric_limits<double>::quiet_NaN() : chi_square_survival(T, dof);
+}
+
 double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
                             const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const {
+  if (significance > 0) {
+    if (window_covariance.rows() != x.size() || window_covariance.cols() != x.size())
+      throw InputError("detector: the window covariance must be " + std::to_string(x.size()) +
+                       " x " + std::to_string(x.size()));
+    return std::log10(wald_p_value(x, window_covariance) / significance);
+  }
   Eigen::VectorXd deviation = x - feature_mean;
   if (reference_covariance.size() != 0) {
     if (window_covariance.rows() != x.size() || window_covariance.cols() != x.size())
@@ -111,6 +149,12 @@ void ChannelScorer::validate(int feature_length, const std::string& where) const
        !mean_covariance.isApprox(mean_covariance.transpose())))
     fail("mean_covariance must be empty or, with reference_covariance, a finite symmetric " +
          std::to_string(feature_length) + " x " + std::to_string(feature_length) + " matrix");
+  if (significance > 0) {
+    if (!(significance < 1)) fail("significance must be in (0, 1)");
+    if (reference_covariance.size() == 0 || mean_covariance.size() == 0)
+      fail("a Wald-test channel needs reference_covariance and mean_covariance");
+    return;
+  }
   if (support_vectors.rows() < 1 || support_vectors.cols() != feature_length)
     fail("support_vectors must be n_sv x " + std::to_string(feature_length));
   if (dual_coef.size() != support_vectors.rows())
@@ -300,12 +344,14 @@ std::string Detector::to_json() const {
     jc["feature_decorrelation"] = rows_json(s.feature_decorrelation);
     jc["reference_covariance"] = rows_json(s.reference_covariance);
     jc["mean_covariance"] = rows_json(s.mean_covariance);
-    jc["svm"] = json{{"kernel_scale", s.kernel_scale},
-                     {"nu", s.nu},
-                     {"n_train", s.n_train},
-                     {"offset", s.offset},
-                     {"dual_coef", vector_json(s.dual_coef)},
-                     {"support_vectors", rows_json(s.support_vectors)}};
+    jc["significance"] = s.significance;
+    jc["svm"] = s.significance > 0 ? json(nullptr)
+                                   : json{{"kernel_scale", s.kernel_scale},
+                                          {"nu", s.nu},
+                                          {"n_train", s.n_train},
+                                          {"offset", s.offset},
+                                          {"dual_coef", vector_json(s.dual_coef)},
+                                          {"support_vectors", rows_json(s.support_vectors)}};
     channels.push_back(std::move(jc));
   }
   // nlohmann writes doubles in their shortest round-trip form: a reload scores identically.
@@ -363,16 +409,20 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
     s.cv_accuracy = cv.is_null() ? -1.0 : rd.number(cv, p + ".cv_accuracy");
     s.feature_mean = rd.vector(rd.field(c, p, "feature_mean"), p + ".feature_mean");
     s.feature_scale = rd.vector(rd.field(c, p, "feature_scale"), p + ".feature_scale");
-    const std::string ps = p + ".svm";
-    const json& svm = rd.field(c, p, "svm");
-    s.kernel_scale = rd.number(rd.field(svm, ps, "kernel_scale"), ps + ".kernel_scale");
-    s.nu = rd.number(rd.field(svm, ps, "nu"), ps + ".nu");
-    s.n_train = rd.integer(rd.field(svm, ps, "n_train"), ps + ".n_train");
-    s.offset = rd.number(rd.field(svm, ps, "offset"), ps + ".offset");
-    s.dual_coef = rd.vector(rd.field(svm, ps, "dual_coef"), ps + ".dual_coef");
     const Eigen::Index m = s.feature_mean.size();
-    s.support_vectors =
-        rd.matrix(rd.field(svm, ps, "support_vectors"), ps + ".support_vectors", m, true);
+    if (version >= 5)  // earlier files predate the Wald test: every channel has an SVM
+      s.significance = rd.number(rd.field(c, p, "significance"), p + ".significance");
+    if (s.significance <= 0) {
+      const std::string ps = p + ".svm";
+      const json& svm = rd.field(c, p, "svm");
+      s.kernel_scale = rd.number(rd.field(svm, ps, "kernel_scale"), ps + ".kernel_scale");
+      s.nu = rd.number(rd.field(svm, ps, "nu"), ps + ".nu");
+      s.n_train = rd.integer(rd.field(svm, ps, "n_train"), ps + ".n_train");
+      s.offset = rd.number(rd.field(svm, ps, "offset"), ps + ".offset");
+      s.dual_coef = rd.vector(rd.field(svm, ps, "dual_coef"), ps + ".dual_coef");
+      s.support_vectors =
+          rd.matrix(rd.field(svm, ps, "support_vectors"), ps + ".support_vectors", m, true);
+    }
     if (version >= 2)  // version 1 files predate it: identity
       s.feature_decorrelation = rd.matrix(rd.field(c, p, "feature_decorrelation"),
                                           p + ".feature_decorrelation", m, false);

@@ -251,7 +251,8 @@ ChannelScorer train_channel_scorer(const Eigen::Ref<const RowMatrixXd>& estimate
                                    double mean_ratio) {
   const Eigen::Index d = estimates.cols();
   ChannelScorer s;
-  if (config.resampling == Resampling::Estimator && covariances.size() != 0) {
+  const bool wald = config.process_test == ProcessTest::Residual && !noise;
+  if ((config.resampling == Resampling::Estimator || wald) && covariances.size() != 0) {
     if (covariances.rows() != estimates.rows() || covariances.cols() != d * d)
       throw InputError("covariances: need one row of d^2 = " + std::to_string(d * d) +
                        " entries per training window");
@@ -262,6 +263,16 @@ ChannelScorer train_channel_scorer(const Eigen::Ref<const RowMatrixXd>& estimate
     // that of the training mean it is compared with (ChannelScorer::mean_covariance).
     s.mean_covariance = mean_ratio * window;
     s.reference_covariance = window + s.mean_covariance;
+  }
+  if (wald) {
+    // The Wald test needs no cloud: the training mean, its covariance and the level.
+    if (covariances.size() == 0)
+      throw InputError("a residual-test channel needs the training windows' covariances");
+    s.feature_mean = estimates.colwise().mean().transpose();
+    s.feature_scale = Eigen::VectorXd::Ones(d);
+    s.significance = config.window_significance;
+    s.training_windows = static_cast<int>(estimates.rows());
+    return s;
   }
   const ResampledModels drawn =
       draw_training_models(estimates, config, seed, s.reference_covariance, noise);

@@ -52,7 +52,8 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
     : sample_time_s_(nominal.sample_time_s),
       num_inputs_(nominal.num_inputs()),
       num_outputs_(nominal.num_outputs()),
-      with_covariances_(config.resampling == Resampling::Estimator) {
+      with_covariances_(config.resampling == Resampling::Estimator ||
+                        config.process_test == ProcessTest::Residual) {
   config.validate();
   window_ = config.window_samples(nominal.sample_time_s);
   step_ = config.step_samples(nominal.sample_time_s);
@@ -80,9 +81,15 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       if (channels_[k].kind == MonitoredChannel::Kind::Noise && channels_[k].output == i)
         noise_channel = static_cast<int>(k);
     feature_length_[noise_channel] = config.arx_order_a;
-    problems_.push_back(
-        OutputProblem{inputs, channels, skip, noise_channel, ArxOeEstimator(std::move(c)),
-                      Eigen::MatrixXd(window_, static_cast<Eigen::Index>(inputs.size()))});
+    std::optional<ResidualRegression> residual;
+    if (config.process_test == ProcessTest::Residual) {
+      residual.emplace(nominal, i, inputs, config);
+      for (size_t e = 0; e < inputs.size(); ++e)
+        feature_length_[channels[e]] = residual->block_size(static_cast<int>(e));
+    }
+    problems_.push_back(OutputProblem{
+        inputs, channels, skip, noise_channel, ArxOeEstimator(std::move(c)),
+        Eigen::MatrixXd(window_, static_cast<Eigen::Index>(inputs.size())), std::move(residual)});
   }
 }
 
@@ -114,6 +121,19 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
       if (skip_reason) *skip_reason = err.what();
       return false;
     }
+    features[p.noise_channel] = result_.noise;
+    if (p.residual) {
+      std::vector<Eigen::VectorXd> beta;
+      std::vector<Eigen::MatrixXd> beta_covariance;
+      if (!p.residual->estimate(y.col(i), p.u, beta, beta_covariance, skip_reason)) return false;
+      for (size_t e = 0; e < p.inputs.size(); ++e) {
+        features[p.channels[e]] = beta[e];
+        if (want_covariances)
+          (*covariances)[p.channels[e]] =
+              0.5 * (beta_covariance[e] + beta_covariance[e].transpose());
+      }
+      continue;
+    }
     Eigen::Index offset = 0;  // channel e's block of the OE parameter vector (FIR structure)
     for (size_t e = 0; e < p.inputs.size(); ++e) {
       const Eigen::VectorXd& g = result_.channels[e].fir;
@@ -126,7 +146,6 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
       }
       offset += d;
     }
-    features[p.noise_channel] = result_.noise;
   }
   return true;
 }

@@ -17,7 +17,9 @@ from mpmpp.detect import Detector, make_config
 from mpmpp.evaluate import nominal_model
 from mpmpp.identify import arx_oe_model, channel_inputs
 
-ESTIMATOR = {"preset": "mimo"}  # resampling "estimator", alpha 1.25, noise_alpha 5, outlier fraction 0.05
+# resampling "estimator", alpha 1.25, noise_alpha 5, outlier fraction 0.05; the SVM on the
+# process channels (the preset's own process test is the residual Wald test)
+ESTIMATOR = {"preset": "mimo", "process_test": "svm"}
 
 
 def estimator_config(**changes):

@@ -12,9 +12,8 @@ noise change raise MPM alarms in a sizeable share of runs, as the paper's own pr
 residual baseline do) fails.
 
 Not guarded here: detection on the scenario families (docs/families.md). No preset reaches a
-rate worth guarding there yet (the best tuning-family rate is the ``mimo`` preset's 45 % on
-``mpc_2x2``; held-out families 6-29 %), so a bound would either be loose enough to pass a broken
-detector or would lock in today's misses. tests/python/test_detection_families.py guards the
+rate worth guarding there yet (9-57 % per family), so a bound would either be loose enough to
+pass a broken detector or would lock in today's misses. tests/python/test_detection_families.py guards the
 false-alarm side on held-out families (no MPM alarm during held-out noise changes).
 """
 import math

@@ -62,6 +62,16 @@ struct ChannelScorer {
   // -0.93 -> -0.99) sees the mean's error as a change in its thin direction (mean squared
   // Mahalanobis distance per coefficient 2.5 instead of 1 over 30 seeds; 1.0 with C_mean).
   Eigen::MatrixXd mean_covariance;
+  // ProcessTest::Residual process channels (else 0): the window level of the Wald test that
+  // replaces the SVM. T = (x - mean)' (C + C_mean)^+ (x - mean) ~ chi-square(rank) with no
+  // change, p = P(chi-square > T), and the score is log10(p / significance): negative (a
+  // mismatch window, eq. 22's sign) when p < significance, like h(x) < 0 for the SVM.
+  // (A union of nested gain / gain-and-dead-time / full tests with a Bonferroni correction
+  // was tried: tuning families, seeds 0-19, it detected fewer changes, 15/35 against 18/35.)
+  double significance = 0;
+  static constexpr double kWaldRankTolerance = 1e-9;  // eigenvalues of the correlation form
+  double wald_p_value(const Eigen::Ref<const Eigen::VectorXd>& x,
+                      const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const;
 
   // score(x) for channels without reference_covariance (InputError otherwise); score(x, C)
   // takes the window's covariance (ignored without reference_covariance; NaN when C is not
@@ -127,7 +137,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 4;  // history in CHANGELOG.md, "File formats"
+  static constexpr int kFormatVersion = 5;  // history in CHANGELOG.md, "File formats"
 
  private:
   Model model_;

@@ -36,6 +36,15 @@ enum class Resampling {
   Estimator,
 };
 
+// How a process channel's windows are judged against the training period.
+enum class ProcessTest {
+  Svm,  // the paper: ARX-OE FIR estimates, one-class SVM on the resampled training cloud
+  // mpmpp: the nominal model's output error regressed on directions of model change
+  // (residual_regression.hpp), each window's coefficients compared with the training mean by
+  // a Wald test at level window_significance. Noise channels keep the SVM.
+  Residual,
+};
+
 struct DetectorConfig {
   double window_s = 7200.0;           // W_size: moving-window length
   double step_s = 300.0;              // W_step: moving-window step
@@ -61,6 +70,10 @@ struct DetectorConfig {
   OeStructure oe_structure = OeStructure::Foptd;
   double arx_regularisation = 1e-4;  // delta of the paper's R_reg rule (Sec. 3.1)
   Resampling resampling = Resampling::Independent;
+  ProcessTest process_test = ProcessTest::Svm;
+  double window_significance = 0.01;  // Residual: a window is negative when its Wald p < this
+  int laguerre_terms = 3;             // Residual: Laguerre directions per channel
+  int residual_ar_order = 0;          // Residual: order of the whitening A(q); 0 = arx_order_a
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the
   // choices the paper leaves open are documented next to their values in detector_config.cpp.
@@ -92,5 +105,7 @@ const char* to_string(OeStructure s);
 OeStructure oe_structure_from_string(const std::string& s);
 const char* to_string(Resampling r);
 Resampling resampling_from_string(const std::string& s);
+const char* to_string(ProcessTest t);
+ProcessTest process_test_from_string(const std::string& s);
 
 }  // namespace mpmpp

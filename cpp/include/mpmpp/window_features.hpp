@@ -12,12 +12,14 @@
 // falls below 1% of its peak (fir_length_to_one_percent), so a gain or pole change shows in
 // every coefficient the nominal model deems significant.
 #include <Eigen/Dense>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "mpmpp/arx_oe.hpp"
 #include "mpmpp/detector_config.hpp"
 #include "mpmpp/model.hpp"
+#include "mpmpp/residual_regression.hpp"
 
 namespace mpmpp {
 
@@ -55,7 +57,9 @@ class WindowFeatures {
   // ARX-OE); InputError on wrong shapes.
   // With Resampling::Estimator, `covariances` (when given) receives per channel the OE
   // covariance sigma^2 (J'J)^-1 of features[k] (process channels; the FIR structure makes the
-  // OE parameters the features themselves) and a 0 x 0 matrix for noise channels.
+  // OE parameters the features themselves) and a 0 x 0 matrix for noise channels. With
+  // ProcessTest::Residual a process channel's features are its residual-regression
+  // coefficients (residual_regression.hpp) and `covariances` receives theirs.
   bool extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                const Eigen::Ref<const Eigen::MatrixXd>& y, std::vector<Eigen::VectorXd>& features,
                std::string* skip_reason = nullptr,
@@ -83,6 +87,9 @@ class WindowFeatures {
     int noise_channel = 0;
     ArxOeEstimator estimator;
     Eigen::MatrixXd u;  // window workspace: the problem's input columns
+    // ProcessTest::Residual: the process channels' features come from here (the ARX-OE
+    // estimate still gives the noise channel's).
+    std::optional<ResidualRegression> residual;
   };
   double sample_time_s_;
   int num_inputs_, num_outputs_;

@@ -1,0 +1,59 @@
+#pragma once
+// The nominal model's output error regressed on directions of model change (the "residual"
+// process test of the recommended presets, DetectorConfig::process_test).
+//
+// For output i with nominal channels G0_ij, v = y_i - sum_j G0_ij u_j. With the model right,
+// v = H e is the disturbance alone; in closed loop the inputs' past is driven by e's past but
+// never by e(t), so after whitening v by its own AR polynomial A(q) no lagged input explains
+// any of it. With G_ij = G0_ij + dG_ij, v gains dG_ij u_j. So per window (Ljung's residual
+// cross-correlation test made a regression, the Box-Jenkins pseudo-linear step):
+//   A(q) v(t) = sum_j beta_j' A(q) x_j(t) + c0 + c1 t + e(t),
+// x_j = the directions in which G_ij can change, all lagged at least one sample (u(t) may
+// react to y(t), docs/formats.md's timing):
+//   G0_ij u_j at the nominal delay d (gain), then at d + 1 and d - 1 (d + 2 when d = 1: the
+//   dead time);
+//   laguerre_terms Laguerre filters of u_j from lag 1, with the channel's slowest pole
+//   (time constant and any other shape).
+// A(q) (order arx_order_a, with a level and a ramp for drifting disturbances) and beta are
+// estimated alternately (two passes). beta_j and its covariance sigma^2 (Z'Z)^-1 are the
+// channel's features; the Detector compares them with the training period's in a Wald test
+// (detector.hpp, ChannelScorer::significance). A disturbance change moves only A(q) and
+// sigma^2, which the window re-estimates, so it does not move beta: no MPM alarm for a noise
+// change. Near-collinear directions (a smooth input, a Laguerre pole at the model's own) are
+// handled by a truncated SVD of the column-scaled regressors.
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "mpmpp/detector_config.hpp"
+#include "mpmpp/model.hpp"
+#include "mpmpp/transfer_function.hpp"
+
+namespace mpmpp {
+
+class ResidualRegression {
+ public:
+  // Output `output` of `nominal`, regressed on the channels from `inputs` (each a channel the
+  // model has). InputError when an input has no channel.
+  ResidualRegression(const Model& nominal, int output, std::vector<int> inputs,
+                     const DetectorConfig& config);
+
+  int block_size(int e) const { return static_cast<int>(directions_[e].size()); }
+  // Leading samples of a window used only to let the filters settle (zero initial state).
+  int settling_samples() const { return settle_; }
+
+  // y: the output's samples, u: one column per entry of `inputs`. Fills beta[e] and
+  // covariance[e] per input; false (with the reason) when the window is too short or the
+  // whitened regressors carry no information.
+  bool estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
+                const Eigen::Ref<const Eigen::MatrixXd>& u, std::vector<Eigen::VectorXd>& beta,
+                std::vector<Eigen::MatrixXd>& covariance, std::string* reason = nullptr) const;
+
+ private:
+  std::vector<TransferFunction> nominal_;                  // G0_ij per input
+  std::vector<std::vector<TransferFunction>> directions_;  // x_j = directions_[e][k] u_j
+  int ar_order_;
+  int settle_;
+};
+
+}  // namespace mpmpp

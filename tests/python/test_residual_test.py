@@ -1,0 +1,145 @@
+"""The residual process test of the recommended presets (cpp/include/mpmpp/residual_regression.hpp,
+ChannelScorer's Wald test): against a plain NumPy/SciPy implementation of the same equations,
+SciPy's chi-square tail, and its null distribution and power on simulated closed loops."""
+import numpy as np
+import pytest
+from scipy.signal import lfilter
+from scipy.stats import chi2
+
+from mpmpp import _core
+from mpmpp import families as fam
+from mpmpp.detect import detect, make_config
+from mpmpp.evaluate import nominal_model
+from mpmpp.simulate import simulate
+
+
+def test_chi_square_survival_matches_scipy():
+    for dof in (1, 2, 3, 6, 9, 17, 40):
+        for x in (1e-3, 0.3, 1.0, 4.0, dof, 2.5 * dof, 60.0, 150.0):
+            assert _core.chi_square_survival(x, dof) == pytest.approx(chi2.sf(x, dof), rel=1e-9, abs=1e-300)
+
+
+# ------------------------------------------------------------------ NumPy reference of one window
+
+def _tf(num, den, delay, x):
+    return lfilter(np.concatenate([np.zeros(delay), num]), den, x)
+
+
+def _directions(g, x, terms):
+    num, den, d = np.asarray(g.num), np.asarray(g.den), int(g.delay)
+    cols = [_tf(num, den, d, x), _tf(num, den, d + 1, x), _tf(num, den, d - 1 if d >= 2 else d + 2, x)]
+    p = float(np.clip(np.max(np.abs(np.roots(den))) if len(den) > 1 else 0.5, 0.2, 0.99))
+    c = np.sqrt(1 - p * p)
+    cur = lfilter([0.0, c], [1.0, -p], x)  # L_0 = c q^-1 / (1 - p q^-1)
+    for _ in range(terms):
+        cols.append(cur)
+        cur = lfilter([-p, 1.0], [1.0, -p], cur)
+    return np.column_stack(cols), p
+
+
+def _lstsq(Z, z):
+    """Least squares on the column-scaled regressors by a truncated SVD, and sigma^2 (Z'Z)^+."""
+    scale = np.sqrt((Z**2).mean(0))
+    scale[scale == 0] = 1.0
+    U, s, Vt = np.linalg.svd(Z / scale, full_matrices=False)
+    k = s > 1e-8 * s[0]
+    bs = Vt[k].T @ ((U[:, k].T @ z) / s[k])
+    sigma2 = np.sum((z - (Z / scale) @ bs) ** 2) / (len(z) - k.sum())
+    Vs = Vt[k].T / s[k]
+    return bs / scale, sigma2 * (Vs @ Vs.T) / np.outer(scale, scale)
+
+
+def reference_window(g, y, u, na, terms, settle):
+    yc, uc = y - y.mean(), u - u.mean()
+    v = yc - _tf(np.asarray(g.num), np.asarray(g.den), int(g.delay), uc)
+    X, _ = _directions(g, uc, terms)
+    skip = min(settle, len(y) // 3)
+    v, X = v[skip:], X[skip:]
+    rows = len(v) - na
+    trend = np.column_stack([np.ones(rows), np.linspace(0.0, 1.0, rows)])
+    b = np.zeros(X.shape[1])
+    for _ in range(2):
+        r = v - X @ b
+        R = np.column_stack([r[na - k:len(r) - k] for k in range(1, na + 1)] + [trend])
+        a = _lstsq(R, r[na:])[0][:na]
+        A = np.concatenate([[1.0], -a])
+        coef, cov = _lstsq(np.column_stack([lfilter(A, [1.0], X, axis=0)[na:], trend]),
+                           lfilter(A, [1.0], v)[na:])
+        b = coef[:X.shape[1]]
+    p = X.shape[1]
+    return b, cov[:p, :p]
+
+
+@pytest.fixture(scope="module")
+def pi_loop():
+    spec, _ = fam.family("pi_siso").draw(1, record_s=6 * 3600, effect="none")
+    model = nominal_model(spec)
+    return model, simulate(spec)
+
+
+def test_one_window_matches_numpy(pi_loop):
+    model, data = pi_loop
+    config = make_config("siso", model)
+    y = data["y1"].to_numpy()[:1440]
+    u = data[["u1"]].to_numpy()[:1440]
+    beta, cov, settle = _core.residual_regression(model, 0, [0], config, y, u)
+    ref_b, ref_c = reference_window(model.process("y1", "u1"), y, u[:, 0], config.arx_order_a,
+                                    config.laguerre_terms, settle)
+    np.testing.assert_allclose(beta[0], ref_b, rtol=1e-6, atol=1e-9 * np.abs(ref_b).max())
+    np.testing.assert_allclose(cov[0], ref_c, rtol=1e-6, atol=1e-9 * np.abs(ref_c).max())
+
+
+def _wald(beta, cov):
+    w, V = np.linalg.eigh(cov)
+    keep = w > 1e-9 * w.max()
+    z = V[:, keep].T @ beta
+    return float(np.sum(z**2 / w[keep])), int(keep.sum())
+
+
+@pytest.mark.parametrize("family,effect", [("mpc_siso_controls", "none"), ("pi_siso", "none"),
+                                           ("mpc_siso_controls", "noise_change")])
+def test_null_distribution_is_chi_square(family, effect):
+    """Right model, disjoint 2 h windows over several seeds: T / dof averages near 1, at most
+    1.7 (the SVM features' window covariance was 3-15x too small on these loops, docs/families.md:
+    T / dof 3-15), and a noise change does not push it up. The test is conservative on the MPC
+    loops (measured 0.55 for no change and 0.57 for the noise change): the OLS covariance taken
+    given the estimated A(q) overstates beta's spread there; the lower bound catches a covariance
+    gone grossly wrong."""
+    ratios = []
+    for seed in range(3):
+        spec, _ = fam.family(family).draw(seed, effect=effect)
+        model = nominal_model(spec)
+        data = simulate(spec)
+        config = make_config("siso", model)
+        n = config.window_samples(spec["sample_time_s"])
+        y, u = data["y1"].to_numpy(), data[["u1"]].to_numpy()
+        for a in range(0, len(y) - n + 1, n):
+            beta, cov, _ = _core.residual_regression(model, 0, [0], config, y[a:a + n], u[a:a + n])
+            T, dof = _wald(beta[0], cov[0])
+            ratios.append(T / dof)
+    assert len(ratios) >= 15
+    assert 0.3 < np.mean(ratios) < 1.7, np.round(ratios, 2)
+
+
+def test_detect_alarms_on_a_gain_change_and_not_on_a_noise_change():
+    spec, expect = fam.family("pi_siso").draw(1)
+    assert expect["effect"] == "gain"
+    model = nominal_model(spec)
+    result = detect(model, simulate(spec), config="siso")
+    starts = result.alarm_starts(0)
+    assert len(starts) and starts[0] - result.windows["start_s"].iloc[0] > expect["onset_s"]
+    spec, expect = fam.family("mpc_siso_controls").draw(4)
+    assert expect["effect"] == "noise_change"
+    model = nominal_model(spec)
+    result = detect(model, simulate(spec), config="siso")
+    assert len(result.alarm_starts(0)) == 0
+
+
+def test_detector_file_round_trip(tmp_path, pi_loop):
+    model, data = pi_loop
+    result = detect(model, data, 3 * 3600, "siso")
+    det = result.core[0]
+    det.save(str(tmp_path / "d.json"))
+    again = _core.Detector.load(str(tmp_path / "d.json"))
+    assert again.scorers[0].significance == pytest.approx(0.001)
+    assert again.to_json() == det.to_json()

@@ -78,7 +78,8 @@ def plot_profiles(model, data, path, events=None, title=None, origin=None):
 def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), events=None, title=None, origin=None):
     """Per channel, against the end time of each moving window: left, how far the window's
     identified model lies inside (> 0) or outside (< 0) the region learnt in training (the
-    one-class SVM score, eq. 20); right, the share of the recent windows that were outside
+    one-class SVM score, eq. 20; for a residual-test process channel log10(p / level) of its
+    Wald test, negative when p < level); right, the share of the recent windows that were outside
     (the indicator, eq. 23) with the alarm threshold. Training windows score 0."""
     plt = _pyplot()
     picked = [k for k, c in enumerate(result.channels) if c["kind"] in kinds]

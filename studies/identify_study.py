@@ -70,10 +70,8 @@ def run_integrating(loop, steps, seeds, ts=10.0, rows=751, step_size=0.5):
     was the one with a lag."""
     est, refs, covered, refused, integrating, lagged = [], [], [], 0, 0, 0
     for seed in seeds:
-        df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=steps, step_size=step_size)
-        try:
-            r = model_from_data(df, ["OP"], ["PV"])
-        except NotIdentified:
+        df, r = identified(loop, seed, steps, rows, ts, step_size=step_size)
+        if r is None:
             refused += 1
             continue
         c = r.channels[0]
@@ -90,15 +88,13 @@ def run_integrating(loop, steps, seeds, ts=10.0, rows=751, step_size=0.5):
     return np.array(est), np.array(refs), np.array(covered), refused, integrating, lagged
 
 
-def integrating_row(label, loop, x, cover=None):
-    if len(x) == 0:
-        return f"{label:<9}" + " (none identified as integrating)"
-    truth = np.array([loop.gain, loop.dead_time_s + loop.time_constant_s])
-    scale = np.array([loop.gain / 100, 1.0])
-    bias = (x.mean(axis=0) - truth) / scale
-    sd = x.std(axis=0, ddof=1) / scale if len(x) > 1 else np.full(2, np.nan)
-    cov = "" if cover is None else f"  {cover.mean():4.2f}"
-    return f"{label:<9}" + "  ".join(f"{b:+7.1f} {s:6.1f}" for b, s in zip(bias, sd)) + cov
+def identified(loop, seed, steps, rows, ts, **simulate):
+    """A simulated record of loop and mpmpp's identification of it (None when refused)."""
+    df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=steps, **simulate)
+    try:
+        return df, model_from_data(df, ["OP"], ["PV"])
+    except NotIdentified:
+        return df, None
 
 
 def run_case(loop, steps, seeds, ts=10.0, rows=751):
@@ -108,10 +104,8 @@ def run_case(loop, steps, seeds, ts=10.0, rows=751):
     est, refs, covered, refused, uncertain, slopes = [], [], [], 0, 0, []
     truth = np.array([loop.gain, loop.time_constant_s, loop.dead_time_s])
     for seed in seeds:
-        df = pi_loop.simulate(loop, seed, rows=rows, ts=ts, setpoint_steps=steps)
-        try:
-            r = model_from_data(df, ["OP"], ["PV"])
-        except NotIdentified:
+        df, r = identified(loop, seed, steps, rows, ts)
+        if r is None:
             refused += 1
             continue
         c = r.channels[0]
@@ -128,14 +122,15 @@ def run_case(loop, steps, seeds, ts=10.0, rows=751):
     return truth, np.array(est), np.array(refs), np.array(covered), refused, uncertain, slopes
 
 
-def row(label, truth, x, cover=None):
+def row(label, truth, x, scale, cover=None, empty=" (none identified)"):
+    """Bias and spread of the estimates x (rows) against truth, in units of scale per column,
+    and the mean of cover (per column, or one flag per seed)."""
     if len(x) == 0:
-        return f"{label:<9}" + " (none identified)"
-    scale = np.array([abs(truth[0]) / 100, truth[1] / 100, 1.0])  # %, %, seconds
+        return f"{label:<9}" + empty
     bias = (x.mean(axis=0) - truth) / scale
-    sd = x.std(axis=0, ddof=1) / scale if len(x) > 1 else np.full(3, np.nan)
+    sd = x.std(axis=0, ddof=1) / scale if len(x) > 1 else np.full(len(truth), np.nan)
     cells = [f"{b:+7.1f} {s:6.1f}" for b, s in zip(bias, sd)]
-    cov = "" if cover is None else "  " + " ".join(f"{c:4.2f}" for c in cover.mean(axis=0))
+    cov = "" if cover is None else "  " + " ".join(f"{c:4.2f}" for c in np.atleast_1d(cover.mean(axis=0)))
     return f"{label:<9}" + "  ".join(cells) + cov
 
 
@@ -169,8 +164,9 @@ def print_self_regulating(seeds):
                   + (f", {uncertain} flagged uncertain" if uncertain else "")
                   + (f", {len(slopes)} called integrating (rate gain / (K / tau): "
                      + ", ".join(f"{x:.2f}" for x in slopes) + ")" if slopes else ""))
-            print("  " + row("mpmpp", truth, est, cov))
-            print("  " + row("scipy-ref", truth, refs))
+            scale = np.array([abs(truth[0]) / 100, truth[1] / 100, 1.0])  # %, %, seconds
+            print("  " + row("mpmpp", truth, est, scale, cov))
+            print("  " + row("scipy-ref", truth, refs, scale))
             if len(est):
                 print(f"  max |mpmpp - ref|: K {np.max(np.abs(est[:, 0] - refs[:, 0])):.2g}, "
                       f"tau {np.max(np.abs(est[:, 1] - refs[:, 1])):.2g} s, "
@@ -183,8 +179,11 @@ def print_integrating(loop, steps, seeds):
           f" theta={loop.dead_time_s:g} s: integrating class on {integrating}/{len(seeds)}"
           f" ({lagged} with a lag)"
           + (f", {refused} not identified" if refused else ""))
-    print("  " + integrating_row("mpmpp", loop, est, cov))
-    print("  " + integrating_row("scipy-ref", loop, refs))
+    truth = np.array([loop.gain, loop.dead_time_s + loop.time_constant_s])
+    scale = np.array([loop.gain / 100, 1.0])  # %, seconds
+    empty = " (none identified as integrating)"
+    print("  " + row("mpmpp", truth, est, scale, cov, empty))
+    print("  " + row("scipy-ref", truth, refs, scale, empty=empty))
     if len(est):
         print(f"  max |mpmpp - ref|: K {np.max(np.abs(est[:, 0] - refs[:, 0]) / abs(loop.gain)):.2g} (relative),"
               f" delay {np.max(np.abs(est[:, 1] - refs[:, 1])):.2g} s")

@@ -8,8 +8,8 @@ The numerics are in the C++ core (``mpmpp._core``): per-window features (ARX-OE 
 or for ``process_test: "residual"`` the residual regression of residual_regression.hpp),
 training (``train_detector``: resampling, standardisation, cross-validated outlier fraction,
 one-class SVM, or the Wald test's training mean; detector_training.hpp), scoring, the
-indicator (eq. 23) and alarms, and the detector file. This module turns user input (configs, data frames) into core calls and results into
-tables and JSON.
+indicator (eq. 23) and alarms, and the detector file. This module turns user input (configs,
+data frames) into core calls and results into tables and JSON.
 """
 from __future__ import annotations
 

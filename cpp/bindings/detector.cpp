@@ -94,6 +94,10 @@ void bind_detector(py::module_& m) {
       .def_readwrite("window_significance", &DetectorConfig::window_significance)
       .def_readwrite("laguerre_terms", &DetectorConfig::laguerre_terms)
       .def_readwrite("residual_ar_order", &DetectorConfig::residual_ar_order)
+      .def_property(
+          "noise_test",
+          [](const DetectorConfig& c) { return std::string(to_string(c.noise_test)); },
+          [](DetectorConfig& c, const std::string& s) { c.noise_test = noise_test_from_string(s); })
       .def_readwrite("arx_regularisation", &DetectorConfig::arx_regularisation)
       .def_static("paper_siso", &DetectorConfig::paper_siso)
       .def_static("paper_mimo", &DetectorConfig::paper_mimo)

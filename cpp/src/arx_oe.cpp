@@ -61,8 +61,8 @@ ArxOeEstimator::ArxOeEstimator(ArxOeConfig config)
   oe_.check_signals_ = false;   // A(q)-filtering a non-constant signal keeps it non-constant
 }
 
-void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                              const Eigen::Ref<const Eigen::MatrixXd>& u, ArxOeResult& out) {
+void ArxOeEstimator::estimate_arx(const Eigen::Ref<const Eigen::VectorXd>& y,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out) {
   const Eigen::Index N = y.size(), m = static_cast<Eigen::Index>(config_.structures.size());
   if (u.cols() != m || u.rows() != N)
     throw InputError("u must be " + std::to_string(N) + " x " + std::to_string(m) + ", got " +
@@ -86,7 +86,13 @@ void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     require_left(u.col(j), u_.col(j), "u[" + std::to_string(j) + "]");
 
   // 2. high-order ARX.
-  arx_.estimate(y_, u_, out.arx);
+  arx_.estimate(y_, u_, out);
+}
+
+void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
+                              const Eigen::Ref<const Eigen::MatrixXd>& u, ArxOeResult& out) {
+  estimate_arx(y, u, out.arx);
+  const Eigen::Index N = y.size(), m = static_cast<Eigen::Index>(config_.structures.size());
   const Eigen::VectorXd& a = out.arx.a;
   const int na = config_.arx.na;
 

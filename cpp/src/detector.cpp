@@ -226,10 +226,13 @@ DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
     r.scores.col(k) = with_covariance
                           ? scorers_[k].score_rows(series.features[k], series.covariances[k])
                           : scorers_[k].score_rows(series.features[k]);
+    for (int w = 0; w < n_windows; ++w)
+      if (r.training[w]) r.scores(w, k) = 0.0;  // as in the paper: 0 while the SVM is trained
+  }
+  for (int k = 0; k < n_channels; ++k) {
     MismatchIndicator indicator(config_.inspection_windows(), config_.alarm_count());
     for (int w = 0; w < n_windows; ++w) {
-      if (r.training[w]) r.scores(w, k) = 0.0;  // as in the paper: 0 while the SVM is trained
-      const auto update = indicator.push(r.scores(w, k));
+      const auto update = indicator.push(indicator_score(r.scores.row(w).transpose(), k));
       r.indicator(w, k) = update.indicator;
       if (update.started) r.alarms.push_back({k, w, series.windows[w].end_s});
     }
@@ -253,6 +256,18 @@ Eigen::VectorXd Detector::score_window(WindowFeatures& features,
     h[k] = scorers_[k].reference_covariance.size() != 0 ? scorers_[k].score(f[k], c[k])
                                                         : scorers_[k].score(f[k]);
   return h;
+}
+
+double Detector::indicator_score(const Eigen::Ref<const Eigen::VectorXd>& window_scores,
+                                 int k) const {
+  const MonitoredChannel& c = channels_[k];
+  if (c.kind != MonitoredChannel::Kind::Noise || config_.noise_test != NoiseTest::Wald)
+    return window_scores[k];
+  for (size_t j = 0; j < channels_.size(); ++j)
+    if (channels_[j].kind == MonitoredChannel::Kind::Process && channels_[j].output == c.output &&
+        window_scores[static_cast<Eigen::Index>(j)] < 0)
+      return std::numeric_limits<double>::quiet_NaN();
+  return window_scores[k];
 }
 
 // ------------------------------------------------------------------------------ file format

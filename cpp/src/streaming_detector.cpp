@@ -153,7 +153,7 @@ void StreamingDetector::complete_window(StreamWindow& w) {
   w.alarm.assign(n_channels, false);
   w.alarm_starts.clear();
   for (int k = 0; k < n_channels; ++k) {
-    const auto update = indicators_[k].push(w.scores[k]);
+    const auto update = indicators_[k].push(detector_.indicator_score(w.scores, k));
     w.indicator[k] = update.indicator;
     w.alarm[k] = update.alarm;
     if (update.started) w.alarm_starts.push_back(k);

@@ -56,7 +56,9 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       num_inputs_(nominal.num_inputs()),
       num_outputs_(nominal.num_outputs()),
       with_covariances_(config.resampling == Resampling::Estimator ||
-                        config.process_test == ProcessTest::Residual) {
+                        config.process_test == ProcessTest::Residual ||
+                        config.noise_test == NoiseTest::Wald),
+      noise_wald_(config.noise_test == NoiseTest::Wald) {
   config.validate();
   window_ = config.window_samples(nominal.sample_time_s);
   step_ = config.step_samples(nominal.sample_time_s);
@@ -119,12 +121,20 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
     const int i = channels_[p.noise_channel].output;
     for (size_t e = 0; e < p.inputs.size(); ++e) p.u.col(e) = u.col(p.inputs[e]);
     try {
-      p.estimator.estimate(y.col(i), p.u, result_);
+      if (p.residual && noise_wald_)  // no channel needs the OE step: the ARX step suffices
+        p.estimator.estimate_arx(y.col(i), p.u, result_.arx);
+      else
+        p.estimator.estimate(y.col(i), p.u, result_);
     } catch (const NumericalError& err) {
       if (skip_reason) *skip_reason = err.what();
       return false;
     }
-    features[p.noise_channel] = result_.noise;
+    const Eigen::Index na = feature_length_[p.noise_channel];
+    features[p.noise_channel] = result_.arx.a.tail(na);  // a_1..a_na of A(q) = 1/H (Remark 5)
+    if (noise_wald_ && want_covariances) {
+      const auto block = result_.arx.covariance.topLeftCorner(na, na);
+      (*covariances)[p.noise_channel] = 0.5 * (block + block.transpose());
+    }
     if (p.residual) {
       std::vector<Eigen::VectorXd> beta;
       std::vector<Eigen::MatrixXd> beta_covariance;
@@ -168,7 +178,8 @@ WindowFeatures::Series WindowFeatures::extract_series(
     s.features.emplace_back(count, feature_length_[k]);
     if (with_covariances_) {
       const bool process = channels_[k].kind == MonitoredChannel::Kind::Process;
-      s.covariances.emplace_back(count, process ? feature_length_[k] * feature_length_[k] : 0);
+      s.covariances.emplace_back(
+          count, process || noise_wald_ ? feature_length_[k] * feature_length_[k] : 0);
     }
   }
   std::vector<Eigen::VectorXd> f;

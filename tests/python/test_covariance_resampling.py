@@ -23,7 +23,7 @@ def config(resampling):
     c.outlier_fraction = 0.05
     c.resampling = resampling
     c.alpha = 5.0  # the widening these draws need (docs/detection.md)
-    c.process_test = "svm"  # the SVM's resampling is under test, not the preset's Wald test
+    c.process_test = c.noise_test = "svm"  # the SVM's resampling is under test, not the Wald tests
     return c
 
 

@@ -64,8 +64,9 @@ def anticorrelated_windows(n=73, seed=0):
 
 def config(**changes):
     c = make_config("mimo")
-    # the SVM's training is under test, not the preset's Wald test of process channels
-    c.resampling, c.alpha, c.outlier_fraction, c.process_test = "covariance", 3.0, 0.05, "svm"
+    # the SVM's training is under test, not the preset's Wald tests
+    c.resampling, c.alpha, c.outlier_fraction = "covariance", 3.0, 0.05
+    c.process_test = c.noise_test = "svm"
     for k, v in changes.items():
         setattr(c, k, v)
     return c

@@ -18,8 +18,8 @@ from mpmpp.evaluate import nominal_model
 from mpmpp.identify import arx_oe_model, channel_inputs
 
 # resampling "estimator", alpha 1.25, noise_alpha 5, outlier fraction 0.05; the SVM on the
-# process channels (the preset's own process test is the residual Wald test)
-ESTIMATOR = {"preset": "mimo", "process_test": "svm"}
+# process channels and the SVM on the noise channels (the preset judges both by Wald tests)
+ESTIMATOR = {"preset": "mimo", "process_test": "svm", "noise_test": "svm"}
 
 
 def estimator_config(**changes):

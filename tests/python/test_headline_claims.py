@@ -1,6 +1,7 @@
 """Guards of the recommended presets' headline claims (docs/detection.md): a seeded Monte Carlo
 per preset on the paper's scenarios at seeds never used for choosing (200 on; alpha and the
-training lengths were chosen on seeds 0-99 and checked on 100-199), through ``mpmpp.evaluate``.
+training lengths were chosen on seeds 0-99 and checked on 100-199), through ``mpmpp.evaluate``,
+with the presets' training lengths and with the paper's (3 h SISO, 4 h MIMO).
 
 Margins. Each count is binomial over independent runs. A lower bound on a detection count is
 the 1 % quantile of Binomial(n, 0.95) (the issue's target rate); an upper bound on a false
@@ -61,23 +62,33 @@ def counts(summary, channel):
     return detected, round(row["false_alarm_rate"] * n)
 
 
-@pytest.mark.parametrize("scenario,preset,seeds,changed,noise", [
+G11, G31 = "G[press_dry_weight <- stock_flow]", "G[reel_moisture <- stock_flow]"
+
+
+@pytest.mark.parametrize("scenario,config,seeds,changed,noise", [
     # The gain doubling at 11 h, the noise change of dry_weight at 7 h.
-    ("paper_siso", "siso", range(200, 300), ["G[dry_weight <- stock_flow]"], "H[dry_weight]"),
+    ("paper_siso", "siso", range(200, 300), {"G[dry_weight <- stock_flow]": TARGET_DETECTION}, "H[dry_weight]"),
     # G11 doubled at 20.83 h, G31 at 16.67 h, the noise change of press_moisture at 9.58 h.
-    ("paper_mimo", "mimo", range(200, 260),
-     ["G[press_dry_weight <- stock_flow]", "G[reel_moisture <- stock_flow]"], "H[press_moisture]"),
-])
-def test_recommended_preset_meets_its_claims(scenario, preset, seeds, changed, noise):
-    s = evaluate(scenario, seeds, preset, workers=2, progress=False)
+    ("paper_mimo", "mimo", range(200, 260), {G11: TARGET_DETECTION, G31: TARGET_DETECTION}, "H[press_moisture]"),
+    # The paper's own training lengths (Table 1: 3 h, Table 3: 4 h) with the recommended presets.
+    # G31 with 4 h of training: detected in 15 of 20 runs at seeds 0-19, so its bound is the 1 %
+    # quantile at 0.75, not the target: the shorter training's mean is less precise.
+    ("paper_siso", {"preset": "siso", "train_duration_s": 3 * 3600.0}, range(300, 400),
+     {"G[dry_weight <- stock_flow]": TARGET_DETECTION}, "H[dry_weight]"),
+    ("paper_mimo", {"preset": "mimo", "train_duration_s": 4 * 3600.0}, range(300, 330),
+     {G11: TARGET_DETECTION, G31: 0.75}, "H[press_moisture]"),
+], ids=["siso", "mimo", "siso-3h-training", "mimo-4h-training"])
+def test_recommended_preset_meets_its_claims(scenario, config, seeds, changed, noise):
+    s = evaluate(scenario, seeds, config, workers=2, progress=False)
     n = s["seeds"]
-    for channel in changed:
+    for channel, rate in changed.items():
         detected, _ = counts(s, channel)
-        assert detected >= at_least(n), f"{channel}: detected in {detected} of {n} runs"
-    detected, false_noise = counts(s, noise)
+        assert detected >= at_least(n, rate), f"{channel}: detected in {detected} of {n} runs"
+    detected, _ = counts(s, noise)
     assert detected >= at_least(n), f"{noise}: noise change detected in {detected} of {n} runs"
     false_mpm = round(s["svm"]["any_false_mpm_rate"] * n)
     assert false_mpm <= at_most(n, TARGET_FALSE_MPM), f"false MPM alarm in {false_mpm} of {n} runs"
     during_noise = round(s["svm"]["noise_change_alarm_rate"] * n)
     assert during_noise <= at_most(n, NOISE_CHANGE_MPM), f"MPM alarm during the noise change in {during_noise} of {n}"
-    assert round(s["svm"]["any_false_noise_rate"] * n) <= at_most(n, TARGET_FALSE_MPM)
+    false_noise = round(s["svm"]["any_false_noise_rate"] * n)
+    assert false_noise <= at_most(n, TARGET_FALSE_MPM), f"false noise alarm in {false_noise} of {n} runs"

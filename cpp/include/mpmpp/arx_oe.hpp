@@ -74,6 +74,10 @@ class ArxOeEstimator {
                 const Eigen::Ref<const Eigen::MatrixXd>& u, ArxOeResult& out);
   ArxOeResult estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                        const Eigen::Ref<const Eigen::MatrixXd>& u);
+  // The first step alone (detrending and the high-order ARX): the noise model A(q) and its
+  // covariance without the OE step. Same errors as estimate().
+  void estimate_arx(const Eigen::Ref<const Eigen::VectorXd>& y,
+                    const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out);
   // Windows [s, s + window) for s = 0, step, 2 step, ... while s + window <= N.
   std::vector<WindowEstimate> estimate_windows(const Eigen::Ref<const Eigen::VectorXd>& y,
                                                const Eigen::Ref<const Eigen::MatrixXd>& u,

@@ -41,8 +41,17 @@ enum class ProcessTest {
   Svm,  // the paper: ARX-OE FIR estimates, one-class SVM on the resampled training cloud
   // mpmpp: the nominal model's output error regressed on directions of model change
   // (residual_regression.hpp), each window's coefficients compared with the training mean by
-  // a Wald test at level window_significance. Noise channels keep the SVM.
+  // a Wald test at level window_significance.
   Residual,
+};
+
+// How a noise channel's windows are judged against the training period.
+enum class NoiseTest {
+  Svm,  // the paper: the ARX-OE estimate's A_i(q), one-class SVM on the resampled cloud
+  // mpmpp: the same a_1..a_na with their ARX covariance sigma^2 (Phi'Phi)^-1, compared with
+  // the training mean by a Wald test at window_significance as ProcessTest::Residual's
+  // channels are. With both, the OE step is not run at all.
+  Wald,
 };
 
 struct DetectorConfig {
@@ -74,6 +83,7 @@ struct DetectorConfig {
   double window_significance = 0.01;  // Residual: a window is negative when its Wald p < this
   int laguerre_terms = 3;             // Residual: Laguerre directions per channel
   int residual_ar_order = 0;          // Residual: order of the whitening A(q); 0 = arx_order_a
+  NoiseTest noise_test = NoiseTest::Svm;
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the
   // choices the paper leaves open are documented next to their values in detector_config.cpp.
@@ -107,5 +117,7 @@ const char* to_string(Resampling r);
 Resampling resampling_from_string(const std::string& s);
 const char* to_string(ProcessTest t);
 ProcessTest process_test_from_string(const std::string& s);
+const char* to_string(NoiseTest t);
+NoiseTest noise_test_from_string(const std::string& s);
 
 }  // namespace mpmpp

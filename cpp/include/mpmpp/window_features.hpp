@@ -59,7 +59,9 @@ class WindowFeatures {
   // covariance sigma^2 (J'J)^-1 of features[k] (process channels; the FIR structure makes the
   // OE parameters the features themselves) and a 0 x 0 matrix for noise channels. With
   // ProcessTest::Residual a process channel's features are its residual-regression
-  // coefficients (residual_regression.hpp) and `covariances` receives theirs.
+  // coefficients (residual_regression.hpp) and `covariances` receives theirs; with
+  // NoiseTest::Wald a noise channel's covariance is that of the ARX step's a_1..a_na (and
+  // with both, the OE step is not run).
   bool extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                const Eigen::Ref<const Eigen::MatrixXd>& y, std::vector<Eigen::VectorXd>& features,
                std::string* skip_reason = nullptr,
@@ -71,8 +73,9 @@ class WindowFeatures {
     std::vector<FeatureWindow> windows;
     std::vector<Eigen::MatrixXd>
         features;  // per channel: windows x feature_length, NaN rows when skipped
-    // Resampling::Estimator only (else empty): per channel, windows x d^2, each row the
-    // window's feature covariance in row-major order; 0 columns for noise channels.
+    // Resampling::Estimator or ProcessTest::Residual only (else empty): per channel,
+    // windows x d^2, each row the window's feature covariance in row-major order; 0 columns
+    // for noise channels unless NoiseTest::Wald.
     std::vector<Eigen::MatrixXd> covariances;
   };
   Series extract_series(const Eigen::Ref<const Eigen::VectorXd>& time_s,
@@ -88,13 +91,14 @@ class WindowFeatures {
     ArxOeEstimator estimator;
     Eigen::MatrixXd u;  // window workspace: the problem's input columns
     // ProcessTest::Residual: the process channels' features come from here (the ARX-OE
-    // estimate still gives the noise channel's).
+    // estimate, or with NoiseTest::Wald its ARX step alone, gives the noise channel's).
     std::optional<ResidualRegression> residual;
   };
   double sample_time_s_;
   int num_inputs_, num_outputs_;
   int window_, step_;
   bool with_covariances_;
+  bool noise_wald_;
   std::vector<MonitoredChannel> channels_;
   std::vector<int> feature_length_;
   std::vector<OutputProblem> problems_;

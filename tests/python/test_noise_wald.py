@@ -1,0 +1,87 @@
+"""The noise channels' Wald test of the recommended presets (DetectorConfig::noise_test "wald"):
+the window features are the ARX step's a_1..a_na with sigma^2 (Phi'Phi)^-1, checked against a
+plain least-squares reference; a noise change alarms the noise channel only; a process change
+does not raise a noise alarm on its output (Detector::indicator_score)."""
+import json
+
+import numpy as np
+import pytest
+
+import identification_reference as ref
+import mpmpp
+from mpmpp import _core
+from mpmpp.detect import Detector, _arrays, detect, make_config
+from mpmpp.evaluate import load_scenario, nominal_model
+from mpmpp.simulate import simulate
+
+
+def _paper(name, seed, hours=None):
+    spec = load_scenario(name)
+    spec["seed"] = seed
+    if hours is not None:
+        spec["duration_s"] = hours * 3600.0
+        spec["events"] = [e for e in spec["events"] if e["time_s"] < spec["duration_s"]]
+    return nominal_model(spec), simulate(spec)
+
+
+def test_presets_use_the_wald_noise_test_and_the_paper_presets_do_not():
+    assert make_config("siso").noise_test == "wald" and make_config("mimo").noise_test == "wald"
+    assert make_config("paper_siso").noise_test == "svm" and make_config("paper_mimo").noise_test == "svm"
+    with pytest.raises(ValueError, match="noise_test"):
+        make_config({"preset": "siso", "noise_test": "bogus"})
+
+
+def test_noise_features_are_the_arx_step_with_its_covariance():
+    model, data = _paper("paper_siso", 4, hours=5)
+    config = make_config("siso", model)
+    time_s, u, y = _arrays(model, data)
+    series = _core.WindowFeatures(model, config).extract_series(time_s, u, y)
+    noise = [k for k, c in enumerate(_core.WindowFeatures(model, config).channels) if c[0] == "noise"][0]
+    n, na = config.window_samples(model.sample_time_s), config.arx_order_a
+    delay = model.process(model.outputs[0], model.inputs[0]).delay
+    for w in (0, len(series.windows) // 2):
+        first = series.windows[w]["first"]
+        yw, uw = y[first:first + n, 0], u[first:first + n]
+        yw, uw = yw - yw.mean(), uw - uw.mean(axis=0)  # the ARX-OE step's mean detrending
+        theta, sigma2, regularised = ref.arx(yw, uw, na, [config.arx_order_b + 1], [delay], delta=1e-4)
+        assert not regularised
+        Phi, _ = ref.arx_regressors(yw, uw, na, [config.arx_order_b + 1], [delay])
+        np.testing.assert_allclose(series.features[noise][w], theta[:na], rtol=1e-7, atol=1e-9)
+        cov = (sigma2 * np.linalg.inv(Phi.T @ Phi))[:na, :na]
+        np.testing.assert_allclose(series.covariances[noise][w].reshape(na, na), cov, rtol=1e-6)
+
+
+def test_noise_change_alarms_the_noise_channel_with_the_paper_training_length():
+    # Table 1's 3 h of training; the noise change of dry_weight at 7 h, the gain at 11 h.
+    model, data = _paper("paper_siso", 211)
+    r = detect(model, data, 3 * 3600, "siso")
+    t0 = float(data["time"].iloc[0])
+    starts = {c["kind"]: r.alarm_starts(k) - t0 for k, c in enumerate(r.channels)}
+    assert starts["noise"].size and starts["noise"].min() >= 7 * 3600
+    assert starts["process"].size and starts["process"].min() >= 11 * 3600
+
+
+def test_a_process_change_raises_no_noise_alarm_on_its_output(tmp_path):
+    # Paper MIMO: G11 (press_dry_weight <- stock_flow) doubles at 20.83 h. Windows straddling the
+    # change score negative on H[press_dry_weight] (the ARX's A(q) absorbs what one B cannot fit
+    # on both sides); they must not count while G11's own test is negative.
+    model, data = _paper("paper_mimo", 3)
+    result, detector = detect(model, data, config="mimo", return_detector=True)
+    labels = [(c["kind"], c["output"], c.get("input")) for c in result.channels]
+    h11 = labels.index(("noise", "press_dry_weight", None))
+    g11 = labels.index(("process", "press_dry_weight", "stock_flow"))
+    h22 = labels.index(("noise", "press_moisture", None))
+    change = float(data["time"].iloc[0]) + 75000.0
+    straddling = (result.windows["end_s"] > change) & (result.windows["start_s"] < change)
+    assert np.nanmin(result.scores[straddling.to_numpy(), h11]) < 0  # the raw window test fires
+    assert result.alarm_starts(g11).size and result.alarm_starts(g11).min() >= change
+    assert result.alarm_starts(h11).size == 0
+    assert result.alarm_starts(h22).size
+    # A saved detector, batch and sample by sample (the plant path), gates the same way.
+    path = tmp_path / "detector.json"
+    detector.save(path)
+    loaded = Detector.load(path)
+    assert json.dumps(loaded.monitor(data).to_dict()["alarms"]) == json.dumps(result.to_dict()["alarms"])
+    windows = mpmpp.StreamingDetector(loaded).push_block(
+        data["time"].to_numpy(), data[list(model.inputs)].to_numpy(), data[list(model.outputs)].to_numpy())
+    np.testing.assert_array_equal(np.array([w.indicator for w in windows])[:, h11], result.indicator[:, h11])

@@ -37,6 +37,8 @@ py::list windows_list(const std::vector<FeatureWindow>& ws) {
 void bind_detector(py::module_& m) {
   m.def("chi_square_survival", &chi_square_survival, py::arg("x"), py::arg("dof"),
         "P(X > x) for X ~ chi-square(dof)");
+  m.def("chi_square_log_survival", &chi_square_log_survival, py::arg("x"), py::arg("dof"),
+        "log P(X > x) for X ~ chi-square(dof), finite where P underflows");
   m.def(
       "residual_regression",
       [](const Model& model, int output, std::vector<int> inputs, const DetectorConfig& config,

@@ -23,8 +23,9 @@ double lower_series(double a, double x) {
   return sum * std::exp(-x + a * std::log(x) - std::lgamma(a));
 }
 
-// Q(a, x) = e^-x x^a / Gamma(a) * 1 / (x + 1 - a - 1 (1 - a) / (x + 3 - a - ...)), x >= a + 1.
-double upper_fraction(double a, double x) {
+// log Q(a, x), Q = e^-x x^a / Gamma(a) * 1 / (x + 1 - a - 1 (1 - a) / (x + 3 - a - ...)),
+// x >= a + 1.
+double log_upper_fraction(double a, double x) {
   const double tiny = std::numeric_limits<double>::min() / kTolerance;
   double b = x + 1.0 - a, c = 1.0 / tiny, d = 1.0 / b, h = d;
   for (int n = 1; n < kMaxTerms; ++n) {
@@ -39,18 +40,20 @@ double upper_fraction(double a, double x) {
     h *= delta;
     if (std::abs(delta - 1.0) < kTolerance) break;
   }
-  return std::exp(-x + a * std::log(x) - std::lgamma(a)) * h;
+  return -x + a * std::log(x) - std::lgamma(a) + std::log(h);
 }
 
 }  // namespace
 
-double chi_square_survival(double x, int dof) {
+double chi_square_log_survival(double x, int dof) {
   if (dof < 1)
     throw InputError("chi_square_survival: dof must be >= 1, got " + std::to_string(dof));
   if (std::isnan(x)) return x;
-  if (x <= 0) return 1.0;
+  if (x <= 0) return 0.0;
   const double a = 0.5 * dof, h = 0.5 * x;
-  return h < a + 1.0 ? 1.0 - lower_series(a, h) : upper_fraction(a, h);
+  return h < a + 1.0 ? std::log1p(-lower_series(a, h)) : log_upper_fraction(a, h);
 }
+
+double chi_square_survival(double x, int dof) { return std::exp(chi_square_log_survival(x, dof)); }
 
 }  // namespace mpmpp

@@ -42,7 +42,7 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   return score(x, Eigen::MatrixXd());
 }
 
-double ChannelScorer::wald_p_value(
+double ChannelScorer::wald_log_p_value(
     const Eigen::Ref<const Eigen::VectorXd>& x,
     const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const {
   const Eigen::VectorXd deviation = x - feature_mean;
@@ -66,7 +66,7 @@ double ChannelScorer::wald_p_value(
     T += proj * proj / lambda[k];
     ++dof;
   }
-  return dof == 0 ? std::numeric_limits<double>::quiet_NaN() : chi_square_survival(T, dof);
+  return dof == 0 ? std::numeric_limits<double>::quiet_NaN() : chi_square_log_survival(T, dof);
 }
 
 double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -75,7 +75,8 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
       (window_covariance.rows() != x.size() || window_covariance.cols() != x.size()))
     throw InputError("detector: the window covariance must be " + std::to_string(x.size()) + " x " +
                      std::to_string(x.size()));
-  if (significance > 0) return std::log10(wald_p_value(x, window_covariance) / significance);
+  if (significance > 0)
+    return (wald_log_p_value(x, window_covariance) - std::log(significance)) / std::log(10.0);
   Eigen::VectorXd deviation = x - feature_mean;
   if (reference_covariance.size() != 0) {
     Eigen::MatrixXd reference_root, window_inverse_root;
@@ -232,7 +233,11 @@ DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
   for (int k = 0; k < n_channels; ++k) {
     MismatchIndicator indicator(config_.inspection_windows(), config_.alarm_count());
     for (int w = 0; w < n_windows; ++w) {
-      const auto update = indicator.push(indicator_score(r.scores.row(w).transpose(), k));
+      if (!counts_for_indicator(r.scores.row(w).transpose(), k)) {
+        r.indicator(w, k) = indicator.indicator();
+        continue;
+      }
+      const auto update = indicator.push(r.scores(w, k));
       r.indicator(w, k) = update.indicator;
       if (update.started) r.alarms.push_back({k, w, series.windows[w].end_s});
     }
@@ -258,16 +263,15 @@ Eigen::VectorXd Detector::score_window(WindowFeatures& features,
   return h;
 }
 
-double Detector::indicator_score(const Eigen::Ref<const Eigen::VectorXd>& window_scores,
-                                 int k) const {
+bool Detector::counts_for_indicator(const Eigen::Ref<const Eigen::VectorXd>& window_scores,
+                                    int k) const {
   const MonitoredChannel& c = channels_[k];
-  if (c.kind != MonitoredChannel::Kind::Noise || config_.noise_test != NoiseTest::Wald)
-    return window_scores[k];
+  if (c.kind != MonitoredChannel::Kind::Noise || config_.noise_test != NoiseTest::Wald) return true;
   for (size_t j = 0; j < channels_.size(); ++j)
     if (channels_[j].kind == MonitoredChannel::Kind::Process && channels_[j].output == c.output &&
         window_scores[static_cast<Eigen::Index>(j)] < 0)
-      return std::numeric_limits<double>::quiet_NaN();
-  return window_scores[k];
+      return false;
+  return true;
 }
 
 // ------------------------------------------------------------------------------ file format

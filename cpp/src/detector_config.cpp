@@ -124,8 +124,8 @@ DetectorConfig DetectorConfig::mimo() {
   c.process_test = ProcessTest::Residual;
   c.window_significance = 0.001;
   c.threshold = 0.5;
-  // Noise channels by the Wald test, as siso(); a noise window is not counted while its
-  // output's process test is negative (Detector::indicator_score). Paper scenario, seeds
+  // Noise channels by the Wald test, as siso(); a noise window is passed over while its
+  // output's process test is negative (Detector::counts_for_indicator). Paper scenario, seeds
   // 0-19: H22's change detected in every run, no false noise alarm with 8 h of training or
   // with Table 3's 4 h (the SVM with noise_alpha 5 and 4 h: false noise alarms in 13 of 20
   // runs, seeds 300-319).

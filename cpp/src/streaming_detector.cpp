@@ -153,7 +153,12 @@ void StreamingDetector::complete_window(StreamWindow& w) {
   w.alarm.assign(n_channels, false);
   w.alarm_starts.clear();
   for (int k = 0; k < n_channels; ++k) {
-    const auto update = indicators_[k].push(detector_.indicator_score(w.scores, k));
+    if (!detector_.counts_for_indicator(w.scores, k)) {
+      w.indicator[k] = indicators_[k].indicator();
+      w.alarm[k] = indicators_[k].alarm();
+      continue;
+    }
+    const auto update = indicators_[k].push(w.scores[k]);
     w.indicator[k] = update.indicator;
     w.alarm[k] = update.alarm;
     if (update.started) w.alarm_starts.push_back(k);

@@ -1,7 +1,7 @@
 """The noise channels' Wald test of the recommended presets (DetectorConfig::noise_test "wald"):
 the window features are the ARX step's a_1..a_na with sigma^2 (Phi'Phi)^-1, checked against a
 plain least-squares reference; a noise change alarms the noise channel only; a process change
-does not raise a noise alarm on its output (Detector::indicator_score)."""
+does not raise a noise alarm on its output (Detector::counts_for_indicator)."""
 import json
 
 import numpy as np

@@ -1,6 +1,8 @@
 """The residual process test of the recommended presets (cpp/include/mpmpp/residual_regression.hpp,
 ChannelScorer's Wald test): against a plain NumPy/SciPy implementation of the same equations,
 SciPy's chi-square tail, and its null distribution and power on simulated closed loops."""
+import math
+
 import numpy as np
 import pytest
 from scipy.signal import lfilter
@@ -17,6 +19,19 @@ def test_chi_square_survival_matches_scipy():
     for dof in (1, 2, 3, 6, 9, 17, 40):
         for x in (1e-3, 0.3, 1.0, 4.0, dof, 2.5 * dof, 60.0, 150.0):
             assert _core.chi_square_survival(x, dof) == pytest.approx(chi2.sf(x, dof), rel=1e-9, abs=1e-300)
+    # Far in the tail, where P underflows (SciPy's logsf too, beyond x ~ 1400), its logarithm
+    # stays finite (the Wald scores): against the asymptotic series of Q(a, h), a = dof/2,
+    # h = x/2: h^(a-1) e^-h / Gamma(a) * sum_k (a-1)(a-2)...(a-k) / h^k.
+    for dof in (1, 6, 18):
+        assert _core.chi_square_log_survival(50.0, dof) == pytest.approx(chi2.logsf(50.0, dof), rel=1e-9)
+        for x in (900.0, 2e3, 1e5):
+            a, h = dof / 2, x / 2
+            term, total = 1.0, 1.0
+            for k in range(1, 12):
+                term *= (a - k) / h
+                total += term
+            reference = (a - 1) * math.log(h) - h - math.lgamma(a) + math.log(total)
+            assert _core.chi_square_log_survival(x, dof) == pytest.approx(reference, rel=1e-12)
 
 
 # ------------------------------------------------------------------ NumPy reference of one window

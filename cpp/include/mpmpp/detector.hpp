@@ -64,14 +64,15 @@ struct ChannelScorer {
   Eigen::MatrixXd mean_covariance;
   // ProcessTest::Residual process channels (else 0): the window level of the Wald test that
   // replaces the SVM. T = (x - mean)' (C + C_mean)^+ (x - mean) ~ chi-square(rank) with no
-  // change, p = P(chi-square > T), and the score is log10(p / significance): negative (a
+  // change, p = P(chi-square > T) (wald_log_p_value: log p, finite where p underflows), and
+  // the score is log10(p / significance): negative (a
   // mismatch window, eq. 22's sign) when p < significance, like h(x) < 0 for the SVM.
   // (A union of nested gain / gain-and-dead-time / full tests with a Bonferroni correction
   // was tried: tuning families, seeds 0-19, it detected fewer changes, 15/35 against 18/35.)
   double significance = 0;
   static constexpr double kWaldRankTolerance = 1e-9;  // eigenvalues of the correlation form
-  double wald_p_value(const Eigen::Ref<const Eigen::VectorXd>& x,
-                      const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const;
+  double wald_log_p_value(const Eigen::Ref<const Eigen::VectorXd>& x,
+                          const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const;
 
   // score(x) for channels without reference_covariance (InputError otherwise); score(x, C)
   // takes the window's covariance (ignored without reference_covariance; NaN when C is not
@@ -122,13 +123,15 @@ class Detector {
   Eigen::VectorXd score_window(WindowFeatures& features, const Eigen::Ref<const Eigen::MatrixXd>& u,
                                const Eigen::Ref<const Eigen::MatrixXd>& y,
                                std::string* skip_reason = nullptr) const;
-  // What the indicator (eq. 23) counts for channel k in a window with these scores: the
-  // score, except that with NoiseTest::Wald a noise channel's window is not counted (NaN)
-  // when a process channel of its output is negative in it. A window straddling a process
-  // change leaves in the ARX's A(q) what one B(q) cannot fit on both sides; the Wald test,
-  // precise to a few percent of a coefficient, then flags a noise change that did not happen
-  // (paper MIMO, seeds 0-19: a noise alarm on press_dry_weight at every G11 doubling).
-  double indicator_score(const Eigen::Ref<const Eigen::VectorXd>& window_scores, int k) const;
+  // Whether channel k's window, with these scores, is evidence for its indicator (eq. 23).
+  // Always, except that with NoiseTest::Wald a noise channel's window is passed over (the
+  // indicator and alarm keep their state) while a process channel of its output is negative
+  // in it. A window straddling a process change leaves in the ARX's A(q) what one B(q)
+  // cannot fit on both sides; the Wald test, precise to a few percent of a coefficient, then
+  // flags a noise change that did not happen (paper MIMO, seeds 0-19: a noise alarm on
+  // press_dry_weight at every G11 doubling). Passing over, not counting as normal, keeps an
+  // earlier, real noise alarm standing through a later process change.
+  bool counts_for_indicator(const Eigen::Ref<const Eigen::VectorXd>& window_scores, int k) const;
 
   const Model& model() const { return model_; }
   const DetectorConfig& config() const { return config_; }

@@ -45,8 +45,8 @@ N_FOLDS = 5
 # fitted on the TUNING families of studies/stiction_benchmark.py (which prints the fit). A
 # negative gain (the linear explanation predicts better) is no evidence either way: how much
 # better a sinusoid explains an external oscillation says nothing about the valve.
-CAL_SLOPE = 460.0
-CAL_GAIN_AT_HALF = 0.0039
+CAL_SLOPE = 570.0
+CAL_GAIN_AT_HALF = 0.0027
 
 HYSTERESIS_KINDS = ("stick_slip", "he", "backlash", "deadband")
 
@@ -74,13 +74,16 @@ class HammersteinResult:
         return ", ".join(f"{k}={v:.3g}" for k, v in self.params.items())
 
 
-def _lagged(y: np.ndarray, v: np.ndarray, frequency: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """ARX regressors (PV lags, valve lags from 1, a constant) and targets; with ``frequency``
-    (cycles per sample) also a sine and a cosine: an oscillating disturbance at the output."""
+def _lagged(y: np.ndarray, v: np.ndarray, frequency: float | None = None,
+            valve_lags: int = N_U) -> tuple[np.ndarray, np.ndarray]:
+    """ARX regressors (PV lags, valve lags 1..valve_lags, a constant) and targets; with
+    ``frequency`` (cycles per sample) also a sine and a cosine: an oscillating disturbance at the
+    output. Every structure predicts the same rows (from max(N_Y, N_U) on), so their held-out
+    errors compare."""
     start = max(N_Y, N_U)
     n = len(y)
     cols = [y[start - k:n - k] for k in range(1, N_Y + 1)]
-    cols += [v[start - k:n - k] for k in range(1, N_U + 1)]
+    cols += [v[start - k:n - k] for k in range(1, valve_lags + 1)]
     cols.append(np.ones(n - start))
     if frequency is not None:
         phase = 2 * np.pi * frequency * np.arange(start, n)
@@ -158,17 +161,20 @@ def fit_valve(op, pv) -> HammersteinResult:
     scale = np.std(y)
     y_s = (y - y.mean()) / scale
 
-    def evaluate(kind, actuator, params, frequency=None):
+    def evaluate(kind, actuator, params, frequency=None, valve_lags=N_U):
         # the valve is taken at rest at the first OP (what it did before the record is unknown)
         v = actuator_positions(u, actuator, u[0])
-        phi, target = _lagged(y_s, v, frequency)
+        phi, target = _lagged(y_s, v, frequency, valve_lags)
         return Candidate(kind, params, float(_held_out_losses(phi, target).sum()))
 
     frequency = dominant_frequency(y_s)
-    plain = evaluate("linear", ActuatorNonlinearity(), {})
-    oscillating = evaluate("linear", ActuatorNonlinearity(), {"disturbance_period": 1.0 / frequency}, frequency)
-    linear = min(plain, oscillating, key=lambda c: c.cv_sse)
-    periodic = oscillating.cv_sse < plain.cv_sse and is_oscillating(u)
+    linears = [evaluate("linear", ActuatorNonlinearity(),
+                        {"valve_lags": k} | ({"disturbance_period": 1.0 / f} if f else {}), f, k)
+               for k in range(N_U + 1) for f in (None, frequency)]
+    linear = min(linears, key=lambda c: c.cv_sse)
+    with_sine = min((c for c in linears if "disturbance_period" in c.params), key=lambda c: c.cv_sse)
+    without = min((c for c in linears if "disturbance_period" not in c.params), key=lambda c: c.cv_sse)
+    periodic = with_sine.cv_sse < without.cv_sse and is_oscillating(u)
     ranking = [linear] + [evaluate(*c) for c in _candidate_grid(u)]
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")

@@ -299,3 +299,23 @@ def test_linear_reference_structures_predict_the_same_rows():
     ar = np.column_stack([y[start - j:300 - j] for j in range(1, hm.N_Y + 1)] + [np.ones(300 - start)])
     np.testing.assert_allclose(np.linalg.lstsq(phi, target, rcond=None)[0],
                                np.linalg.lstsq(ar, y[start:], rcond=None)[0], rtol=1e-10)
+
+
+def test_a_valve_without_effect_is_scored_against_the_linear_reference_without_the_op():
+    """Process gain 0: the OP cannot inform the PV, so any valve gain is the selection among the
+    grid. The best linear explanation then leaves the OP out (no valve lags), and the hysteresis
+    candidates must beat that, not six free valve coefficients that only add estimation error
+    (against those, 4 of these 6 loops were called stiction)."""
+    nothing = Process(b=(0.0,), a=(1.0, -0.5), delay=2)
+    left_out = called = 0
+    for seed in range(1, 7):
+        rng = np.random.default_rng(seed)
+        drift = lfilter([1.0], [1.0, -0.97], rng.standard_normal(751))
+        d = 0.25 * drift / np.std(drift) + 0.1 * rng.standard_normal(751)
+        rec = simulate_pi_loop(nothing, 0.5, 4.0, 751, disturbance=d)
+        res = fit_valve(rec["op"], rec["pv"])
+        linear = next(c for c in res.ranking if c.kind == "linear")
+        left_out += linear.params["valve_lags"] == 0
+        called += res.verdict
+    assert left_out >= 4
+    assert called <= 2

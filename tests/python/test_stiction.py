@@ -281,3 +281,41 @@ def test_an_op_too_jumpy_for_any_valve_size_gives_no_valve_finding():
     r = fit_valve(op, pv)
     assert not r.verdict
     assert r.gain_per_sample == 0.0 and not any(c.kind == "stick_slip" for c in r.ranking)
+
+
+def test_linear_reference_structures_predict_the_same_rows():
+    """The linear valve's structures (valve lags 0..N_U) regress on the same rows, and with no
+    valve lag the regression is the PV's own AR model (checked against a plain NumPy fit)."""
+    from mpmpp.stiction import hammerstein as hm
+    rng = np.random.default_rng(5)
+    y = lfilter([1.0], [1.0, -0.7], rng.standard_normal(300))
+    v = rng.standard_normal(300)
+    start = max(hm.N_Y, hm.N_U)
+    for k in range(hm.N_U + 1):
+        phi, target = hm._lagged(y, v, valve_lags=k)
+        assert phi.shape == (300 - start, hm.N_Y + k + 1)
+        np.testing.assert_array_equal(target, y[start:])
+    phi, target = hm._lagged(y, v, valve_lags=0)
+    ar = np.column_stack([y[start - j:300 - j] for j in range(1, hm.N_Y + 1)] + [np.ones(300 - start)])
+    np.testing.assert_allclose(np.linalg.lstsq(phi, target, rcond=None)[0],
+                               np.linalg.lstsq(ar, y[start:], rcond=None)[0], rtol=1e-10)
+
+
+def test_a_valve_without_effect_is_scored_against_the_linear_reference_without_the_op():
+    """Process gain 0: the OP cannot inform the PV, so any valve gain is the selection among the
+    grid. The best linear explanation then leaves the OP out (no valve lags), and the hysteresis
+    candidates must beat that, not six free valve coefficients that only add estimation error
+    (against those, 4 of these 6 loops were called stiction)."""
+    nothing = Process(b=(0.0,), a=(1.0, -0.5), delay=2)
+    left_out = called = 0
+    for seed in range(1, 7):
+        rng = np.random.default_rng(seed)
+        drift = lfilter([1.0], [1.0, -0.97], rng.standard_normal(751))
+        d = 0.25 * drift / np.std(drift) + 0.1 * rng.standard_normal(751)
+        rec = simulate_pi_loop(nothing, 0.5, 4.0, 751, disturbance=d)
+        res = fit_valve(rec["op"], rec["pv"])
+        linear = next(c for c in res.ranking if c.kind == "linear")
+        left_out += linear.params["valve_lags"] == 0
+        called += res.verdict
+    assert left_out >= 4
+    assert called <= 2

@@ -81,6 +81,52 @@ def _from_step(g, delay: int, ts: float) -> Foptd | None:
     return Foptd(gain, max(t63 - dead, 0.0), dead, False)
 
 
+def integrating_reading(b, f, delay, ts):
+    """(K, tau, theta) of the differenced channel G' = q^-delay (b0 + b1 q^-1) / F, F = 1 or
+    1 - a q^-1, of K e^(-theta s) / (s (tau s + 1)); K is the rate gain (per second). Without a
+    lag the ZOH gives b0 = K Ts (1 - phi), b1 = K Ts phi for theta = (delay - 1 + phi) Ts, exactly.
+    With a lag, theta matches the first moment: the mean delay of G' in samples,
+    delay + b1 / (b0 + b1) + a / (1 - a), is (theta + tau) / Ts + 1 for the continuous system
+    under a ZOH (the pulse and the sampling window each add half a sample), exact for any theta.
+    None when the pole is not in [0, 1), b1 / (b0 + b1) is outside [0, 1) or theta < 0."""
+    a = -f[1] if len(f) > 1 else 0.0
+    if not (0.0 <= a < 1.0) or b.sum() == 0.0:
+        return None
+    share = b[1] / b.sum() if len(b) > 1 else 0.0
+    if not (-1e-9 <= share < 1.0):
+        return None
+    tau = -ts / np.log(a) if a > 0 else 0.0
+    theta = (delay - 1 + share + a / (1.0 - a)) * ts - tau
+    if theta < -1e-9 * ts:
+        return None
+    return b.sum() / ((1.0 - a) * ts), tau, max(theta, 0.0)
+
+
+@dataclass(frozen=True)
+class Integrating:
+    rate_gain: float  # output units per second per input unit
+    time_constant_s: float
+    dead_time_s: float
+
+    def __str__(self) -> str:
+        lag = f", time constant {self.time_constant_s:.4g} s" if self.time_constant_s > 0 else ""
+        return f"integrating, rate gain {self.rate_gain:.4g} per s{lag}, dead time {self.dead_time_s:.4g} s"
+
+
+def integrating_parameters(g, sample_time_s: float) -> Integrating | None:
+    """``g`` with one pole at 1 (the integrating channels ``identify`` writes) as rate gain,
+    lag and dead time of K e^(-theta s) / (s (tau s + 1)); None for any other channel."""
+    num, delay = _taps(g)
+    den = np.asarray(g.den, dtype=float) / g.den[0]
+    if num.size == 0 or len(den) < 2 or len(den) > 3 or len(num) > 2:
+        return None
+    f, rest = np.polydiv(den, [1.0, -1.0])  # den = (1 - q^-1) f, coefficients in q^-1
+    if not np.allclose(rest, 0.0, atol=1e-9):
+        return None
+    reading = integrating_reading(num, f, delay, sample_time_s)
+    return None if reading is None else Integrating(*reading)
+
+
 def foptd_parameters(g, sample_time_s: float) -> Foptd | None:
     """``g`` (a discrete TransferFunction at ``sample_time_s``) as gain, time constant and dead
     time; None where no such reading exists (unstable or integrating channels, zero gain)."""

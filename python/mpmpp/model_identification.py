@@ -52,6 +52,7 @@ import numpy as np
 
 from . import _core
 from .compare import _finite
+from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import require_rows
 
@@ -547,28 +548,7 @@ def _refine(y, U, c: _Candidate, cls, t0, max_iterations=200, tolerance=1e-12):
 
 def _continuous(b, f, delay, ts, cls: ProcessClass):
     """(K, tau, theta) of a fitted channel of class cls, or None when it is not of that form."""
-    return (_integrating if cls.integrating else _foptd)(b, f, delay, ts)
-
-
-def _integrating(b, f, delay, ts):
-    """(K, tau, theta) of the differenced channel G' = q^-delay (b0 + b1 q^-1) / F, F = 1 or
-    1 - a q^-1, of K e^(-theta s) / (s (tau s + 1)); K is the rate gain (per second). Without a
-    lag the ZOH gives b0 = K Ts (1 - phi), b1 = K Ts phi for theta = (delay - 1 + phi) Ts, exactly.
-    With a lag, theta matches the first moment: the mean delay of G' in samples,
-    delay + b1 / (b0 + b1) + a / (1 - a), is (theta + tau) / Ts + 1 for the continuous system
-    under a ZOH (the pulse and the sampling window each add half a sample), exact for any theta.
-    None when the pole is not in [0, 1), b1 / (b0 + b1) is outside [0, 1) or theta < 0."""
-    a = -f[1] if len(f) > 1 else 0.0
-    if not (0.0 <= a < 1.0) or b.sum() == 0.0:
-        return None
-    share = b[1] / b.sum() if len(b) > 1 else 0.0
-    if not (-1e-9 <= share < 1.0):
-        return None
-    tau = -ts / np.log(a) if a > 0 else 0.0
-    theta = (delay - 1 + share + a / (1.0 - a)) * ts - tau
-    if theta < -1e-9 * ts:
-        return None
-    return b.sum() / ((1.0 - a) * ts), tau, max(theta, 0.0)
+    return (integrating_reading if cls.integrating else _foptd)(b, f, delay, ts)
 
 
 def _foptd(b, f, delay, ts):

@@ -42,13 +42,15 @@ def test_check_json_summary(capsys):
 
 
 def test_check_counts_missing_and_integrating_channel(tmp_path, capsys):
-    integrator = mpmpp.TransferFunction([0.1], [1.0, -1.0])
-    model = mpmpp.Model("int", 1.0, ["u"], ["y"], {"y": {"u": integrator}})
+    integrator = mpmpp.TransferFunction([0.1], [1.0, -1.0], 3)  # 0.1 e^(-2 s) / s at Ts = 1 s
+    lagged = mpmpp.TransferFunction([0.1], [1.0, -2.0, 1.0])  # a double integrator: no reading
+    model = mpmpp.Model("int", 1.0, ["u", "v"], ["y"], {"y": {"u": integrator, "v": lagged}})
     mpmpp.save_model(model, tmp_path / "m.json")
-    (tmp_path / "d.csv").write_text("time,u,y,y_sp,x\n0,1,,0,1\n1,,2,0,\n2,1,2,0,3\n")
+    (tmp_path / "d.csv").write_text("time,u,v,y,y_sp,x\n0,1,0,,0,1\n1,,0,2,0,\n2,1,0,2,0,3\n")
     assert cli.main(["check", str(tmp_path / "m.json"), str(tmp_path / "d.csv")]) == 0
     out = capsys.readouterr().out
-    assert "y <- u: integrating (infinite dc gain)" in out
+    assert "y <- u: integrating, rate gain 0.1 per s, dead time 2 s" in out
+    assert "y <- v: integrating (infinite dc gain)" in out
     assert "missing values: u 1, y 1, x 1 (2 rows affected" in out
     assert "setpoints: y_sp" in out and "candidates for diagnose): x" in out
 

@@ -28,17 +28,21 @@ def _finite_or_none(x: float):
 
 
 def _model_summary(path: str, model) -> dict:
-    from ..foptd import foptd_parameters
+    from ..foptd import foptd_parameters, integrating_parameters
 
     channels = []
     for output, input_ in model.channels():
         g = model.process(output, input_)
         f = foptd_parameters(g, model.sample_time_s)
+        r = integrating_parameters(g, model.sample_time_s) if f is None else None
         channels.append({"output": output, "input": input_, "num": g.num.tolist(), "den": g.den.tolist(),
                          "delay": g.delay, "dc_gain": _finite_or_none(g.dc_gain()), "text": str(g),
                          "foptd": None if f is None else {"gain": f.gain, "time_constant_s": f.time_constant_s,
                                                           "dead_time_s": f.dead_time_s, "exact": f.exact},
-                         "foptd_text": None if f is None else str(f)})
+                         "integrating": None if r is None else {"rate_gain_per_s": r.rate_gain,
+                                                                "time_constant_s": r.time_constant_s,
+                                                                "dead_time_s": r.dead_time_s},
+                         "foptd_text": str(f) if f is not None else str(r) if r is not None else None})
     noise = []
     for output in model.outputs:
         h = model.noise(output)

@@ -279,7 +279,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                 fitted.append(_ClassFit(cls, best, chans))
             if not fitted:
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
-            cls, best, chans = _choose_class(fitted, n * ts)
+            cls, best, chans = _choose_class(fitted, n * ts, ts)
             try:
                 _check_verdict(out, chans, action)
             except NotIdentified as refusal:
@@ -308,7 +308,7 @@ class _ClassFit:
         return any(c.significant for c in self.channels)
 
 
-def _choose_class(fitted: list[_ClassFit], duration_s: float):
+def _choose_class(fitted: list[_ClassFit], duration_s: float, sample_time_s: float):
     """(class, candidate, channel summaries) of the BIC-best class, except that an integrating
     output's disturbance is an inflow (it integrates) unless the disturbance at the output scores
     better by OUTPUT_NOISE_MARGIN, and that first order plus
@@ -316,7 +316,13 @@ def _choose_class(fitted: list[_ClassFit], duration_s: float):
     CLASS_MARGIN when it identifies something; when it identifies nothing, the best identified
     other class takes its place if its BIC is lower, or if first order ran to its integrating
     boundary (every time constant longer than the record: no settling seen, the gain lost in the
-    trade-off with tau). Without excitation a PI loop's one-step errors hardly tell the classes
+    trade-off with tau), or if its every channel has a dead time of a sample or more: a rate the
+    data determine, through a transport delay of its own, is an integrating loop whose first-order
+    fit lost its gain to a pole near 1 (level loops with a sticking valve, tuning flow and level
+    loops of studies/stiction_benchmark.py: 5 of 6 refused before), while an integrator without
+    dead time is how a fast self-regulating loop under integral control can look (the tuning
+    linear flow loops: rate gain 1.3 per sample, dead time 0; still refused).
+    Without excitation a PI loop's one-step errors hardly tell the classes
     apart (the noise model absorbs the difference: routine data of a flow loop fit an integrator
     with theta = 0 within a BIC of 3 on 3 of 20 seeds)."""
     inflow = [f.best.bic for f in fitted if f.cls.integrating and f.cls.noise_integrates and f.identified]
@@ -331,8 +337,11 @@ def _choose_class(fitted: list[_ClassFit], duration_s: float):
     else:
         others = [f for f in fitted[1:] if f.identified]
         at_boundary = all(c.time_constant_s > duration_s for c in default.channels)
+        delayed = [f for f in others if all(c.dead_time_s >= sample_time_s for c in f.channels if c.significant)]
         if others and (at_boundary or min(f.best.bic for f in others) < default.best.bic):
             best = min(others, key=lambda f: f.best.bic)
+        elif delayed:
+            best = min(delayed, key=lambda f: f.best.bic)
     return best.cls, best.best, best.channels
 
 

@@ -308,23 +308,26 @@ def test_class_choice_prefers_first_order_unless_clearly_beaten_or_at_its_bounda
 
     from mpmpp.model_identification import CLASS_MARGIN, INTEGRATING, SELF_REGULATING, _ClassFit, _choose_class
 
-    def fit(cls, bic, significant, tau=30.0):
-        c = ChannelSummary("PV", "OP", 1.0, 0.1, tau, 5.0, 10.0, (0.0, 20.0), 2, 1, significant)
+    def fit(cls, bic, significant, tau=30.0, dead=10.0):
+        c = ChannelSummary("PV", "OP", 1.0, 0.1, tau, 5.0, dead, (0.0, 20.0), 2, 1, significant)
         return _ClassFit(cls, SimpleNamespace(bic=bic), [c])
 
-    record = 7500.0
+    record, ts = 7500.0, 10.0
     # integrator better, but by less than the margin: first order kept
     assert _choose_class([fit(SELF_REGULATING, 0.0, True), fit(INTEGRATING, -CLASS_MARGIN + 0.5, True)],
-                         record)[0] is SELF_REGULATING
+                         record, ts)[0] is SELF_REGULATING
     assert _choose_class([fit(SELF_REGULATING, 0.0, True), fit(INTEGRATING, -CLASS_MARGIN - 0.5, True)],
-                         record)[0] is INTEGRATING
-    # first order identifies nothing: the integrator replaces it only at first order's boundary
-    assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=1e5), fit(INTEGRATING, 2.0, True)],
-                         record)[0] is INTEGRATING
+                         record, ts)[0] is INTEGRATING
+    # first order identifies nothing: the integrator replaces it at first order's boundary, or
+    # when it has a dead time of a sample or more; without one it does not (and the verdict refuses)
+    assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=1e5), fit(INTEGRATING, 2.0, True, dead=0.0)],
+                         record, ts)[0] is INTEGRATING
     assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=400.0), fit(INTEGRATING, 2.0, True)],
-                         record)[0] is SELF_REGULATING
+                         record, ts)[0] is INTEGRATING
+    assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=400.0), fit(INTEGRATING, 2.0, True, dead=5.0)],
+                         record, ts)[0] is SELF_REGULATING
     # forced integrating classes: plain BIC
-    assert _choose_class([fit(INTEGRATING, 1.0, True), fit(INTEGRATING, 0.0, True)], record)[1].bic == 0.0
+    assert _choose_class([fit(INTEGRATING, 1.0, True), fit(INTEGRATING, 0.0, True)], record, ts)[1].bic == 0.0
 
 
 def test_threads_do_not_change_the_result():
@@ -360,11 +363,25 @@ def test_level_from_the_cpp_simulator_is_integrating_with_its_rate_gain(seed):
     assert c.dead_time_s == pytest.approx(2.0, abs=0.1)   # q^-3 at 1 s: 2 s after the hold
 
 
-def test_refusal_names_the_integrating_reading_when_the_class_is_open():
+def test_integrating_class_taken_when_first_order_loses_its_gain():
     """Seed 1: a first-order fit with a 200 s lag scores better than the integrator but its gain is
-    not determined; the refusal says what the integrating class reads."""
-    with pytest.raises(NotIdentified, match=r"as an integrating process: rate gain 0\.05.* per s from 'OP'"):
-        model_from_data(_cpp_level_loop(1), ["OP"], ["PV"], max_dead_time_s=40)
+    not determined; the integrator's rate is, through a dead time of its own, so it is taken."""
+    r = model_from_data(_cpp_level_loop(1), ["OP"], ["PV"], max_dead_time_s=40)
+    ch, = r.channels
+    assert ch.integrating and ch.gain == pytest.approx(0.05, rel=0.15) and ch.dead_time_s >= 1.0
+
+
+def test_refusal_names_the_integrating_reading_when_the_class_is_open():
+    from types import SimpleNamespace
+
+    from mpmpp.model_identification import INTEGRATING, SELF_REGULATING, _ClassFit, _integrating_alternative
+
+    def fit(cls, significant):
+        c = ChannelSummary("PV", "OP", 0.05, 0.002, 0.0, float("nan"), 0.0, (0.0, 1.0), 1, 1, significant, True)
+        return _ClassFit(cls, SimpleNamespace(bic=0.0), [c])
+
+    text = _integrating_alternative([fit(SELF_REGULATING, False), fit(INTEGRATING, True)], SELF_REGULATING)
+    assert text.startswith("; as an integrating process: rate gain 0.05 +- 0.002 per s from 'OP', dead time 0 s")
 
 
 def test_identified_level_model_goes_through_diagnose(tmp_path, capsys):
@@ -445,8 +462,8 @@ def test_integrating_disturbance_is_an_inflow_unless_the_output_form_wins_clearl
     first = fit(SELF_REGULATING, 0.0, significant=False)
     close = [first, fit(INTEGRATING, -5.0), fit(INTEGRATING_OUTPUT_NOISE, -5.0 - OUTPUT_NOISE_MARGIN + 1)]
     clear = [first, fit(INTEGRATING, -5.0), fit(INTEGRATING_OUTPUT_NOISE, -5.0 - OUTPUT_NOISE_MARGIN - 1)]
-    assert _choose_class(close, 7500.0)[0] is INTEGRATING
-    assert _choose_class(clear, 7500.0)[0] is INTEGRATING_OUTPUT_NOISE
+    assert _choose_class(close, 7500.0, 10.0)[0] is INTEGRATING
+    assert _choose_class(clear, 7500.0, 10.0)[0] is INTEGRATING_OUTPUT_NOISE
     # no identified inflow form: the output form stands on its own
     alone = [first, fit(INTEGRATING, -5.0, significant=False), fit(INTEGRATING_OUTPUT_NOISE, -6.0)]
-    assert _choose_class(alone, 7500.0)[0] is INTEGRATING_OUTPUT_NOISE
+    assert _choose_class(alone, 7500.0, 10.0)[0] is INTEGRATING_OUTPUT_NOISE

@@ -25,6 +25,7 @@ AR_ORDER = 5                 # AR correction of the noise model (residual whiten
 SETTLE = 60                  # samples left out after the start of each filtered segment
 NOISE_ORDER = 10             # AR order of a disturbance model estimated from the data
 MIN_AR_ROWS_PER_COEFFICIENT = 10
+TREND_GRID = 60              # onset grid (samples) of the step + ramp removed before that fit
 
 
 @dataclass
@@ -86,19 +87,20 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     e0 = np.nan_to_num(e)
     # The split looks for a change of the disturbance's level or colour. A slow drift
     # changes the AR fit too, and a split inside it lets each side's correction absorb a
-    # different part of it; so the split is made on e with its best step + ramp removed
-    # (the drift itself is a candidate of the process pool).
-    trend = trend_fit(e0, weight > 0, noise.inverse(), first_onset, 4 * min_segment // 12,
-                      max(first_onset, 2 * SETTLE)).trend
-    split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
+    # different part of it; so the split and the corrections are fitted to e with its best
+    # step + ramp removed (the drift itself is a candidate of the process pool; a correction
+    # fitted with it differences it away, see estimated_noise_model).
+    detrended = e0 - trend_fit(e0, weight > 0, noise.inverse(), first_onset, 4 * min_segment // 12,
+                               max(first_onset, 2 * SETTLE)).trend
+    split = _core.split_ar(detrended[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
     split_onset = first_onset + split.onset if split.statistic > 0 else None
     # The split is kept when it beats its parameters (AR coefficients, variance, onset).
     split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
     pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
-    ar = [_core.fit_ar(e0, AR_ORDER, a + SETTLE, b) for a, b in pieces]
+    ar = [_core.fit_ar(detrended, AR_ORDER, a + SETTLE, b) for a, b in pieces]
     sigma = []
     for (a, b), poly in zip(pieces, ar):
-        w = TransferFunction(poly, [1.0], 0).filter(e0[a:b])[SETTLE:]
+        w = TransferFunction(poly, [1.0], 0).filter(detrended[a:b])[SETTLE:]
         sigma.append(float(np.sqrt(np.mean(w**2))))
     parity = (np.arange(n) // block) % 2
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
@@ -125,12 +127,19 @@ def has_noise_model(h: TransferFunction) -> bool:
 
 def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray) -> TransferFunction:
     """H = 1 / A(q), A the least-squares AR(NOISE_ORDER) of the output error y_i - G_i u on
-    ``rows`` (roots reflected inside the unit circle, so H^-1 = A and H are stable)."""
-    v = per_segment(sig, lambda yy, uu: _core.output_error(sig.rows[i], yy, uu), sig.y[:, i], sig.u)
+    ``rows`` less its best step + ramp and its mean (roots reflected inside the unit circle,
+    so H^-1 = A and H are stable). A drift is a candidate of its own: an AR fitted with it
+    gets a root near 1 whose inverse differences the drift, and the controller's
+    compensation of it, away before any candidate can explain it, and the compensation's
+    leftovers then pose as a channel change."""
+    v = np.nan_to_num(per_segment(sig, lambda yy, uu: _core.output_error(sig.rows[i], yy, uu), sig.y[:, i], sig.u))
     usable = np.zeros(len(v), bool)
     for a, b in sig.segments:
         usable[a + SETTLE:b] = True
-    return TransferFunction([1.0], stable(masked_ar(np.nan_to_num(v), usable & rows, NOISE_ORDER)), 0)
+    usable &= rows
+    free = v - trend_fit(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE).trend
+    free -= free[usable].mean()
+    return TransferFunction([1.0], stable(masked_ar(free, usable, NOISE_ORDER)), 0)
 
 
 def masked_ar(e: np.ndarray, mask: np.ndarray, order: int = AR_ORDER) -> np.ndarray:

@@ -87,20 +87,19 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     e0 = np.nan_to_num(e)
     # The split looks for a change of the disturbance's level or colour. A slow drift
     # changes the AR fit too, and a split inside it lets each side's correction absorb a
-    # different part of it; so the split and the corrections are fitted to e with its best
-    # step + ramp removed (the drift itself is a candidate of the process pool; a correction
-    # fitted with it differences it away, see estimated_noise_model).
-    detrended = e0 - trend_fit(e0, weight > 0, noise.inverse(), first_onset, 4 * min_segment // 12,
-                               max(first_onset, 2 * SETTLE)).trend
-    split = _core.split_ar(detrended[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
+    # different part of it; so the split is made on e with its best step + ramp removed
+    # (the drift itself is a candidate of the process pool).
+    trend = trend_fit(e0, weight > 0, noise.inverse(), first_onset, 4 * min_segment // 12,
+                      max(first_onset, 2 * SETTLE)).trend
+    split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
     split_onset = first_onset + split.onset if split.statistic > 0 else None
     # The split is kept when it beats its parameters (AR coefficients, variance, onset).
     split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
     pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
-    ar = [_core.fit_ar(detrended, AR_ORDER, a + SETTLE, b) for a, b in pieces]
+    ar = [_core.fit_ar(e0, AR_ORDER, a + SETTLE, b) for a, b in pieces]
     sigma = []
     for (a, b), poly in zip(pieces, ar):
-        w = TransferFunction(poly, [1.0], 0).filter(detrended[a:b])[SETTLE:]
+        w = TransferFunction(poly, [1.0], 0).filter(e0[a:b])[SETTLE:]
         sigma.append(float(np.sqrt(np.mean(w**2))))
     parity = (np.arange(n) // block) % 2
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,

@@ -118,13 +118,17 @@ class GridSums {
   }
 
  public:
-  // Best onset for weighting j; `row` receives its grid index.
-  OnsetFit scan(int j, Eigen::Index* row = nullptr) const {
+  // Best onset for weighting j; `row` receives its grid index. With `latest_tie`, of onsets
+  // with the same statistic the latest is taken: inside the other fold's block a fold's sums
+  // do not move, so it cannot tell where there the change starts, and the held-out drop is
+  // then only counted from where the fold saw it (the earliest onset would charge the other
+  // fold for a change applied before it happened).
+  OnsetFit scan(int j, Eigen::Index* row = nullptr, bool latest_tie = false) const {
     OnsetFit best = make_fit(0, drop_(0, j), rp_(0, j), pp_(0, j));
     Eigen::Index best_row = 0;
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
       const OnsetFit f = make_fit(onsets_[i], drop_(i, j), rp_(i, j), pp_(i, j));
-      if (f.statistic > best.statistic) {
+      if (f.statistic > best.statistic || (latest_tie && f.statistic == best.statistic)) {
         best = f;
         best_row = i;
       }
@@ -186,7 +190,7 @@ CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::Vec
   out.full = sums.scan(0);
   for (int k = 0; k < 2; ++k) {
     Eigen::Index row = 0;
-    out.fold[k] = sums.scan(1 + k, &row);
+    out.fold[k] = sums.scan(1 + k, &row, true);
     out.heldout[k] = sums.drop_with(2 - k, row, out.fold[k].theta);
   }
   return out;

@@ -10,10 +10,11 @@ import mpmpp
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.result import InsufficientData
-from mpmpp.diagnose.whitening import NOISE_ORDER, masked_ar
+from mpmpp.diagnose.whitening import NOISE_ORDER, TREND_GRID, masked_ar
 from mpmpp.update import update
 
 import closed_loop_case as loop
+from trend_reference import brute_trend
 
 
 def model_without_noise():
@@ -95,9 +96,17 @@ def test_estimated_noise_model_matches_least_squares_reference():
     assert prepared.estimated_noise == ["y"]
     h = prepared.sig.noise[0]
     assert np.array_equal(h.num, [1.0]) and len(h.den) == NOISE_ORDER + 1
-    # reference: v as deviations, rows after the 60-sample settling, lags 1..NOISE_ORDER
+    # reference: v as deviations less its best step + ramp (one least-squares fit per onset)
+    # and its mean, rows after the 60-sample settling, lags 1..NOISE_ORDER
     vd = (x + v) - np.mean(x + v)
     vd = vd - lfilter(np.r_[np.zeros(d), num], den, u - u.mean())
+    ok = np.arange(n) >= 60
+    k, _ = brute_trend(vd, ok, mpmpp.TransferFunction(), 0, TREND_GRID, 120)
+    t = np.arange(n)
+    basis = np.column_stack([np.ones(n), t >= k, np.maximum(t - k, 0)])
+    coef = np.linalg.lstsq(basis[ok], vd[ok], rcond=None)[0]
+    vd = vd - basis[:, 1:] @ coef[1:]
+    vd = vd - vd[ok].mean()
     rows = np.arange(60, n)
     lagged = vd[rows[:, None] - np.arange(1, NOISE_ORDER + 1)]
     a_ref = np.linalg.lstsq(lagged, vd[rows], rcond=None)[0]
@@ -105,6 +114,22 @@ def test_estimated_noise_model_matches_least_squares_reference():
     assert h.den[1] == pytest.approx(-1.2, abs=0.05) and h.den[2] == pytest.approx(0.5, abs=0.05)
     assert np.all(np.abs(h.den[3:]) < 0.05)
 
+
+
+@pytest.mark.parametrize("rate", [2e-4, 1e-3])
+def test_estimated_noise_model_does_not_absorb_a_drift(rate):
+    """An output drift from the middle of a closed-loop record, no noise model: the AR fitted
+    with the drift in it has a root at 0.999 (it differences the drift away, and the
+    controller's compensation then posed as a delay / time-constant change at 1e-3 per
+    sample). With the best step + ramp removed first, the estimate keeps the disturbance's
+    own roots (H = (1 - 0.3q^-1) / (1 + 0.5q^-1): 0.66-0.77 measured), the drift is named and
+    no process change is."""
+    data = loop.simulate(n=8000, seed=0, onset=4000, drift_rate=rate)
+    h = diagnosis_signals(model_without_noise(), data).sig.noise[0]
+    assert np.max(np.abs(np.roots(h.den))) < 0.9
+    res = diagnose(model_without_noise(), data)
+    assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS]
+    assert [f.effect for f in res.findings] == ["output_drift"]
 
 # ---- degenerate folds and singular fits --------------------------------------------------------
 

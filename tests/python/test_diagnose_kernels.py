@@ -1,6 +1,9 @@
 """The diagnosis's fast kernels against plain NumPy implementations of the same equations:
 the cross-validated onset scan, the step + ramp trend fit over all onsets, and the drift and
-delayed-channel responses built from one response per family."""
+delayed-channel responses built from one response per family; the grid refinement against an
+analytic minimum."""
+import math
+
 import numpy as np
 import pytest
 
@@ -9,6 +12,7 @@ from mpmpp import TransferFunction, _core
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.plots import rolling_rms
 from mpmpp.diagnose.process import DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
+from mpmpp.diagnose.refine import neighbours, refine
 from mpmpp.diagnose.trend import trend_fit
 from mpmpp.diagnose.whitening import output_residual
 
@@ -16,15 +20,24 @@ import closed_loop_case as loop
 from trend_reference import brute_trend
 
 
-def brute_scan(r, r_without, psi, weight, min_segment, step):
-    best = None
+def brute_fits(r, r_without, psi, weight, min_segment, step):
+    """(onset, statistic, theta) for every grid onset."""
     for k in [0, *range(min_segment, len(r) - min_segment + 1, step)]:
         w = weight[k:]
         pp = np.sum(w * psi[k:] ** 2)
         theta = np.sum(w * r_without[k:] * psi[k:]) / pp if pp > 0 else 0.0
-        stat = np.sum(w * (r[k:] ** 2 - r_without[k:] ** 2)) + pp * theta**2
-        if best is None or stat > best[1]:
-            best = (k, stat, theta)
+        yield k, np.sum(w * (r[k:] ** 2 - r_without[k:] ** 2)) + pp * theta**2, theta
+
+
+def brute_statistics(r, r_without, psi, weight, min_segment, step):
+    return [(k, stat) for k, stat, _ in brute_fits(r, r_without, psi, weight, min_segment, step)]
+
+
+def brute_scan(r, r_without, psi, weight, min_segment, step):
+    best = None
+    for fit in brute_fits(r, r_without, psi, weight, min_segment, step):
+        if best is None or fit[1] > best[1]:
+            best = fit
     return best
 
 
@@ -47,11 +60,15 @@ def test_cross_validated_scan_matches_numpy(late_start):
     assert cv.full.statistic == pytest.approx(full[1], rel=1e-10)
     assert cv.full.theta == pytest.approx(full[2], rel=1e-10)
     for k in (0, 1):
-        # held-out blocks leave runs of onsets with identical sums (exact ties): compare the
-        # statistic reached, and the held-out drop at the onset the scan chose
+        # held-out blocks leave runs of onsets with identical sums (exact ties): the scan takes
+        # the latest of them (the fold cannot tell where inside the other fold's block the
+        # change starts, so the held-out drop counts only from where the fold saw it)
         _, stat, _ = brute_scan(r, r_without, psi, weight * folds[k], 60, 7)
         on = cv.folds[k].onset
         assert cv.folds[k].statistic == pytest.approx(stat, rel=1e-10)
+        tied = [j for j, s in brute_statistics(r, r_without, psi, weight * folds[k], 60, 7)
+                if s == pytest.approx(stat, rel=1e-10)]
+        assert on == max(tied)
         w = (weight * folds[k])[on:]
         theta = np.sum(w * r_without[on:] * psi[on:]) / np.sum(w * psi[on:] ** 2)
         assert cv.folds[k].theta == pytest.approx(theta, rel=1e-10)
@@ -123,3 +140,22 @@ def test_rolling_rms_matches_a_plain_window():
         window = window[np.isfinite(window)]
         expected = np.sqrt(np.mean(window**2)) if len(window) > 10 else np.nan
         assert got[t] == pytest.approx(expected, rel=1e-12, nan_ok=True)
+
+
+@pytest.mark.parametrize("truth,best", [(2.37, 2.0), (0.41, 0.33), (4.2, 3.0), (0.72, 0.67)])
+def test_refine_finds_the_analytic_minimum_between_grid_neighbours(truth, best):
+    """A criterion with its minimum at ``truth`` (a smooth, asymmetric bowl): the refined value
+    is the analytic minimiser, searched only between the grid neighbours of ``best``."""
+    grid = (0.33, 0.5, 0.67, 0.8, 1.25, 1.5, 2.0, 3.0)
+    lo, hi = neighbours(grid, best, 0.2, 5.0)
+    assert lo < truth < hi
+    value = refine(lambda x: (math.log(x) - math.log(truth)) ** 2, grid, best, 0.2, 5.0)
+    assert value == pytest.approx(truth, rel=2e-3)
+
+
+def test_refine_keeps_the_grid_value_when_nothing_is_better():
+    grid = (0.5, 1.0, 2.0)
+    assert refine(lambda x: 0.0, grid, 1.0, 0.1, 4.0) == 1.0          # flat: no improvement
+    assert refine(lambda x: abs(x - 1.0), grid, 1.0, 0.1, 4.0) == 1.0   # minimum on the grid point
+    assert neighbours(grid, 0.5, 0.1, 4.0) == (0.1, 1.0)
+    assert neighbours(grid, 2.0, 0.1, 4.0) == (1.0, 4.0)

@@ -1,13 +1,14 @@
 """The SIZE of each diagnosed effect against the truth, with effects placed between the points
 of the search grids (diagnose/process.py): gain ratio (continuous theta), time constant (grid
-TIME_CONSTANT_FACTORS), dead time (integer grid, an uneven shift), coupling gain (continuous
+TIME_CONSTANT_FACTORS, refined between its points), dead time (integer grid, an uneven shift), coupling gain (continuous
 theta on a grid of poles, the true pole between two of them), and the example case's coupling.
 
 Data: the hidden-effect suite's MPC closed loop (studies/diagnose_eval.py, 2x2 MD plant, 16 h at
 5 s, effect at 6 h), the channel alternating with the seed. Tolerances sit near what the method
 achieves; measured over seeds 0-7 with the label right (docs/diagnose.md, "Effect sizes"):
-gain ratio x1.7 within 4 %, x0.55 within 13 %; time constant x2.5 / x0.4 always one of the two
-neighbouring grid values, with the gain kept within 0.87-1.20; dead time +7 samples exact;
+gain ratio x1.7 within 4 %, x0.55 within 13 %; time constant (refined between the grid points)
+x2.5 within 15 % on seeds 0-3 (2.34-3.28 on 0-7), x0.4 within 7 %, the gain kept within 0.94-1.27;
+dead time +7 samples exact;
 coupling gain 0.35 with pole 0.87 within 23 % (the pole snaps to 0.8 or 0.9 and the gain
 absorbs part of the difference).
 """
@@ -62,12 +63,14 @@ def test_gain_ratio(seed, factor, tolerance):
 
 
 @pytest.mark.parametrize("seed", SEEDS)
-@pytest.mark.parametrize("factor", [2.5, 0.4])
-def test_time_constant_between_grid_points(seed, factor):
-    neighbours = _between(TIME_CONSTANT_FACTORS, factor)
+@pytest.mark.parametrize("factor,tolerance", [(2.5, 0.2), (0.4, 0.1)])
+def test_time_constant_between_grid_points(seed, factor, tolerance):
+    _between(TIME_CONSTANT_FACTORS, factor)
     sc, expect = _case("time_constant", seed, factor=factor)
     top = _top_process(sc, seed, "time_constant", expect["output"], expect["input"])
-    assert top.estimate["time_constant_ratio"] in neighbours
+    # refined between the grid points, not snapped to one of them
+    assert top.estimate["time_constant_ratio"] not in TIME_CONSTANT_FACTORS
+    assert top.estimate["time_constant_ratio"] == pytest.approx(factor, rel=tolerance)
     # the time constant changed, the gain did not: the fitted channel scale stays near 1
     assert 0.8 <= top.estimate["gain_ratio"] <= 1.25
     g = suite.BASE["process"][expect["output"]][expect["input"]]

@@ -34,7 +34,9 @@ OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
 // odd fold where odd(t) != 0, else in the even fold. The onset and theta are chosen on one
 // fold's samples and the drop of the squared error
 //   sum_{t >= onset_k, t in the other fold} weight (r^2 - (r_without - theta_k psi)^2)
-// is measured on the other fold's; `full` is the scan on all samples. One pass of suffix sums
+// is measured on the other fold's; `full` is the scan on all samples. Inside the other fold's
+// blocks a fold's sums do not move, so its onsets there tie exactly: the latest is taken, and
+// the held-out drop is counted only from where the fold saw the change. One pass of suffix sums
 // serves the three scans and both held-out drops.
 struct CrossValidatedOnset {
   OnsetFit full;

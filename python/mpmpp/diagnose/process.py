@@ -12,6 +12,7 @@ likelihood-ratio statistic) minus log(N)/2 per parameter (theta, grid value, ons
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -22,11 +23,13 @@ from .._core import TransferFunction
 from ..signals import Signals
 from .errors import held_out_error
 from .noise import drift_finding
+from .refine import refine
 from .result import Finding, InsufficientData, ModelChange
 from .scoring import ProfilePoint, ci_from_profile, confidence
 from .whitening import OutputResidual
 
 TIME_CONSTANT_FACTORS = (0.33, 0.5, 0.67, 0.8, 1.25, 1.5, 2.0, 3.0)
+TIME_CONSTANT_BOUNDS = (0.2, 5.0)   # refinement bounds past the grid's ends
 DELAY_RANGE = (-10, 15)      # new delay = model delay + this range (samples)
 COUPLING_POLES = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98)
 # Delay >= 1: in closed loop u(t) may already react to y(t), a lag-0 channel would fit feedback.
@@ -360,6 +363,7 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
             if finding is not None:
                 finding.score = top.score
         else:
+            top = _refined_time_constant(out, r, top, first_onset, min_segment, step)
             finding = _process_finding(out, top)
         if finding is None or not finding.error_after < finding.error_before:
             # the whitened-domain gain does not carry over to the model the update would write
@@ -368,6 +372,30 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
         w = responses.whitened(top.shape)
         r = np.where(np.arange(len(r)) >= top.onset, _without_channel(r, w) - top.theta * w.psi, r)
     return found
+
+
+def _refined_time_constant(out: OutputResidual, r: np.ndarray, top: Fit, first_onset: int, min_segment: int,
+                           step: int) -> Fit:
+    """A time-constant fit with its factor refined between the neighbouring grid points
+    (refine.py) by the statistic on all the data (the one the reported onset and theta
+    maximise). The held-out drop chose the structure and stays its score. Other fits as given."""
+    s = top.shape
+    if s.effect != "time_constant":
+        return top
+
+    def fit_at(factor: float) -> Fit:
+        shape = dataclasses.replace(s, shape=first_order_with_time_constant(s.nominal, factor), label=factor)
+        return _fit_shape(out, r, shape, first_onset, min_segment, step, ShapeResponses(out))
+
+    factor = refine(lambda f: -fit_at(f).statistic, TIME_CONSTANT_FACTORS, s.label, *TIME_CONSTANT_BOUNDS)
+    if factor == s.label:
+        return top
+    refined = fit_at(factor)
+    if not refined.statistic > top.statistic:
+        return top
+    refined.heldout, refined.score = top.heldout, top.score
+    refined.profile = top.profile + [ProfilePoint(factor, refined.statistic)]
+    return refined
 
 
 def _time_constant_s(g: TransferFunction, ts: float) -> float:

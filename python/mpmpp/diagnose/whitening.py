@@ -25,6 +25,7 @@ AR_ORDER = 5                 # AR correction of the noise model (residual whiten
 SETTLE = 60                  # samples left out after the start of each filtered segment
 NOISE_ORDER = 10             # AR order of a disturbance model estimated from the data
 MIN_AR_ROWS_PER_COEFFICIENT = 10
+TREND_GRID = 60              # onset grid (samples) of the step + ramp removed before that fit
 
 
 @dataclass
@@ -125,12 +126,19 @@ def has_noise_model(h: TransferFunction) -> bool:
 
 def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray) -> TransferFunction:
     """H = 1 / A(q), A the least-squares AR(NOISE_ORDER) of the output error y_i - G_i u on
-    ``rows`` (roots reflected inside the unit circle, so H^-1 = A and H are stable)."""
-    v = per_segment(sig, lambda yy, uu: _core.output_error(sig.rows[i], yy, uu), sig.y[:, i], sig.u)
+    ``rows`` less its best step + ramp and its mean (roots reflected inside the unit circle,
+    so H^-1 = A and H are stable). A drift is a candidate of its own: an AR fitted with it
+    gets a root near 1 whose inverse differences the drift, and the controller's
+    compensation of it, away before any candidate can explain it, and the compensation's
+    leftovers then pose as a channel change."""
+    v = np.nan_to_num(per_segment(sig, lambda yy, uu: _core.output_error(sig.rows[i], yy, uu), sig.y[:, i], sig.u))
     usable = np.zeros(len(v), bool)
     for a, b in sig.segments:
         usable[a + SETTLE:b] = True
-    return TransferFunction([1.0], stable(masked_ar(np.nan_to_num(v), usable & rows, NOISE_ORDER)), 0)
+    usable &= rows
+    free = v - trend_fit(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE).trend
+    free -= free[usable].mean()
+    return TransferFunction([1.0], stable(masked_ar(free, usable, NOISE_ORDER)), 0)
 
 
 def masked_ar(e: np.ndarray, mask: np.ndarray, order: int = AR_ORDER) -> np.ndarray:

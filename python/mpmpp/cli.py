@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 
@@ -77,6 +78,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 2
+    # The commands' NumPy work is many small least-squares solves (valve fits, trend scans):
+    # threaded BLAS spends more on its threads than on them, 20x on a loaded 2-core machine
+    # (docs/diagnose.md). One thread unless the user set otherwise; studies and fleets
+    # parallelise over processes.
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
     try:
         return int(importlib.import_module(COMMANDS[args.command][1]).run(args) or 0)
     except (ValueError, OSError) as exc:

@@ -65,6 +65,19 @@ def test_help_loads_no_engine_and_no_heavy_library():
     assert out.strip() == "['numpy']"  # check's own module needs NumPy; --help alone needs nothing
 
 
+def test_commands_run_blas_single_threaded_unless_the_user_says_otherwise(tmp_path):
+    model = tmp_path / "m.json"
+    mpmpp.save_model(mpmpp.Model("m", 1.0, ["u"], ["y"], {"y": {"u": mpmpp.TransferFunction([0.5], [1.0, -0.5], 1)}}),
+                     model)
+    code = (f"import os; from mpmpp import cli; cli.main(['check', {str(model)!r}]); "
+            "import numpy; print('threads', os.environ['OPENBLAS_NUM_THREADS'])")
+    env = {"PYTHONPATH": str(pathlib.Path(mpmpp.__file__).parents[1])}
+    run = lambda extra: subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,  # noqa: E731
+                                       check=True, env={**env, **extra}).stdout
+    assert "threads 1" in run({})
+    assert "threads 4" in run({"OPENBLAS_NUM_THREADS": "4"})
+
+
 def test_lazy_package_names_are_the_functions():
     import mpmpp.simulate  # noqa: F401  (binds the submodule on the package, as any import does)
     import mpmpp.detect  # noqa: F401

@@ -94,12 +94,17 @@ def test_delay_convention_matches_the_contract(name):
 def test_score():
     expect = {"kind": "mpm", "onset_s": 100.0, "channels": [["y1", "u1"]]}
     assert score({"G[y1 <- u1]": [150.0], "H[y1]": []}, expect) == {
-        "false_mpm": False, "detected": True, "delay_s": 50.0, "mislocated": False}
+        "false_mpm": False, "false_noise": False, "detected": True, "delay_s": 50.0, "mislocated": False}
+    assert score({"H[y1]": [60.0, 150.0]}, expect)["false_noise"]
+    assert not score({"H[y1]": [150.0]}, expect)["false_noise"]
     assert score({"G[y1 <- u1]": [50.0]}, expect)["false_mpm"]
     assert score({"G[y1 <- u2]": [120.0], "G[y1 <- u1]": []}, expect)["mislocated"]
     control = {"kind": "none", "onset_s": 100.0, "channels": []}
     assert score({"G[y1 <- u1]": [150.0]}, control) == {
-        "false_mpm": True, "detected": None, "delay_s": None, "mislocated": None}
+        "false_mpm": True, "false_noise": False, "detected": None, "delay_s": None, "mislocated": None}
+    # a noise change at 100 s: a noise alarm after it is right; with no change at all, none is
+    assert not score({"H[y1]": [150.0]}, {**control, "effect": "noise_change"})["false_noise"]
+    assert score({"H[y1]": [150.0]}, {**control, "effect": "none", "onset_s": None})["false_noise"]
     anything = {"kind": "any", "onset_s": 100.0, "channels": [["y1", "u1"]], "output": "y1"}
     assert score({"H[y1]": [130.0]}, anything)["detected"]
     assert not math.isnan(score({}, anything)["detected"])

@@ -268,7 +268,7 @@ ChannelScorer train_channel_scorer(const Eigen::Ref<const RowMatrixXd>& estimate
   if (wald) {
     // The Wald test needs no cloud: the training mean, its covariance and the level.
     if (covariances.size() == 0)
-      throw InputError("a residual-test channel needs the training windows' covariances");
+      throw InputError("a Wald-test channel needs the training windows' covariances");
     s.feature_mean = estimates.colwise().mean().transpose();
     s.feature_scale = Eigen::VectorXd::Ones(d);
     s.significance = config.window_significance;

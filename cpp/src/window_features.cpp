@@ -19,6 +19,11 @@ std::vector<MonitoredChannel> monitored_channels(const Model& model) {
 
 namespace {
 
+// Symmetrised bit for bit, so that batch (row-major copy) and streaming scores agree.
+Eigen::MatrixXd symmetrised(const Eigen::Ref<const Eigen::MatrixXd>& m) {
+  return 0.5 * (m + m.transpose());
+}
+
 ArxOeConfig output_problem_config(const Model& model, const DetectorConfig& config, int i,
                                   const std::vector<int>& inputs,
                                   std::vector<int>& fir_after_delay) {
@@ -55,9 +60,8 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
     : sample_time_s_(nominal.sample_time_s),
       num_inputs_(nominal.num_inputs()),
       num_outputs_(nominal.num_outputs()),
-      with_covariances_(config.resampling == Resampling::Estimator ||
-                        config.process_test == ProcessTest::Residual ||
-                        config.noise_test == NoiseTest::Wald),
+      process_covariances_(config.resampling == Resampling::Estimator ||
+                           config.process_test == ProcessTest::Residual),
       noise_wald_(config.noise_test == NoiseTest::Wald) {
   config.validate();
   window_ = config.window_samples(nominal.sample_time_s);
@@ -115,7 +119,7 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
     return false;
   }
   features.resize(channels_.size());
-  const bool want_covariances = with_covariances_ && covariances != nullptr;
+  const bool want_covariances = has_covariances() && covariances != nullptr;
   if (want_covariances) covariances->assign(channels_.size(), Eigen::MatrixXd());
   for (auto& p : problems_) {
     const int i = channels_[p.noise_channel].output;
@@ -133,7 +137,7 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
     features[p.noise_channel] = result_.arx.a.tail(na);  // a_1..a_na of A(q) = 1/H (Remark 5)
     if (noise_wald_ && want_covariances) {
       const auto block = result_.arx.covariance.topLeftCorner(na, na);
-      (*covariances)[p.noise_channel] = 0.5 * (block + block.transpose());
+      (*covariances)[p.noise_channel] = symmetrised(block);
     }
     if (p.residual) {
       std::vector<Eigen::VectorXd> beta;
@@ -141,9 +145,7 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
       if (!p.residual->estimate(y.col(i), p.u, beta, beta_covariance, skip_reason)) return false;
       for (size_t e = 0; e < p.inputs.size(); ++e) {
         features[p.channels[e]] = beta[e];
-        if (want_covariances)
-          (*covariances)[p.channels[e]] =
-              0.5 * (beta_covariance[e] + beta_covariance[e].transpose());
+        if (want_covariances) (*covariances)[p.channels[e]] = symmetrised(beta_covariance[e]);
       }
       continue;
     }
@@ -152,11 +154,9 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
       const Eigen::VectorXd& g = result_.channels[e].fir;
       features[p.channels[e]] = g.tail(g.size() - p.skip[e]);
       const Eigen::Index d = features[p.channels[e]].size();
-      if (want_covariances) {  // symmetrised bit for bit: batch (row-major copy) and streaming
-                               // agree
-        const auto block = result_.two_step_covariance.block(offset, offset, d, d);
-        (*covariances)[p.channels[e]] = 0.5 * (block + block.transpose());
-      }
+      if (want_covariances && process_covariances_)
+        (*covariances)[p.channels[e]] =
+            symmetrised(result_.two_step_covariance.block(offset, offset, d, d));
       offset += d;
     }
   }
@@ -176,10 +176,10 @@ WindowFeatures::Series WindowFeatures::extract_series(
   s.windows.resize(count);
   for (size_t k = 0; k < channels_.size(); ++k) {
     s.features.emplace_back(count, feature_length_[k]);
-    if (with_covariances_) {
+    if (has_covariances()) {
       const bool process = channels_[k].kind == MonitoredChannel::Kind::Process;
-      s.covariances.emplace_back(
-          count, process || noise_wald_ ? feature_length_[k] * feature_length_[k] : 0);
+      const bool covariance = process ? process_covariances_ : noise_wald_;
+      s.covariances.emplace_back(count, covariance ? feature_length_[k] * feature_length_[k] : 0);
     }
   }
   std::vector<Eigen::VectorXd> f;
@@ -194,12 +194,12 @@ WindowFeatures::Series WindowFeatures::extract_series(
     for (size_t k = 0; k < channels_.size(); ++k) {
       if (win.skipped) {
         s.features[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());
-        if (with_covariances_)
+        if (has_covariances())
           s.covariances[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());
         continue;
       }
       s.features[k].row(w) = f[k].transpose();
-      if (with_covariances_ && c[k].size() != 0)  // symmetric: row- and column-major agree
+      if (has_covariances() && c[k].size() != 0)  // symmetric: row- and column-major agree
         s.covariances[k].row(w) = Eigen::Map<const Eigen::RowVectorXd>(c[k].data(), c[k].size());
     }
   }

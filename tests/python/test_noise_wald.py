@@ -31,6 +31,24 @@ def test_presets_use_the_wald_noise_test_and_the_paper_presets_do_not():
         make_config({"preset": "siso", "noise_test": "bogus"})
 
 
+def test_wald_noise_channels_beside_svm_process_channels():
+    # The paper's preset (SVM process channels, no estimator covariances) with the Wald noise
+    # test: only the noise channels carry covariances, and every window after the noise change
+    # at 7 h scores negative. (Whether it alarms depends on the SVM's process windows, which
+    # are often negative on this preset: the noise windows are then passed over.)
+    model, data = _paper("paper_siso", 5)
+    config = make_config({"preset": "paper_siso", "noise_test": "wald"})
+    time_s, u, y = _arrays(model, data)
+    features = _core.WindowFeatures(model, config)
+    series = features.extract_series(time_s, u, y)
+    widths = {c[0]: series.covariances[k].shape[1] for k, c in enumerate(features.channels)}
+    assert widths == {"process": 0, "noise": config.arx_order_a ** 2}
+    r = detect(model, data, None, config)
+    k = [k for k, c in enumerate(r.channels) if c["kind"] == "noise"][0]
+    end_h = (r.windows["end_s"].to_numpy() - float(data["time"].iloc[0])) / 3600
+    assert (r.scores[end_h >= 8, k] < 0).all() and (r.scores[(end_h > 3) & (end_h <= 7), k] > 0).all()
+
+
 def test_noise_features_are_the_arx_step_with_its_covariance():
     model, data = _paper("paper_siso", 4, hours=5)
     config = make_config("siso", model)

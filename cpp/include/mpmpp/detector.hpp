@@ -62,11 +62,12 @@ struct ChannelScorer {
   // -0.93 -> -0.99) sees the mean's error as a change in its thin direction (mean squared
   // Mahalanobis distance per coefficient 2.5 instead of 1 over 30 seeds; 1.0 with C_mean).
   Eigen::MatrixXd mean_covariance;
-  // ProcessTest::Residual process channels (else 0): the window level of the Wald test that
-  // replaces the SVM. T = (x - mean)' (C + C_mean)^+ (x - mean) ~ chi-square(rank) with no
-  // change, p = P(chi-square > T) (wald_log_p_value: log p, finite where p underflows), and
-  // the score is log10(p / significance): negative (a
-  // mismatch window, eq. 22's sign) when p < significance, like h(x) < 0 for the SVM.
+  // Wald-test channels (ProcessTest::Residual process channels, NoiseTest::Wald noise
+  // channels; else 0): the window level of the Wald test that replaces the SVM.
+  // T = (x - mean)' (C + C_mean)^+ (x - mean) ~ chi-square(rank) with no change,
+  // p = P(chi-square > T) (wald_log_p_value: log p, finite where p underflows), and the score
+  // is log10(p / significance): negative (a mismatch window, eq. 22's sign) when
+  // p < significance, like h(x) < 0 for the SVM.
   // (A union of nested gain / gain-and-dead-time / full tests with a Bonferroni correction
   // was tried: tuning families, seeds 0-19, it detected fewer changes, 15/35 against 18/35.)
   double significance = 0;

@@ -66,16 +66,17 @@ class WindowFeatures {
                const Eigen::Ref<const Eigen::MatrixXd>& y, std::vector<Eigen::VectorXd>& features,
                std::string* skip_reason = nullptr,
                std::vector<Eigen::MatrixXd>* covariances = nullptr);
-  bool has_covariances() const { return with_covariances_; }
+  bool has_covariances() const { return process_covariances_ || noise_wald_; }
 
   // All windows of a series (windows start at 0, step, 2 step, ... while they fit).
   struct Series {
     std::vector<FeatureWindow> windows;
     std::vector<Eigen::MatrixXd>
         features;  // per channel: windows x feature_length, NaN rows when skipped
-    // Resampling::Estimator or ProcessTest::Residual only (else empty): per channel,
-    // windows x d^2, each row the window's feature covariance in row-major order; 0 columns
-    // for noise channels unless NoiseTest::Wald.
+    // Empty unless has_covariances(): per channel, windows x d^2, each row the window's
+    // feature covariance in row-major order; 0 columns for the channels without one (process
+    // channels under the SVM without Resampling::Estimator, noise channels without
+    // NoiseTest::Wald).
     std::vector<Eigen::MatrixXd> covariances;
   };
   Series extract_series(const Eigen::Ref<const Eigen::VectorXd>& time_s,
@@ -97,8 +98,8 @@ class WindowFeatures {
   double sample_time_s_;
   int num_inputs_, num_outputs_;
   int window_, step_;
-  bool with_covariances_;
-  bool noise_wald_;
+  bool process_covariances_;  // Resampling::Estimator (the OE step's) or ProcessTest::Residual
+  bool noise_wald_;           // NoiseTest::Wald: the ARX step's covariance of a_1..a_na
   std::vector<MonitoredChannel> channels_;
   std::vector<int> feature_length_;
   std::vector<OutputProblem> problems_;

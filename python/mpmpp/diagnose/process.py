@@ -13,6 +13,7 @@ likelihood-ratio statistic) minus log(N)/2 per parameter (theta, grid value, ons
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -363,7 +364,7 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
             if finding is not None:
                 finding.score = top.score
         else:
-            top = _refined_time_constant(out, r, top, first_onset, min_segment, step)
+            top = _refined_time_constant(out, r, top, first_onset, min_segment, step, responses)
             finding = _process_finding(out, top)
         if finding is None or not finding.error_after < finding.error_before:
             # the whitened-domain gain does not carry over to the model the update would write
@@ -375,7 +376,7 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
 
 
 def _refined_time_constant(out: OutputResidual, r: np.ndarray, top: Fit, first_onset: int, min_segment: int,
-                           step: int) -> Fit:
+                           step: int, responses: ShapeResponses) -> Fit:
     """A time-constant fit with its factor refined between the neighbouring grid points
     (refine.py) by the statistic on all the data (the one the reported onset and theta
     maximise). The held-out drop chose the structure and stays its score. Other fits as given."""
@@ -383,9 +384,10 @@ def _refined_time_constant(out: OutputResidual, r: np.ndarray, top: Fit, first_o
     if s.effect != "time_constant":
         return top
 
+    @functools.cache  # the minimiser's best point is fitted again below
     def fit_at(factor: float) -> Fit:
         shape = dataclasses.replace(s, shape=first_order_with_time_constant(s.nominal, factor), label=factor)
-        return _fit_shape(out, r, shape, first_onset, min_segment, step, ShapeResponses(out))
+        return _fit_shape(out, r, shape, first_onset, min_segment, step, responses)
 
     factor = refine(lambda f: -fit_at(f).statistic, TIME_CONSTANT_FACTORS, s.label, *TIME_CONSTANT_BOUNDS)
     if factor == s.label:

@@ -17,7 +17,7 @@ import math
 from .._core import TransferFunction
 from ..signals import Signals, valve_input
 from ..stiction import fit_valve
-from ..stiction.hammerstein import N_U, N_Y
+from ..stiction.hammerstein import CAL_GAIN_AT_HALF, N_U, N_Y, held_out_losses
 from ..stiction.valve import actuator_from_fit
 from .errors import held_out_error
 from .loops import Loop
@@ -27,12 +27,6 @@ from .whitening import OutputResidual, stable
 
 MIN_LOOP_ROWS = 100   # fit_valve's minimum
 PARAMS = 3            # kind, S, J
-# Fraction of the linear valve's held-out one-step error variance the valve must remove in each
-# half of the record. Chosen between what the sticking valves of the stiction study's TUNING
-# flow loops remove (19 % or more) and what a linear integral-control loop with a mid-record
-# noise change gives (3-8 %, tests/python/test_diagnose_degenerate.py).
-MIN_EFFECT = 0.05
-
 
 def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop], logn: float,
                    actuated=frozenset()) -> tuple[list[Finding], list[str]]:
@@ -63,7 +57,7 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
             continue
         finding = _finding(out, sig, lp, fit, logn)
         # as every finding: the model update must predict the held-out blocks better (and the
-        # valve must help in both halves of the record)
+        # valve must be evidenced in both halves of the record)
         if finding is not None and finding.error_after < finding.error_before:
             found.append(finding)
         else:
@@ -97,29 +91,29 @@ class _ValveArx:
             return None
         return np.linalg.lstsq(phi[keep], self.y[self.rows][keep], rcond=None)[0]
 
-    def held_out_errors(self, v: np.ndarray) -> np.ndarray | None:
-        """One-step equation errors of each row, by the ARX fitted on the other fold."""
-        phi = self.regressors(v)
-        errors = np.zeros(len(self.rows))
-        for k in (0, 1):
-            coef = self.fit(phi, k)
-            if coef is None:
-                return None
-            errors[self.fold[1 - k]] = (self.y[self.rows] - phi @ coef)[self.fold[1 - k]]
-        return errors
+    def held_out_sse(self, v: np.ndarray, part: np.ndarray) -> float:
+        """Held-out one-step error energy on the rows ``part`` (indices into ``rows``) of the
+        ARX with a constant fitted on that part alone (blocked K-fold within it)."""
+        phi = np.column_stack([self.regressors(v)[part], np.ones(len(part))])
+        return float(held_out_losses(phi, self.y[self.rows[part]]).sum())
 
 
 def _helps_throughout(arx: _ValveArx, u: np.ndarray, position: np.ndarray) -> bool:
-    """Valve present throughout the record: with the valve, the ARX's held-out one-step error
-    variance is at least MIN_EFFECT lower than with the linear valve in the first and in the
-    second half of the record. A gain from one part only (a disturbance that changed) is not a
-    valve property, and a small gain can be the valve's memory standing in for a misfit noise
-    model: under integral action the OP's direction is a function of past PVs."""
-    linear, valve = arx.held_out_errors(u), arx.held_out_errors(position)
-    if linear is None or valve is None:
+    """Valve present throughout the record: in the first and in the second half, each with its
+    own ARX, the valve's held-out log-likelihood gain per sample over the linear valve,
+    1/2 log(SSE_linear / SSE_valve), is above the fit's calibrated threshold (P(stiction) > 1/2,
+    ``mpmpp.stiction.hammerstein``). The threshold is evidence, not a share of the error: a
+    sticking valve on an integrating (level) loop removes a few per cent of the one-step error,
+    since the PV's own past already predicts most of its limit cycle, on a flow loop tens of per
+    cent. Each half carries its own disturbance correction, so a disturbance that changed within
+    the record gives no gain in the half where it is stationary; a record-wide ARX averages the
+    two regimes, and the valve's memory (under integral action the OP's direction is a function
+    of past PVs) then stands in for the misfit noise model in both halves."""
+    halves = np.array_split(np.arange(len(arx.rows)), 2)
+    if len(halves[-1]) < 10 * (N_Y + len(arx.lags) + 1):
         return False
-    halves = np.array_split(np.arange(len(linear)), 2)
-    return all(np.sum(valve[h] ** 2) <= (1.0 - MIN_EFFECT) * np.sum(linear[h] ** 2) for h in halves)
+    return all(0.5 * math.log(arx.held_out_sse(u, h) / arx.held_out_sse(position, h)) > CAL_GAIN_AT_HALF
+               for h in halves)
 
 
 def _valve_model(arx: _ValveArx, out: OutputResidual, sig: Signals, lp: Loop, actuator: dict,
@@ -161,13 +155,16 @@ def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> F
     err = held_out_error(out, 0, change)
     # the held-out one-step log-likelihood gain of the model update writes (as for every finding)
     heldout = out.fold[1].sum() * math.log(err.before / err.after) if err.after > 0 else 0.0
+    # the refitted channel's steady-state gain over the model's (none for an integrating channel)
+    nominal_gain = g.dc_gain()
+    ratio = change.channel.dc_gain() / nominal_gain if math.isfinite(nominal_gain) else None
     s, j = fit.params["S"], fit.params["J"]
     kind = {"stick_slip": "stick-slip", "he": "stick-slip (He's model)", "backlash": "backlash"}[fit.kind]
     return Finding(
         id="", effect="input_nonlinearity", output=out.name, input=name, onset_s=0.0,
         confidence=fit.confidence,
         estimate={"kind": fit.kind, "S": s, "J": j, "units": "input", "actuator": actuator,
-                  "gain_ratio": change.channel.dc_gain() / g.dc_gain(),
+                  "gain_ratio": ratio,
                   "likelihood_gain_per_sample": fit.gain_per_sample},
         error_before=err.before, error_after=err.after,
         explanation=(f"valve {name} sticks: {kind} with S = {s:.3g} and J = {j:.3g} (OP units), "

@@ -106,7 +106,7 @@ def dominant_frequency(x: np.ndarray) -> float:
     return float(f[band][np.argmax(power[band])])
 
 
-def _held_out_losses(phi: np.ndarray, target: np.ndarray) -> np.ndarray:
+def held_out_losses(phi: np.ndarray, target: np.ndarray) -> np.ndarray:
     """Squared one-step errors of each row, predicted by the ARX fitted on the other folds."""
     n = len(target)
     edges = np.linspace(0, n, N_FOLDS + 1).astype(int)
@@ -168,7 +168,7 @@ def fit_valve(op, pv) -> HammersteinResult:
         # the valve is taken at rest at the first OP (what it did before the record is unknown)
         v = actuator_positions(u, actuator, u[0])
         phi, target = _lagged(y_s, v, frequency, valve_lags)
-        return Candidate(kind, params, float(_held_out_losses(phi, target).sum()))
+        return Candidate(kind, params, float(held_out_losses(phi, target).sum()))
 
     frequency = dominant_frequency(y_s)
     linears = [evaluate("linear", ActuatorNonlinearity(),

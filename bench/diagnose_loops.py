@@ -6,9 +6,12 @@ HELD-OUT: pressure-like and slow-flow loops, He's valve; confounders: linear, ag
 tuning, an external oscillation, a noisy linear valve). Per record the model comes from
 ``model_from_data`` (records it refuses as not identified are counted apart), then
 ``diagnose``; a stiction record is a hit when the top finding is ``input_nonlinearity``.
-The error columns are the mean held-out one-step RMS before and after the valve update.
+A sign flip is a ``gain`` or ``delay`` finding whose gain ratio is negative. The error
+columns are the mean held-out one-step RMS before and after the valve update. The summary
+counts per family: stiction named / stiction records, confounders called stiction /
+confounder records (refused records included in the denominators).
 
-    PYTHONPATH=python python bench/diagnose_loops.py --seeds 3
+    PYTHONPATH=python python bench/diagnose_loops.py --seeds 3 [--families tuning]
 """
 from __future__ import annotations
 
@@ -30,6 +33,7 @@ from mpmpp.identify import model_from_data  # noqa: E402
 
 CASES = (("stiction", 1.5), ("stiction", 3.0), ("linear", 0.0), ("aggressive", 0.0),
          ("external_oscillation", 0.0), ("noisy_valve", 0.0))
+FAMILIES = {"tuning": sb.TUNING, "held_out": sb.HELD_OUT}
 
 
 def frame(rec: dict) -> pd.DataFrame:
@@ -38,13 +42,18 @@ def frame(rec: dict) -> pd.DataFrame:
                          "PV_sp": rec["sp"] + 20.0})
 
 
+def sign_flips(findings) -> int:
+    return sum(f.effect in ("gain", "delay") and (f.estimate.get("gain_ratio") or 0.0) < 0 for f in findings)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--families", default="tuning,held_out", help="comma-separated: tuning, held_out")
     args = parser.parse_args()
-    rows = defaultdict(lambda: {"records": 0, "refused": 0, "named": 0, "before": [], "after": []})
-    for family, dynamics in (("tuning", sb.TUNING), ("held_out", sb.HELD_OUT)):
-        for dyn in dynamics:
+    rows = defaultdict(lambda: {"records": 0, "refused": 0, "named": 0, "flips": 0, "before": [], "after": []})
+    for family in args.families.split(","):
+        for dyn in FAMILIES[family]:
             for case, s in CASES:
                 for seed in range(args.seeds):
                     rec = sb.make_record(family, dyn, case, s, 0.5 * s, 7001 + seed)
@@ -58,15 +67,26 @@ def main() -> None:
                         row["refused"] += 1
                         continue
                     found = diagnose(model, data).findings
+                    row["flips"] += sign_flips(found)
                     if found and found[0].effect == "input_nonlinearity":
                         row["named"] += 1
                         row["before"].append(found[0].error_before)
                         row["after"].append(found[0].error_after)
-    print("| family | loop | case | records | not identified | input_nonlinearity | error before -> after |")
-    print("|---|---|---|---|---|---|---|")
+    print("| family | loop | case | records | not identified | input_nonlinearity | sign flips | error before -> after |")
+    print("|---|---|---|---|---|---|---|---|")
     for (family, loop, case), r in rows.items():
         err = (f"{np.mean(r['before']):.3f} -> {np.mean(r['after']):.3f}" if r["before"] else "")
-        print(f"| {family} | {loop} | {case} | {r['records']} | {r['refused']} | {r['named']} | {err} |")
+        print(f"| {family} | {loop} | {case} | {r['records']} | {r['refused']} | {r['named']} | {r['flips']} | {err} |")
+    print()
+    print("| family | loop | stiction named / records | confounders called stiction / records |")
+    print("|---|---|---|---|")
+    totals = defaultdict(lambda: np.zeros(4, int))
+    for (family, loop, case), r in rows.items():
+        col = 0 if case.startswith("stiction") else 2
+        totals[(family, loop)][col:col + 2] += (r["named"], r["records"])
+        totals[(family, "all")][col:col + 2] += (r["named"], r["records"])
+    for (family, loop), t in sorted(totals.items(), key=lambda kv: (kv[0][0] != "tuning", kv[0][1] == "all", kv[0][1])):
+        print(f"| {family} | {loop} | {t[0]} / {t[1]} | {t[2]} / {t[3]} |")
 
 
 if __name__ == "__main__":

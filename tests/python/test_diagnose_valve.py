@@ -1,0 +1,105 @@
+"""diagnose's valve gate (diagnose/valve.py): a sticking valve on an integrating (level) loop
+is named after `identify`, the confounders of the stiction study are not, and a disturbance
+that changed within the record is no valve. The gate's per-half held-out likelihood gain is
+checked against a plain NumPy re-implementation."""
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from mpmpp.diagnose import diagnose
+from mpmpp.diagnose import valve as gate
+from mpmpp.diagnose.loops import single_loops
+from mpmpp.diagnose.pipeline import diagnosis_signals, record_lengths
+from mpmpp.diagnose.whitening import output_residual
+from mpmpp.identify import model_from_data
+from mpmpp.signals import valve_input
+from mpmpp.update import update
+
+import closed_loop_case as loop
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+import stiction_benchmark as sb  # noqa: E402
+
+LEVEL = next(d for d in sb.TUNING if d.name == "level")
+
+
+def level_record(case, seed, s=3.0):
+    rec = sb.make_record("tuning", LEVEL, case, s, 0.5 * s, seed)
+    return pd.DataFrame({"time": 10.0 * np.arange(len(rec["op"])), "OP": rec["op"], "PV": rec["pv"] + 20.0,
+                         "PV_sp": rec["sp"] + 20.0})
+
+
+@pytest.mark.parametrize("seed, s", [(7002, 3.0), (7004, 3.0), (7002, 1.5)])
+def test_sticking_valve_on_a_level_loop_is_named_and_its_update_lowers_the_error(seed, s):
+    data = level_record("stiction", seed, s)
+    model = model_from_data(data, ["OP"], ["PV"]).model
+    res = diagnose(model, data)
+    assert [f.effect for f in res.findings] == ["input_nonlinearity"]   # no gain/delay beside it
+    top = res.findings[0]
+    assert top.estimate["kind"] in ("stick_slip", "he", "backlash") and 0.5 * s < top.estimate["S"] < 2 * s
+    # no steady-state gain ratio against an integrating identified channel (it would read 0)
+    integrating = not np.isfinite(model.process_dict()["PV"]["OP"].dc_gain())
+    assert (top.estimate["gain_ratio"] is None) == integrating
+    up = update(model, data, top.id)
+    assert up.model.actuator("OP")["kind"] == top.estimate["kind"]
+    assert up.errors[0].error_after < up.errors[0].error_before
+
+
+@pytest.mark.parametrize("case", ["aggressive", "external_oscillation", "noisy_valve", "linear"])
+@pytest.mark.parametrize("seed", [7001, 7002])
+def test_level_loop_confounders_are_not_stiction(case, seed):
+    data = level_record(case, seed)
+    res = diagnose(model_from_data(data, ["OP"], ["PV"]).model, data)
+    assert not any(f.effect == "input_nonlinearity" for f in res.findings)
+
+
+@pytest.mark.parametrize("onset", [2000, 6000])
+def test_a_disturbance_change_off_the_middle_is_no_valve(onset):
+    """A linear valve under integral action, the noise model changing a quarter into the record
+    (or three quarters): the valve's memory helps only in the half that holds both regimes."""
+    from test_diagnose_degenerate import model_without_noise
+
+    data = loop.simulate(n=8000, seed=1, onset=onset, noise_den_after=[1.0, -0.9])
+    res = diagnose(model_without_noise(), data)
+    assert not any(f.effect == "input_nonlinearity" for f in res.findings)
+
+
+def _reference_half_gains(y, rows, regressors, folds=5):
+    """Per half of ``rows``: an ARX (regressors plus a constant) fitted by plain least squares on
+    all but one of ``folds`` contiguous blocks (edges at floor(k n / folds)), the squared errors of the left-out block summed;
+    the gain is 1/2 log of the linear over the valve sum."""
+    gains = []
+    for half in np.array_split(np.arange(len(rows)), 2):
+        sse = []
+        for phi in regressors:
+            x = np.hstack([phi[half], np.ones((len(half), 1))])
+            t = y[rows[half]]
+            total = 0.0
+            edges = (np.arange(folds + 1) * len(half)) // folds
+            for block in (np.arange(a, b) for a, b in zip(edges[:-1], edges[1:])):
+                train = np.setdiff1d(np.arange(len(half)), block)
+                beta = np.linalg.solve(x[train].T @ x[train], x[train].T @ t[train])
+                total += np.sum((t[block] - x[block] @ beta) ** 2)
+            sse.append(total)
+        gains.append(0.5 * np.log(sse[0] / sse[1]))
+    return gains
+
+
+def test_half_gains_match_a_plain_numpy_reference():
+    data = level_record("stiction", 7002)
+    model = model_from_data(data, ["OP"], ["PV"]).model
+    sig = diagnosis_signals(model, data).sig
+    lengths = record_lengths(len(data), model.sample_time_s)
+    out = output_residual(sig, 0, lengths.min_segment, 0, lengths.block, True)
+    lp = single_loops(sig, data)[0]
+    arx = gate._ValveArx(out, sig, lp)
+    u = np.nan_to_num(sig.u[:, 0])
+    position = np.nan_to_num(valve_input(sig, 0, {"kind": "stick_slip", "S": 3.0, "J": 1.5}))
+    halves = np.array_split(np.arange(len(arx.rows)), 2)
+    ours = [0.5 * np.log(arx.held_out_sse(u, h) / arx.held_out_sse(position, h)) for h in halves]
+    ref = _reference_half_gains(arx.y, arx.rows, [arx.regressors(u), arx.regressors(position)])
+    np.testing.assert_allclose(ours, ref, rtol=1e-8)
+    assert gate._helps_throughout(arx, u, position) == (min(ref) > gate.CAL_GAIN_AT_HALF)

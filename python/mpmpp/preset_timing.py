@@ -6,12 +6,14 @@ At another sample time they are resolved so that the detector can run and each w
 holds enough data for the ARX-OE / residual regression:
 
 * the window holds at least ``MIN_WINDOW_SAMPLES`` samples: when the preset's window holds
-  fewer, every duration of the preset is stretched by the same factor, so the training keeps
-  its number of windows (3 for ``siso``) and the inspection its number of steps (n_T, eq. 23);
-* each duration is then a whole number of samples (window and step to the nearest, at least
-  one step; training rounded up), and the inspection period a whole number of steps.
+  fewer, window, step and inspection period are stretched by the same factor, so a window is
+  still inspected over the preset's number of steps (n_T, eq. 23);
+* the training period holds at least ``MIN_TRAINING_WINDOWS`` windows (Table 1's 3 h for 2 h
+  windows), and never less than the preset's own;
+* each duration is a whole number of samples (window and step to the nearest, at least one
+  step; training rounded up), and the inspection period a whole number of steps.
 
-At 5 s nothing changes (the paper's windows hold 1440 samples). Fields a user sets explicitly
+At the paper's 5 s nothing changes (its windows hold 1440 samples). Fields a user sets explicitly
 (``{"preset": "siso", "window_s": 14400}``) are kept verbatim: a user value that is not a whole
 number of samples stays an error naming the field.
 """
@@ -21,10 +23,11 @@ import math
 
 from ._core import DetectorConfig
 
-__all__ = ["MIN_WINDOW_SAMPLES", "TIMING_FIELDS", "resolve_timing", "span_text"]
+__all__ = ["MIN_TRAINING_WINDOWS", "MIN_WINDOW_SAMPLES", "TIMING_FIELDS", "resolve_timing", "span_text"]
 
 # Chosen on the tuning families (docs/detection.md "Presets at other sample times").
-MIN_WINDOW_SAMPLES = 360
+MIN_WINDOW_SAMPLES = 600
+MIN_TRAINING_WINDOWS = 1.5
 TIMING_FIELDS = ("window_s", "step_s", "inspection_s", "train_duration_s")
 
 
@@ -55,14 +58,15 @@ def resolve_timing(config: DetectorConfig, preset: str, sample_time_s: float,
     if "inspection_s" not in explicit:
         out.inspection_s = steps_inspected * out.step_s
     if "train_duration_s" not in explicit:
-        out.train_duration_s = ts * math.ceil(stretch * given["train_duration_s"] / ts - 1e-9)
+        training = max(given["train_duration_s"], MIN_TRAINING_WINDOWS * out.window_s)
+        out.train_duration_s = ts * math.ceil(training / ts - 1e-9)
     out.validate()
     changed = [f for f in TIMING_FIELDS if abs(getattr(out, f) - given[f]) > 1e-9 * given[f]]
     if not changed:
         return out, None
-    why = (f"its {span_text(given['window_s'])} window holds only {given['window_s'] / ts:.4g} samples, "
-           f"so its durations are stretched x{stretch:.3g} to at least {MIN_WINDOW_SAMPLES}"
-           if stretch > 1 else "its durations are rounded to whole samples")
+    why = (f"its {span_text(given['window_s'])} window holds only {given['window_s'] / ts:.4g} samples: "
+           f"windows stretched x{stretch:.3g} to {MIN_WINDOW_SAMPLES} samples, training at least "
+           f"{MIN_TRAINING_WINDOWS:g} windows" if stretch > 1 else "its durations rounded to whole samples")
     return out, (f"preset {preset} at {ts:g} s sampling: window {span_text(out.window_s)} = "
                  f"{round(out.window_s / ts)} samples, step {span_text(out.step_s)} = {round(out.step_s / ts)} "
                  f"samples, inspection {span_text(out.inspection_s)}, training {span_text(out.train_duration_s)} "

@@ -13,7 +13,7 @@ import mpmpp
 from mpmpp import DetectorConfig
 from mpmpp.detect import detect, make_config
 from mpmpp.evaluate import nominal_model
-from mpmpp.preset_timing import MIN_WINDOW_SAMPLES
+from mpmpp.preset_timing import MIN_TRAINING_WINDOWS, MIN_WINDOW_SAMPLES
 
 PRESETS = ("siso", "mimo", "paper_siso", "paper_mimo")
 
@@ -40,10 +40,11 @@ def test_resolved_durations_are_whole_samples_and_keep_the_preset_proportions(pr
         assert _whole(getattr(c, f), ts), (f, getattr(c, f))
     assert _whole(c.inspection_s, c.step_s)
     assert c.window_samples(ts) >= MIN_WINDOW_SAMPLES
-    # the same number of inspected windows (n_T, eq. 23) and, up to a sample, of training windows
+    # the same number of inspected windows (n_T, eq. 23); training: the preset's, and at least
+    # MIN_TRAINING_WINDOWS windows, rounded up to a whole sample
     assert c.inspection_windows() == nominal.inspection_windows()
-    ratio = nominal.train_duration_s / nominal.window_s
-    assert c.train_duration_s / c.window_s == pytest.approx(ratio, abs=2 * ts / c.window_s)
+    needed = max(nominal.train_duration_s, MIN_TRAINING_WINDOWS * c.window_s)
+    assert needed <= c.train_duration_s < needed + ts
     # a window that already holds enough samples is only rounded, never stretched
     if nominal.window_s / ts >= MIN_WINDOW_SAMPLES:
         assert abs(c.window_s - nominal.window_s) <= ts / 2
@@ -63,7 +64,8 @@ def test_explicit_user_values_are_kept_and_still_checked():
     at_40 = _Model(40.0)
     kept = make_config({"preset": "siso", "window_s": 14400, "alpha": 3.0}, at_40)
     assert kept.window_s == 14400 and kept.alpha == 3.0
-    assert _whole(kept.step_s, 40.0) and kept.step_s == 320.0  # the preset's 300 s, to whole samples
+    assert kept.step_s == 320.0  # the preset's 300 s, to whole samples (not stretched: the window is the user's)
+    assert kept.train_duration_s == 21600.0  # the preset's 6 h is already 1.5 such windows
     with pytest.raises(ValueError, match=r"^detector config: window_s = 7210\.0+ is not a positive whole number "
                                          r"of samples \(40\.0+\)$"):
         make_config({"preset": "siso", "window_s": 7210}, at_40).window_samples(40.0)
@@ -85,7 +87,7 @@ def _record(ts: float, hours: float, seed: int = 1):
     return nominal_model(scen), mpmpp.simulate(scen, seed=seed)
 
 
-@pytest.mark.parametrize("ts, hours", [(40.0, 18.0), (7.0, 8.5)])
+@pytest.mark.parametrize("ts, hours", [(40.0, 17.0), (7.0, 8.5)])
 def test_siso_preset_runs_at_40_s_and_7_s_and_says_what_it_resolved(ts, hours):
     model, data = _record(ts, hours)
     result, detector = detect(model, data, config="siso", return_detector=True)
@@ -104,29 +106,29 @@ def test_a_too_short_record_is_one_line_saying_how_long_it_must_be():
         detect(model, data, config="siso")
     text = str(err.value)
     assert "\n" not in text
-    # siso at 40 s: 12 h of training plus one 4 h window
-    assert text == ("data: the record spans 12 h; detection needs at least 16 h at 40 s sampling "
-                    "(training 12 h plus one 4 h window)")
+    # siso at 40 s: a 600-sample (6.667 h) window, 10 h of training (1.5 windows)
+    assert text == ("data: the record spans 12 h; detection needs at least 16.67 h at 40 s sampling "
+                    "(training 10 h plus one 6.667 h window)")
 
 
 def test_cli_detect_at_40_s_reports_the_resolved_windows(tmp_path):
     from mpmpp.cli import main
 
-    model, data = _record(40.0, 18.0)
+    model, data = _record(40.0, 17.0)
     mpmpp.save_model(model, tmp_path / "m.json")
     mpmpp.save_data(tmp_path / "d.csv", data)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "12h"])
+        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "10h"])
     assert code == 0
     text = out.getvalue()
-    assert "windows of 4 h every 10 min" in text
-    assert "note: preset siso at 40 s sampling: window 4 h = 360 samples" in text
+    assert "windows of 6.667 h every 16.67 min" in text
+    assert "note: preset siso at 40 s sampling: window 6.667 h = 600 samples" in text
     err = io.StringIO()
     bad = tmp_path / "bad.json"
     bad.write_text('{"preset": "siso", "step_s": 300}')
     with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "12h",
+        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "10h",
                      "--config", str(bad)])
     assert code == 2
     lines = err.getvalue().strip().splitlines()

@@ -14,7 +14,9 @@ def add_arguments(parser) -> None:
                                      "(the data must be free of mismatch there)")
     parser.add_argument("--config", metavar="FILE",
                         help="detector config JSON ({\"preset\": \"paper_siso\", \"alpha\": 2, ...}); "
-                             "or a preset name (siso, mimo, paper_siso, paper_mimo); default: the recommended preset (siso or mimo) for the model's size")
+                             "or a preset name (siso, mimo, paper_siso, paper_mimo); default: the recommended preset (siso or mimo) for the model's size. "
+                             "A preset's durations are resolved at the data's sample time (whole samples, a minimum number of "
+                             "samples per window; a note says so, docs/detection.md); values the file sets are used as given")
     parser.add_argument("--out", metavar="DIR", help="write scores/indicator plots (PNG) and detect.json there")
     parser.add_argument("--json", action="store_true", help="print one JSON document (docs/formats.md detect --json)")
     parser.add_argument("--save-detector", metavar="FILE",

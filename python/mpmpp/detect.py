@@ -24,6 +24,7 @@ import pandas as pd
 from . import _core
 from ._core import DetectorConfig
 from .disturbance import describe, disturbance_orders
+from .preset_timing import TIMING_FIELDS, resolve_timing, span_text
 from .signals import through_actuators
 
 __all__ = ["DetectorConfig", "Detector", "DetectionResult", "detect", "make_config"]
@@ -35,27 +36,53 @@ def make_config(config: ConfigLike = None, model=None) -> DetectorConfig:
     """A DetectorConfig from: None (the recommended preset for the model's size: ``siso``
     for one output, ``mimo`` otherwise), a preset name (``siso``, ``mimo``, or the paper's
     Tables 1/3 verbatim: ``paper_siso``, ``paper_mimo``), a dict or a JSON file path
-    (``{"preset": ..., field: value, ...}``; unknown keys are an error), or a DetectorConfig."""
+    (``{"preset": ..., field: value, ...}``; unknown keys are an error), or a DetectorConfig.
+    A preset's durations the user did not set are resolved at the model's sample time
+    (mpmpp.preset_timing); explicit values and a DetectorConfig are taken as they are."""
+    return _configure(config, model)[0]
+
+
+def _configure(config: ConfigLike, model) -> tuple:
+    """(config, note): make_config's config and the note saying how a preset was resolved at
+    the model's sample time (None when nothing was)."""
     if isinstance(config, DetectorConfig):
         config.validate()
-        return config
+        return config, None
+    where = None
     if config is None:
         n_outputs = len(model.outputs) if model is not None else 1
-        return DetectorConfig.siso() if n_outputs == 1 else DetectorConfig.mimo()
-    if isinstance(config, dict):
-        return DetectorConfig.from_json(json.dumps(config))
-    text = os.fspath(config)
-    if text in ("siso", "mimo", "paper_siso", "paper_mimo"):
-        return DetectorConfig.preset(text)
+        given = {"preset": "siso" if n_outputs == 1 else "mimo"}
+    elif isinstance(config, dict):
+        given = config
+    else:
+        text = os.fspath(config)
+        if text in ("siso", "mimo", "paper_siso", "paper_mimo"):
+            given = {"preset": text}
+        else:
+            where = text
+            given = _config_file(text)
     try:
-        with open(text, encoding="utf-8") as f:
+        resolved = DetectorConfig.from_json(json.dumps(given))
+        preset = given.get("preset")
+        if preset is None or model is None:
+            return resolved, None
+        return resolve_timing(resolved, preset, model.sample_time_s, explicit=set(given) & set(TIMING_FIELDS))
+    except ValueError as exc:
+        raise ValueError(f"{where}: {exc}" if where else str(exc)) from None
+
+
+def _config_file(path: str):
+    """The JSON document of a detector config file (a non-object is left to the config parser
+    to refuse)."""
+    try:
+        with open(path, encoding="utf-8") as f:
             body = f.read()
     except OSError as exc:
-        raise ValueError(f"{text}: cannot read the detector config ({exc.strerror})") from None
+        raise ValueError(f"{path}: cannot read the detector config ({exc.strerror})") from None
     try:
-        return DetectorConfig.from_json(body)
-    except ValueError as exc:
-        raise ValueError(f"{text}: {exc}") from None
+        return json.loads(body)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: detector config is not valid JSON ({exc.msg}, line {exc.lineno})") from None
 
 
 def _arrays(model, data: pd.DataFrame):
@@ -159,13 +186,18 @@ class Detector:
         return cls._train(model, data, train_end_s, config)[0]
 
     @classmethod
-    def _train(cls, model, data, train_end_s, config):
-        config = make_config(config, model)
+    def _train(cls, model, data, train_end_s, config, monitored: bool = False):
+        """monitored: the same data is monitored after training, so it must hold one window
+        after the training period."""
+        config, timing = _configure(config, model)
         if train_end_s is None:
             train_end_s = config.train_duration_s
         time_s, u, y = _arrays(model, data)
+        if monitored:
+            _check_record(config, model.sample_time_s, time_s, float(train_end_s))
         config, notes = _cover_disturbance(config, model, time_s, u, y, float(train_end_s))
         series = _core.WindowFeatures(model, config).extract_series(time_s, u, y)
+        notes = ([timing] if timing else []) + notes
         return cls(_core.train_detector(model, config, series, float(train_end_s)), notes), series
 
     def monitor(self, data: pd.DataFrame) -> DetectionResult:
@@ -195,6 +227,19 @@ class Detector:
         return cls(_core.Detector.load(os.fspath(path)))
 
 
+def _check_record(config: DetectorConfig, sample_time_s: float, time_s, train_end_s: float) -> None:
+    """A one-line error when the record does not reach the training end plus one window."""
+    if len(time_s) == 0:
+        return  # left to the window extraction's own message
+    span = float(time_s[-1] - time_s[0]) + sample_time_s
+    window = config.window_samples(sample_time_s) * sample_time_s
+    needed = train_end_s + window
+    if span < needed - 1e-6 * sample_time_s:
+        raise ValueError(f"data: the record spans {span_text(span)}; detection needs at least "
+                         f"{span_text(needed)} at {sample_time_s:g} s sampling (training "
+                         f"{span_text(train_end_s)} plus one {span_text(window)} window)")
+
+
 def _cover_disturbance(config: DetectorConfig, model, time_s, u, y, train_end_s: float):
     """(config, notes): the config with the ARX order raised to the disturbance models' AR order
     where it falls short (mpmpp.disturbance), and a note per output whose disturbance model
@@ -213,6 +258,6 @@ def detect(model, data: pd.DataFrame, train_end_s: Optional[float] = None, confi
     the config's ``train_duration_s``) and monitor every window of ``data``.
 
     Returns a DetectionResult, or (DetectionResult, Detector) with ``return_detector``."""
-    detector, series = Detector._train(model, data, train_end_s, config)
+    detector, series = Detector._train(model, data, train_end_s, config, monitored=True)
     result = detector._result(detector._core.monitor_series(series))
     return (result, detector) if return_detector else result

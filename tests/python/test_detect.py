@@ -189,7 +189,7 @@ def test_corrupt_and_truncated_detector_files_are_clear_errors(trained, tmp_path
 
 
 def test_too_short_training_is_an_error():
-    model, data = siso_data(0, hours=3.0)
+    model, data = siso_data(0, hours=5.0)
     with pytest.raises(ValueError, match="train_end_s"):
         detect(model, data, 2 * 3600 + 60, "paper_siso")
 

@@ -33,7 +33,7 @@ def run(args) -> int:
     _step(f"simulating {scenario['name']} ({scenario['duration_s'] / 3600:g} h, seed {args.seed})", started)
     data = simulate(scenario, seed=args.seed)
     _step("training on the first {:g} h and monitoring every window".format(
-        make_config(args.example).train_duration_s / 3600), started)
+        make_config(args.example, model).train_duration_s / 3600), started)
     result, detector = detect(model, data, None, args.example, return_detector=True)
     events = [(float(e["time_s"]), _event_label(e)) for e in scenario["events"]]
     if args.json:

@@ -14,7 +14,9 @@ def add_arguments(parser) -> None:
                                      "(the data must be free of mismatch there)")
     parser.add_argument("--config", metavar="FILE",
                         help="detector config JSON ({\"preset\": \"paper_siso\", \"alpha\": 2, ...}); "
-                             "or a preset name (siso, mimo, paper_siso, paper_mimo); default: the recommended preset (siso or mimo) for the model's size")
+                             "or a preset name (siso, mimo, paper_siso, paper_mimo); default: the recommended preset (siso or mimo) for the model's size. "
+                             "A preset's durations are resolved at the data's sample time (whole samples, a minimum number of "
+                             "samples per window; a note says so, docs/detection.md); values the file sets are used as given")
     parser.add_argument("--out", metavar="DIR", help="write scores/indicator plots (PNG) and detect.json there")
     parser.add_argument("--json", action="store_true", help="print one JSON document (docs/formats.md detect --json)")
     parser.add_argument("--save-detector", metavar="FILE",
@@ -24,13 +26,14 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..detect import detect, make_config
     from ..io import atomic_output
+    from ..preset_timing import span_text
 
     model, data, clock = load_pair(args)
     config = make_config(args.config, model)
     window_s = config.window_samples(model.sample_time_s) * model.sample_time_s
     end = train_end(args, clock, window_s, "monitoring (one detection window)")
     # The detector counts its training period from the first sample.
-    result, detector = detect(model, data, end - clock.start_s, config, return_detector=True)
+    result, detector = detect(model, data, end - clock.start_s, args.config, return_detector=True)
     if args.save_detector:
         detector.save(args.save_detector)
     doc = result_document(result, clock)
@@ -45,7 +48,7 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(doc))
     else:
-        print(f"trained on {clock.span_between(clock.start_s, end)}, {len(result.windows)} windows, "
-              f"threshold s_T = {result.threshold:g}")
+        print(f"trained on {clock.span_between(clock.start_s, end)}, {len(result.windows)} windows of "
+              f"{span_text(window_s)} every {span_text(detector.config.step_s)}, threshold s_T = {result.threshold:g}")
         print(result.alarm_table(clock.stamp))
     return 0

@@ -8,6 +8,10 @@ holds enough data for the ARX-OE / residual regression:
 * the window holds at least ``MIN_WINDOW_SAMPLES`` samples: when the preset's window holds
   fewer, window, step and inspection period are stretched by the same factor, so a window is
   still inspected over the preset's number of steps (n_T, eq. 23);
+* the window holds at most ``MAX_WINDOW_SAMPLES`` samples (a shorter window in time at 1-2 s
+  sampling; step and inspection period stay): with thousands of samples a window's Wald test
+  resolves the small bias an unmeasured step or ramp disturbance leaves in closed loop, and
+  takes it for a process change;
 * the training period holds at least ``MIN_TRAINING_WINDOWS`` windows (Table 1's 3 h for 2 h
   windows), and never less than the preset's own;
 * each duration is a whole number of samples (window and step to the nearest, at least one
@@ -23,10 +27,11 @@ import math
 
 from ._core import DetectorConfig
 
-__all__ = ["MIN_TRAINING_WINDOWS", "MIN_WINDOW_SAMPLES", "TIMING_FIELDS", "resolve_timing", "span_text"]
+__all__ = ["MAX_WINDOW_SAMPLES", "MIN_TRAINING_WINDOWS", "MIN_WINDOW_SAMPLES", "TIMING_FIELDS", "resolve_timing", "span_text"]
 
 # Chosen on the tuning families (docs/detection.md "Presets at other sample times").
 MIN_WINDOW_SAMPLES = 600
+MAX_WINDOW_SAMPLES = 2700
 MIN_TRAINING_WINDOWS = 1.5
 TIMING_FIELDS = ("window_s", "step_s", "inspection_s", "train_duration_s")
 
@@ -52,7 +57,8 @@ def resolve_timing(config: DetectorConfig, preset: str, sample_time_s: float,
     steps_inspected = max(1, round(given["inspection_s"] / given["step_s"]))
     out = DetectorConfig.from_json(config.to_json())
     if "window_s" not in explicit:
-        out.window_s = ts * max(MIN_WINDOW_SAMPLES, round(stretch * given["window_s"] / ts))
+        out.window_s = ts * min(max(MIN_WINDOW_SAMPLES, round(stretch * given["window_s"] / ts)),
+                                max(MAX_WINDOW_SAMPLES, round(given["step_s"] / ts)))
     if "step_s" not in explicit:
         out.step_s = ts * max(1, round(stretch * given["step_s"] / ts))
     if "inspection_s" not in explicit:
@@ -64,9 +70,15 @@ def resolve_timing(config: DetectorConfig, preset: str, sample_time_s: float,
     changed = [f for f in TIMING_FIELDS if abs(getattr(out, f) - given[f]) > 1e-9 * given[f]]
     if not changed:
         return out, None
-    why = (f"its {span_text(given['window_s'])} window holds only {given['window_s'] / ts:.4g} samples: "
-           f"windows stretched x{stretch:.3g} to {MIN_WINDOW_SAMPLES} samples, training at least "
-           f"{MIN_TRAINING_WINDOWS:g} windows" if stretch > 1 else "its durations rounded to whole samples")
+    held = given["window_s"] / ts
+    if stretch > 1:
+        why = (f"its {span_text(given['window_s'])} window holds only {held:.4g} samples: windows stretched "
+               f"x{stretch:.3g} to {MIN_WINDOW_SAMPLES} samples, training at least {MIN_TRAINING_WINDOWS:g} windows")
+    elif held > MAX_WINDOW_SAMPLES and "window_s" not in explicit:
+        why = (f"its {span_text(given['window_s'])} window would hold {held:.4g} samples: windows cut to "
+               f"{MAX_WINDOW_SAMPLES} samples")
+    else:
+        why = "its durations rounded to whole samples"
     return out, (f"preset {preset} at {ts:g} s sampling: window {span_text(out.window_s)} = "
                  f"{round(out.window_s / ts)} samples, step {span_text(out.step_s)} = {round(out.step_s / ts)} "
                  f"samples, inspection {span_text(out.inspection_s)}, training {span_text(out.train_duration_s)} "

@@ -13,7 +13,7 @@ import mpmpp
 from mpmpp import DetectorConfig
 from mpmpp.detect import detect, make_config
 from mpmpp.evaluate import nominal_model
-from mpmpp.preset_timing import MIN_TRAINING_WINDOWS, MIN_WINDOW_SAMPLES
+from mpmpp.preset_timing import MAX_WINDOW_SAMPLES, MIN_TRAINING_WINDOWS, MIN_WINDOW_SAMPLES
 
 PRESETS = ("siso", "mimo", "paper_siso", "paper_mimo")
 
@@ -39,15 +39,18 @@ def test_resolved_durations_are_whole_samples_and_keep_the_preset_proportions(pr
     for f in ("window_s", "step_s", "train_duration_s"):
         assert _whole(getattr(c, f), ts), (f, getattr(c, f))
     assert _whole(c.inspection_s, c.step_s)
-    assert c.window_samples(ts) >= MIN_WINDOW_SAMPLES
+    assert MIN_WINDOW_SAMPLES <= c.window_samples(ts) <= max(MAX_WINDOW_SAMPLES, c.step_samples(ts))
     # the same number of inspected windows (n_T, eq. 23); training: the preset's, and at least
     # MIN_TRAINING_WINDOWS windows, rounded up to a whole sample
     assert c.inspection_windows() == nominal.inspection_windows()
     needed = max(nominal.train_duration_s, MIN_TRAINING_WINDOWS * c.window_s)
     assert needed <= c.train_duration_s < needed + ts
-    # a window that already holds enough samples is only rounded, never stretched
-    if nominal.window_s / ts >= MIN_WINDOW_SAMPLES:
+    # a window that holds enough samples and not too many is only rounded
+    if MIN_WINDOW_SAMPLES <= nominal.window_s / ts <= MAX_WINDOW_SAMPLES:
         assert abs(c.window_s - nominal.window_s) <= ts / 2
+    elif nominal.window_s / ts > MAX_WINDOW_SAMPLES:
+        assert c.window_samples(ts) == MAX_WINDOW_SAMPLES
+        assert c.step_s == nominal.step_s and c.inspection_s == nominal.inspection_s
     else:
         assert c.window_samples(ts) == MIN_WINDOW_SAMPLES
 

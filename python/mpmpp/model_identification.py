@@ -276,7 +276,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                     continue
                 count += n_fitted
                 chans = [_summarise(out, inputs[j], best, j, profile, ts, z, cls) for j in range(len(inputs))]
-                fitted.append(_ClassFit(cls, best, chans))
+                fitted.append(_ClassFit(cls, best, chans, action))
             if not fitted:
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
             cls, best, chans = _choose_class(fitted, n * ts, ts)
@@ -302,10 +302,14 @@ class _ClassFit:
     cls: ProcessClass
     best: "_Candidate"
     channels: list[ChannelSummary]
+    action: int = 0              # the controller's action the data show (SISO), 0 when unknown
 
     @property
     def identified(self) -> bool:
-        return any(c.significant for c in self.channels)
+        """A gain distinguishable from 0 that the controller's action admits: a class whose fit
+        follows the feedback path (sign guard) identifies nothing, so it cannot take the place
+        of another class in ``_choose_class``."""
+        return any(c.significant for c in self.channels) and not _against_controller(self.channels, self.action)
 
 
 def _choose_class(fitted: list[_ClassFit], duration_s: float, sample_time_s: float):
@@ -647,13 +651,21 @@ def _check_verdict(out, chans, action) -> None:
         raise NotIdentified(f"not identified: no input explains {out!r} (gain of {worst.input!r} "
                             f"{worst.gain:.3g} +- {worst.gain_sd:.2g}: not distinguishable from 0; "
                             "the data lack excitation, e.g. setpoint steps)")
-    if action and len(chans) == 1:
+    if _against_controller(chans, action):
         c = chans[0]
-        if np.sign(c.gain) != action and abs(c.gain) < SIGN_FLIP_Z * c.gain_sd:
-            raise NotIdentified(
-                f"not identified: the gain of {out!r} <- {c.input!r} ({c.gain:.3g} +- {c.gain_sd:.2g}) "
-                f"has the sign opposite to the controller's action ({'direct' if action > 0 else 'reverse'}),"
-                f" without overwhelming evidence (|K| / sd < {SIGN_FLIP_Z:g}); the fit follows the feedback path")
+        raise NotIdentified(
+            f"not identified: the gain of {out!r} <- {c.input!r} ({c.gain:.3g} +- {c.gain_sd:.2g}) "
+            f"has the sign opposite to the controller's action ({'direct' if action > 0 else 'reverse'}),"
+            f" without overwhelming evidence (|K| / sd < {SIGN_FLIP_Z:g}); the fit follows the feedback path")
+
+
+def _against_controller(chans, action) -> bool:
+    """A single loop's gain of the sign opposite to the controller's action without overwhelming
+    evidence (|K| / sd < SIGN_FLIP_Z): a stable loop needs the controller's sign."""
+    if not action or len(chans) != 1:
+        return False
+    c = chans[0]
+    return bool(np.sign(c.gain) != action and abs(c.gain) < SIGN_FLIP_Z * c.gain_sd)
 
 
 def _controller_action(u, pv, sp) -> int:

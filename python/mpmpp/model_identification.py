@@ -453,10 +453,11 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
     if not finalists:
         raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
     best = min(finalists, key=lambda c: c.bic)
-    profile = {}
+    profile, refined = {}, []
     for j, c in tried[len(best.a)]:
         if c.rows * np.log(c.cost / best.cost) <= PRUNE:
             c = _refine(y, U, c, cls, t0)
+            refined.append(c)
             if c.bic < best.bic:
                 best = c
             cost = c.cost
@@ -464,11 +465,57 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
             cost = np.inf
         where = (j, _dead_time_samples(c, j, cls))
         profile[where] = min(profile.get(where, np.inf), cost)
+    if m == 1:
+        best = _shortest_mode(y, U, best, refined, profile, cls, significance_z(max_delay - min_delay + 1))
     for j in range(m):
         where = (j, _dead_time_samples(best, j, cls))
         profile[where] = min(profile.get(where, np.inf), best.cost)
     best.covariance = _joint_covariance(y, U, best)
     return best, profile, count
+
+
+def _shortest_mode(y, U, best: _Candidate, refined: list, profile: dict, cls: ProcessClass,
+                   z_effect: float) -> _Candidate:
+    """For a single channel: the best candidate of the profile's shortest-dead-time mode that the
+    search-corrected likelihood-ratio test does not reject against the overall best
+    (n log(V / V_best) <= z_effect^2, chi-square(1) at the Bonferroni level of
+    ``significance_z``) and whose gain is distinguishable from 0; ``best`` when there is none.
+
+    An oscillating loop (a sticking valve's limit cycle, a level's slow swing) repeats itself, so
+    a dead time a good part of a period long predicts nearly as well as the true one, and noise
+    decides between them: the criterion's profile over the dead time has several modes. Modes
+    are separated where the profile rises by more than the 95 % threshold (CHI2_1_95) above the
+    lowest point seen since the last separation; pruned dead times count as such a rise. Within a
+    mode the best point is kept, so a single-mode profile (the usual case with setpoint steps)
+    keeps the BIC choice, fractions of a sample included."""
+    def rise(cost, low):
+        return bool(np.isfinite(low) and best.rows * np.log(cost / low) > CHI2_1_95)
+
+    points = sorted((d, v) for (j, d), v in profile.items() if j == 0)
+    modes, low, climbed = [[]], np.inf, False
+    for d, v in points:
+        if climbed and not rise(v, low):
+            modes.append([])             # the profile came down again: a new mode
+            low, climbed = np.inf, False
+        if np.isfinite(v) and v < low:
+            low = v
+        modes[-1].append((d, v))
+        climbed = climbed or not np.isfinite(v) or rise(v, low)
+    dead = lambda c: _dead_time_samples(c, 0, cls)  # noqa: E731
+    for mode in modes:
+        finite = [(v, d) for d, v in mode if np.isfinite(v)]
+        if not finite:
+            continue
+        v, d = min(finite)
+        if d >= dead(best):
+            return best
+        if best.rows * np.log(v / best.cost) > z_effect ** 2:
+            continue
+        c = min((c for c in refined if dead(c) == d), key=lambda c: c.cost)
+        c.covariance = _joint_covariance(y, U, c)
+        if _summarise("", "", c, 0, {(0, d): c.cost}, 1.0, z_effect, cls).significant:
+            return c
+    return best
 
 
 def _joint_covariance(y, U, c: _Candidate) -> np.ndarray:
@@ -615,6 +662,8 @@ def _summarise(out, inp, c: _Candidate, j: int, profile, ts, z_effect, cls: Proc
     gain_sd = _delta_sd(lambda q: value(q, 0), p, cov)
     tau_sd = _delta_sd(lambda q: value(q, 1), p, cov) if tau > 0 else float("nan")
     lo, hi = _profile_interval({s: v for (jj, s), v in profile.items() if jj == j}, c.rows)
+    # the shortest mode's dead time (``_shortest_mode``) may lie outside the best's 95 % interval
+    lo, hi = min(lo, dead / ts), max(hi, dead / ts)
     return ChannelSummary(out, inp, float(gain), float(gain_sd), float(tau), float(tau_sd), float(dead),
                           (float(lo * ts), float(hi * ts)), int(c.delays[j]), int(c.nb[j]),
                           bool(abs(gain) >= z_effect * gain_sd), cls.integrating)

@@ -270,16 +270,24 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                 if cls is INTEGRATING_LAG and not _lag_worth_searching(fitted):
                     continue
                 try:
-                    best, profile, n_fitted = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay, na_orders,
-                                                      numerator_lengths, max_delay + max(na_orders), pool)
+                    best, profile, n_fitted, shortest = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay,
+                                                                na_orders, numerator_lengths,
+                                                                max_delay + max(na_orders), pool)
                 except NotIdentified:
                     continue
                 count += n_fitted
                 chans = [_summarise(out, inputs[j], best, j, profile, ts, z, cls) for j in range(len(inputs))]
-                fitted.append(_ClassFit(cls, best, chans, action))
+                fitted.append(_ClassFit(cls, best, chans, action, shortest, profile))
             if not fitted:
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
             cls, best, chans = _choose_class(fitted, n * ts, ts)
+            # the class is chosen on the BIC-best dead times; within it, the shortest mode's
+            chosen = next(f for f in fitted if f.best is best)
+            if chosen.shortest is not None and chosen.shortest is not best:
+                alternative = [_summarise(out, inputs[j], chosen.shortest, j, chosen.profile, ts, z, cls)
+                               for j in range(len(inputs))]
+                if not _against_controller(alternative, action):
+                    best, chans = chosen.shortest, alternative
             try:
                 _check_verdict(out, chans, action)
             except NotIdentified as refusal:
@@ -303,6 +311,8 @@ class _ClassFit:
     best: "_Candidate"
     channels: list[ChannelSummary]
     action: int = 0              # the controller's action the data show (SISO), 0 when unknown
+    shortest: "_Candidate | None" = None  # the profile's shortest plausible mode (``_shortest_mode``)
+    profile: dict | None = None
 
     @property
     def identified(self) -> bool:
@@ -437,8 +447,9 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
     ``pool``'s threads when given (the ARX-OE fits release the GIL; each sweep is independent, so
     the result does not depend on the threads). The BIC-best na is kept; at that na every
     candidate not clearly worse (PRUNE) is refined too, and the BIC-best refined candidate
-    returned with the profile {(channel, dead time in samples): refined cost, inf for pruned ones}
-    and the number of candidates fitted."""
+    returned with the profile {(channel, dead time in samples): refined cost, inf for pruned ones},
+    the number of candidates fitted and, for a single channel, the best of the profile's shortest
+    plausible mode (``_shortest_mode``; the BIC-best candidate otherwise)."""
     m = U.shape[1]
     if cls.integrating and cls.noise_integrates:
         # mean removed: a constant inflow imbalance (OP's mean is not the balancing flow)
@@ -465,13 +476,13 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
             cost = np.inf
         where = (j, _dead_time_samples(c, j, cls))
         profile[where] = min(profile.get(where, np.inf), cost)
-    if m == 1:
-        best = _shortest_mode(y, U, best, refined, profile, cls, significance_z(max_delay - min_delay + 1))
     for j in range(m):
         where = (j, _dead_time_samples(best, j, cls))
         profile[where] = min(profile.get(where, np.inf), best.cost)
     best.covariance = _joint_covariance(y, U, best)
-    return best, profile, count
+    shortest = best if m > 1 else _shortest_mode(y, U, best, refined, profile, cls,
+                                                 significance_z(max_delay - min_delay + 1))
+    return best, profile, count, shortest
 
 
 def _shortest_mode(y, U, best: _Candidate, refined: list, profile: dict, cls: ProcessClass,

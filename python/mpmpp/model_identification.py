@@ -42,6 +42,7 @@ the sign opposite to the controller's action (the feedback path fitted as the pr
 """
 from __future__ import annotations
 
+import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
@@ -123,6 +124,13 @@ class ChannelSummary:
     numerator_length: int
     significant: bool                   # |gain| / gain_sd >= significance_z(dead times searched)
     integrating: bool = False           # gain is then the rate gain (output units per s per input unit)
+    effect: bool = False                # the numerator is not 0 at the search-corrected level (``_has_effect``)
+
+    @property
+    def kept(self) -> bool:
+        """In the model: a gain firm at the search-corrected level, or an effect (``_has_effect``)
+        whose gain is distinguishable from 0 at 95 %."""
+        return bool(self.significant or (self.effect and abs(self.gain) >= Z95 * self.gain_sd))
 
     @property
     def uncertain(self) -> bool:
@@ -146,9 +154,9 @@ class ChannelSummary:
         return (f"{self.output} <- {self.input}: {dynamics}"
                 f"dead time {self.dead_time_s:.4g} s (95 % {self.dead_time_ci95[0]:.4g}-"
                 f"{self.dead_time_ci95[1]:.4g} s)"
-                + ("" if self.significant else ", NOT significant: left out")
+                + ("" if self.kept else ", NOT significant: left out")
                 + (", UNCERTAIN: excite the loop (e.g. setpoint steps) for a firmer model"
-                   if self.significant and self.uncertain else ""))
+                   if self.kept and self.uncertain else ""))
 
 
 @dataclass
@@ -176,7 +184,7 @@ class IdentificationResult:
     def to_dict(self) -> dict:
         d = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "model"}
         d["channels"] = [{**asdict(c), "dead_time_ci95": list(c.dead_time_ci95), "dead_time_sd": c.dead_time_sd,
-                          "uncertain": c.uncertain} for c in self.channels]
+                          "uncertain": c.uncertain, "kept": c.kept} for c in self.channels]
         d["outputs"] = [asdict(o) for o in self.outputs]
         return _finite(d)
 
@@ -293,7 +301,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
             except NotIdentified as refusal:
                 raise NotIdentified(str(refusal) + _integrating_alternative(fitted, cls)) from None
             tf, a = _output_domain(best, cls)
-            process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.significant}
+            process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.kept}
             noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(a), 0)
             summaries += chans
             e = _core.prediction_error(tf, noise[out], Y[:, i], U)
@@ -677,7 +685,35 @@ def _summarise(out, inp, c: _Candidate, j: int, profile, ts, z_effect, cls: Proc
     lo, hi = min(lo, dead / ts), max(hi, dead / ts)
     return ChannelSummary(out, inp, float(gain), float(gain_sd), float(tau), float(tau_sd), float(dead),
                           (float(lo * ts), float(hi * ts)), int(c.delays[j]), int(c.nb[j]),
-                          bool(abs(gain) >= z_effect * gain_sd), cls.integrating)
+                          bool(abs(gain) >= z_effect * gain_sd), cls.integrating,
+                          _has_effect(b, cov[:nb, :nb], z_effect))
+
+
+def _has_effect(b: np.ndarray, cov_b: np.ndarray, z_effect: float) -> bool:
+    """Whether the channel moves the output at all: the Wald test of b = 0 (G = 0 exactly when its
+    numerator is 0) at the search-corrected level of ``significance_z``, chi-square with one
+    degree of freedom per numerator term. The gain K = B(1) / F(1) is then tested on its own at
+    95 %: once the search has found an effect, its steady state is one question, not one per
+    dead time. Testing K alone at the search-corrected level refused sticking flow valves whose
+    numerator was determined beyond doubt (Wald 120-240 against a threshold of 14) while the
+    gain, traded off against a slow pole, was 2-3 standard deviations from 0."""
+    try:
+        wald = float(b @ np.linalg.solve(cov_b, b))
+    except np.linalg.LinAlgError:
+        return False
+    return _chi2_sf(wald, len(b)) <= 2.0 * (1.0 - NormalDist().cdf(z_effect))
+
+
+def _chi2_sf(x: float, dof: int) -> float:
+    """P(chi-square(dof) > x), exact for integer dof: erfc for one degree of freedom, exp for two,
+    then sf(x; k + 2) = sf(x; k) + (x/2)^(k/2) e^(-x/2) / Gamma(k/2 + 1)."""
+    if x <= 0:
+        return 1.0
+    k, sf = (1, math.erfc(math.sqrt(x / 2.0))) if dof % 2 else (2, math.exp(-x / 2.0))
+    while k < dof:
+        sf += math.exp((k / 2.0) * math.log(x / 2.0) - x / 2.0 - math.lgamma(k / 2.0 + 1.0))
+        k += 2
+    return sf
 
 
 def _profile_interval(cost_at: dict, rows: int) -> tuple[float, float]:
@@ -706,7 +742,7 @@ def _delta_sd(fn, p, cov) -> float:
 
 
 def _check_verdict(out, chans, action) -> None:
-    if not any(c.significant for c in chans):
+    if not any(c.kept for c in chans):
         worst = chans[0]
         raise NotIdentified(f"not identified: no input explains {out!r} (gain of {worst.input!r} "
                             f"{worst.gain:.3g} +- {worst.gain_sd:.2g}: not distinguishable from 0; "

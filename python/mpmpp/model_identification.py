@@ -35,10 +35,13 @@ G); the dead time from the profile
 of the criterion over the searched dead times (likelihood-ratio 95 % interval), since the
 delta method cannot see a discrete search.
 
-Verdicts: an input that does not move, or an output whose every channel has a gain that is not
-distinguishable from zero (Bonferroni over the searched dead times), is "not identified" (``NotIdentified``); a SISO loop whose gain has
-the sign opposite to the controller's action (the feedback path fitted as the process) needs
-|K| / sd(K) >= SIGN_FLIP_Z, else it is not identified either.
+Verdicts: an input that does not move, or an output none of whose channels has an effect, is "not
+identified" (``NotIdentified``). A channel has one when its gain is distinguishable from zero at
+the level corrected for the dead times searched (Bonferroni), or when its numerator is (the Wald
+test of b = 0 at that level: G = 0 exactly when b = 0) and its gain is at 95 %; the class choice
+uses the first, firm reading only. A SISO loop whose gain has the sign opposite to the
+controller's action (the feedback path fitted as the process) needs |K| / sd(K) >= SIGN_FLIP_Z,
+else it is not identified either, and such a class cannot replace another in the class choice.
 """
 from __future__ import annotations
 
@@ -278,24 +281,16 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                 if cls is INTEGRATING_LAG and not _lag_worth_searching(fitted):
                     continue
                 try:
-                    best, profile, n_fitted, shortest = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay,
-                                                                na_orders, numerator_lengths,
-                                                                max_delay + max(na_orders), pool)
+                    best, profile, n_fitted = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay, na_orders,
+                                                      numerator_lengths, max_delay + max(na_orders), pool)
                 except NotIdentified:
                     continue
                 count += n_fitted
                 chans = [_summarise(out, inputs[j], best, j, profile, ts, z, cls) for j in range(len(inputs))]
-                fitted.append(_ClassFit(cls, best, chans, action, shortest, profile))
+                fitted.append(_ClassFit(cls, best, chans, action))
             if not fitted:
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
             cls, best, chans = _choose_class(fitted, n * ts, ts)
-            # the class is chosen on the BIC-best dead times; within it, the shortest mode's
-            chosen = next(f for f in fitted if f.best is best)
-            if chosen.shortest is not None and chosen.shortest is not best:
-                alternative = [_summarise(out, inputs[j], chosen.shortest, j, chosen.profile, ts, z, cls)
-                               for j in range(len(inputs))]
-                if not _against_controller(alternative, action):
-                    best, chans = chosen.shortest, alternative
             try:
                 _check_verdict(out, chans, action)
             except NotIdentified as refusal:
@@ -319,8 +314,6 @@ class _ClassFit:
     best: "_Candidate"
     channels: list[ChannelSummary]
     action: int = 0              # the controller's action the data show (SISO), 0 when unknown
-    shortest: "_Candidate | None" = None  # the profile's shortest plausible mode (``_shortest_mode``)
-    profile: dict | None = None
 
     @property
     def identified(self) -> bool:
@@ -455,9 +448,8 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
     ``pool``'s threads when given (the ARX-OE fits release the GIL; each sweep is independent, so
     the result does not depend on the threads). The BIC-best na is kept; at that na every
     candidate not clearly worse (PRUNE) is refined too, and the BIC-best refined candidate
-    returned with the profile {(channel, dead time in samples): refined cost, inf for pruned ones},
-    the number of candidates fitted and, for a single channel, the best of the profile's shortest
-    plausible mode (``_shortest_mode``; the BIC-best candidate otherwise)."""
+    returned with the profile {(channel, dead time in samples): refined cost, inf for pruned ones}
+    and the number of candidates fitted."""
     m = U.shape[1]
     if cls.integrating and cls.noise_integrates:
         # mean removed: a constant inflow imbalance (OP's mean is not the balancing flow)
@@ -472,11 +464,10 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
     if not finalists:
         raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
     best = min(finalists, key=lambda c: c.bic)
-    profile, refined = {}, []
+    profile = {}
     for j, c in tried[len(best.a)]:
         if c.rows * np.log(c.cost / best.cost) <= PRUNE:
             c = _refine(y, U, c, cls, t0)
-            refined.append(c)
             if c.bic < best.bic:
                 best = c
             cost = c.cost
@@ -488,53 +479,7 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
         where = (j, _dead_time_samples(best, j, cls))
         profile[where] = min(profile.get(where, np.inf), best.cost)
     best.covariance = _joint_covariance(y, U, best)
-    shortest = best if m > 1 else _shortest_mode(y, U, best, refined, profile, cls,
-                                                 significance_z(max_delay - min_delay + 1))
-    return best, profile, count, shortest
-
-
-def _shortest_mode(y, U, best: _Candidate, refined: list, profile: dict, cls: ProcessClass,
-                   z_effect: float) -> _Candidate:
-    """For a single channel: the best candidate of the profile's shortest-dead-time mode that the
-    search-corrected likelihood-ratio test does not reject against the overall best
-    (n log(V / V_best) <= z_effect^2, chi-square(1) at the Bonferroni level of
-    ``significance_z``) and whose gain is distinguishable from 0; ``best`` when there is none.
-
-    An oscillating loop (a sticking valve's limit cycle, a level's slow swing) repeats itself, so
-    a dead time a good part of a period long predicts nearly as well as the true one, and noise
-    decides between them: the criterion's profile over the dead time has several modes. Modes
-    are separated where the profile rises by more than the 95 % threshold (CHI2_1_95) above the
-    lowest point seen since the last separation; pruned dead times count as such a rise. Within a
-    mode the best point is kept, so a single-mode profile (the usual case with setpoint steps)
-    keeps the BIC choice, fractions of a sample included."""
-    def rise(cost, low):
-        return bool(np.isfinite(low) and best.rows * np.log(cost / low) > CHI2_1_95)
-
-    points = sorted((d, v) for (j, d), v in profile.items() if j == 0)
-    modes, low, climbed = [[]], np.inf, False
-    for d, v in points:
-        if climbed and not rise(v, low):
-            modes.append([])             # the profile came down again: a new mode
-            low, climbed = np.inf, False
-        if np.isfinite(v) and v < low:
-            low = v
-        modes[-1].append((d, v))
-        climbed = climbed or not np.isfinite(v) or rise(v, low)
-    dead = lambda c: _dead_time_samples(c, 0, cls)  # noqa: E731
-    for mode in modes:
-        finite = [(v, d) for d, v in mode if np.isfinite(v)]
-        if not finite:
-            continue
-        v, d = min(finite)
-        if d >= dead(best):
-            return best
-        if best.rows * np.log(v / best.cost) > z_effect ** 2:
-            continue
-        c = min((c for c in refined if dead(c) == d), key=lambda c: c.cost)
-        c.covariance = _joint_covariance(y, U, c)
-        if _summarise("", "", c, 0, {(0, d): c.cost}, 1.0, z_effect, cls).significant:
-            return c
-    return best
+    return best, profile, count
 
 
 def _joint_covariance(y, U, c: _Candidate) -> np.ndarray:
@@ -681,8 +626,6 @@ def _summarise(out, inp, c: _Candidate, j: int, profile, ts, z_effect, cls: Proc
     gain_sd = _delta_sd(lambda q: value(q, 0), p, cov)
     tau_sd = _delta_sd(lambda q: value(q, 1), p, cov) if tau > 0 else float("nan")
     lo, hi = _profile_interval({s: v for (jj, s), v in profile.items() if jj == j}, c.rows)
-    # the shortest mode's dead time (``_shortest_mode``) may lie outside the best's 95 % interval
-    lo, hi = min(lo, dead / ts), max(hi, dead / ts)
     return ChannelSummary(out, inp, float(gain), float(gain_sd), float(tau), float(tau_sd), float(dead),
                           (float(lo * ts), float(hi * ts)), int(c.delays[j]), int(c.nb[j]),
                           bool(abs(gain) >= z_effect * gain_sd), cls.integrating,

@@ -35,13 +35,17 @@ G); the dead time from the profile
 of the criterion over the searched dead times (likelihood-ratio 95 % interval), since the
 delta method cannot see a discrete search.
 
-Verdicts: an input that does not move, or an output whose every channel has a gain that is not
-distinguishable from zero (Bonferroni over the searched dead times), is "not identified" (``NotIdentified``); a SISO loop whose gain has
-the sign opposite to the controller's action (the feedback path fitted as the process) needs
-|K| / sd(K) >= SIGN_FLIP_Z, else it is not identified either.
+Verdicts: an input that does not move, or an output none of whose channels has an effect, is "not
+identified" (``NotIdentified``). A channel has one when its gain is distinguishable from zero at
+the level corrected for the dead times searched (Bonferroni), or when its numerator is (the Wald
+test of b = 0 at that level: G = 0 exactly when b = 0) and its gain is at 95 %; the class choice
+uses the first, firm reading only. A SISO loop whose gain has the sign opposite to the
+controller's action (the feedback path fitted as the process) needs |K| / sd(K) >= SIGN_FLIP_Z,
+else it is not identified either, and such a class cannot replace another in the class choice.
 """
 from __future__ import annotations
 
+import math
 import os
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
@@ -123,6 +127,13 @@ class ChannelSummary:
     numerator_length: int
     significant: bool                   # |gain| / gain_sd >= significance_z(dead times searched)
     integrating: bool = False           # gain is then the rate gain (output units per s per input unit)
+    effect: bool = False                # the numerator is not 0 at the search-corrected level (``_has_effect``)
+
+    @property
+    def kept(self) -> bool:
+        """In the model: a gain firm at the search-corrected level, or an effect (``_has_effect``)
+        whose gain is distinguishable from 0 at 95 %."""
+        return bool(self.significant or (self.effect and abs(self.gain) >= Z95 * self.gain_sd))
 
     @property
     def uncertain(self) -> bool:
@@ -146,9 +157,9 @@ class ChannelSummary:
         return (f"{self.output} <- {self.input}: {dynamics}"
                 f"dead time {self.dead_time_s:.4g} s (95 % {self.dead_time_ci95[0]:.4g}-"
                 f"{self.dead_time_ci95[1]:.4g} s)"
-                + ("" if self.significant else ", NOT significant: left out")
+                + ("" if self.kept else ", NOT significant: left out")
                 + (", UNCERTAIN: excite the loop (e.g. setpoint steps) for a firmer model"
-                   if self.significant and self.uncertain else ""))
+                   if self.kept and self.uncertain else ""))
 
 
 @dataclass
@@ -176,7 +187,7 @@ class IdentificationResult:
     def to_dict(self) -> dict:
         d = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "model"}
         d["channels"] = [{**asdict(c), "dead_time_ci95": list(c.dead_time_ci95), "dead_time_sd": c.dead_time_sd,
-                          "uncertain": c.uncertain} for c in self.channels]
+                          "uncertain": c.uncertain, "kept": c.kept} for c in self.channels]
         d["outputs"] = [asdict(o) for o in self.outputs]
         return _finite(d)
 
@@ -276,7 +287,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                     continue
                 count += n_fitted
                 chans = [_summarise(out, inputs[j], best, j, profile, ts, z, cls) for j in range(len(inputs))]
-                fitted.append(_ClassFit(cls, best, chans))
+                fitted.append(_ClassFit(cls, best, chans, action))
             if not fitted:
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
             cls, best, chans = _choose_class(fitted, n * ts, ts)
@@ -285,7 +296,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
             except NotIdentified as refusal:
                 raise NotIdentified(str(refusal) + _integrating_alternative(fitted, cls)) from None
             tf, a = _output_domain(best, cls)
-            process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.significant}
+            process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.kept}
             noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(a), 0)
             summaries += chans
             e = _core.prediction_error(tf, noise[out], Y[:, i], U)
@@ -302,10 +313,14 @@ class _ClassFit:
     cls: ProcessClass
     best: "_Candidate"
     channels: list[ChannelSummary]
+    action: int = 0              # the controller's action the data show (SISO), 0 when unknown
 
     @property
     def identified(self) -> bool:
-        return any(c.significant for c in self.channels)
+        """A gain distinguishable from 0 that the controller's action admits: a class whose fit
+        follows the feedback path (sign guard) identifies nothing, so it cannot take the place
+        of another class in ``_choose_class``."""
+        return any(c.significant for c in self.channels) and not _against_controller(self.channels, self.action)
 
 
 def _choose_class(fitted: list[_ClassFit], duration_s: float, sample_time_s: float):
@@ -613,7 +628,35 @@ def _summarise(out, inp, c: _Candidate, j: int, profile, ts, z_effect, cls: Proc
     lo, hi = _profile_interval({s: v for (jj, s), v in profile.items() if jj == j}, c.rows)
     return ChannelSummary(out, inp, float(gain), float(gain_sd), float(tau), float(tau_sd), float(dead),
                           (float(lo * ts), float(hi * ts)), int(c.delays[j]), int(c.nb[j]),
-                          bool(abs(gain) >= z_effect * gain_sd), cls.integrating)
+                          bool(abs(gain) >= z_effect * gain_sd), cls.integrating,
+                          _has_effect(b, cov[:nb, :nb], z_effect))
+
+
+def _has_effect(b: np.ndarray, cov_b: np.ndarray, z_effect: float) -> bool:
+    """Whether the channel moves the output at all: the Wald test of b = 0 (G = 0 exactly when its
+    numerator is 0) at the search-corrected level of ``significance_z``, chi-square with one
+    degree of freedom per numerator term. The gain K = B(1) / F(1) is then tested on its own at
+    95 %: once the search has found an effect, its steady state is one question, not one per
+    dead time. Testing K alone at the search-corrected level refused sticking flow valves whose
+    numerator was determined beyond doubt (Wald 120-240 against a threshold of 14) while the
+    gain, traded off against a slow pole, was 2-3 standard deviations from 0."""
+    try:
+        wald = float(b @ np.linalg.solve(cov_b, b))
+    except np.linalg.LinAlgError:
+        return False
+    return _chi2_sf(wald, len(b)) <= 2.0 * (1.0 - NormalDist().cdf(z_effect))
+
+
+def _chi2_sf(x: float, dof: int) -> float:
+    """P(chi-square(dof) > x), exact for integer dof: erfc for one degree of freedom, exp for two,
+    then sf(x; k + 2) = sf(x; k) + (x/2)^(k/2) e^(-x/2) / Gamma(k/2 + 1)."""
+    if x <= 0:
+        return 1.0
+    k, sf = (1, math.erfc(math.sqrt(x / 2.0))) if dof % 2 else (2, math.exp(-x / 2.0))
+    while k < dof:
+        sf += math.exp((k / 2.0) * math.log(x / 2.0) - x / 2.0 - math.lgamma(k / 2.0 + 1.0))
+        k += 2
+    return sf
 
 
 def _profile_interval(cost_at: dict, rows: int) -> tuple[float, float]:
@@ -642,18 +685,26 @@ def _delta_sd(fn, p, cov) -> float:
 
 
 def _check_verdict(out, chans, action) -> None:
-    if not any(c.significant for c in chans):
+    if not any(c.kept for c in chans):
         worst = chans[0]
         raise NotIdentified(f"not identified: no input explains {out!r} (gain of {worst.input!r} "
                             f"{worst.gain:.3g} +- {worst.gain_sd:.2g}: not distinguishable from 0; "
                             "the data lack excitation, e.g. setpoint steps)")
-    if action and len(chans) == 1:
+    if _against_controller(chans, action):
         c = chans[0]
-        if np.sign(c.gain) != action and abs(c.gain) < SIGN_FLIP_Z * c.gain_sd:
-            raise NotIdentified(
-                f"not identified: the gain of {out!r} <- {c.input!r} ({c.gain:.3g} +- {c.gain_sd:.2g}) "
-                f"has the sign opposite to the controller's action ({'direct' if action > 0 else 'reverse'}),"
-                f" without overwhelming evidence (|K| / sd < {SIGN_FLIP_Z:g}); the fit follows the feedback path")
+        raise NotIdentified(
+            f"not identified: the gain of {out!r} <- {c.input!r} ({c.gain:.3g} +- {c.gain_sd:.2g}) "
+            f"has the sign opposite to the controller's action ({'direct' if action > 0 else 'reverse'}),"
+            f" without overwhelming evidence (|K| / sd < {SIGN_FLIP_Z:g}); the fit follows the feedback path")
+
+
+def _against_controller(chans, action) -> bool:
+    """A single loop's gain of the sign opposite to the controller's action without overwhelming
+    evidence (|K| / sd < SIGN_FLIP_Z): a stable loop needs the controller's sign."""
+    if not action or len(chans) != 1:
+        return False
+    c = chans[0]
+    return bool(np.sign(c.gain) != action and abs(c.gain) < SIGN_FLIP_Z * c.gain_sd)
 
 
 def _controller_action(u, pv, sp) -> int:

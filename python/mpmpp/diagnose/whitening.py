@@ -26,6 +26,9 @@ SETTLE = 60                  # samples left out after the start of each filtered
 NOISE_ORDER = 10             # AR order of a disturbance model estimated from the data
 MIN_AR_ROWS_PER_COEFFICIENT = 10
 TREND_GRID = 60              # onset grid (samples) of the step + ramp removed before that fit
+# Unmeasured step / ramp disturbances on an output: up to this many breakpoints are fitted
+# before a disturbance model or its corrections are estimated (each kept while it beats BIC).
+MAX_DISTURBANCE_STEPS = 8
 
 
 @dataclass
@@ -89,17 +92,22 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     # changes the AR fit too, and a split inside it lets each side's correction absorb a
     # different part of it; so the split is made on e with its best step + ramp removed
     # (the drift itself is a candidate of the process pool).
-    trend = trend_fit(e0, weight > 0, noise.inverse(), first_onset, 4 * min_segment // 12,
-                      max(first_onset, 2 * SETTLE)).trend
+    trend = disturbance_steps(e0, weight > 0, noise.inverse(), first_onset, max(min_segment // 60, 1),
+                              max(first_onset, 2 * SETTLE), math.log(n))[1]
     split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
     split_onset = first_onset + split.onset if split.statistic > 0 else None
     # The split is kept when it beats its parameters (AR coefficients, variance, onset).
     split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
     pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
-    ar = [_core.fit_ar(e0, AR_ORDER, a + SETTLE, b) for a, b in pieces]
+    # The corrections and levels are those of the disturbance less its steps and ramps: fitted
+    # with them in, the AR gets roots near 1, and whitening with it differences the record, so
+    # the controller's reaction to the noise correlates with the whitened error (the direct
+    # method's closed-loop bias) and poses as a channel change present throughout.
+    free = e0 - trend
+    ar = [_core.fit_ar(free, AR_ORDER, a + SETTLE, b) for a, b in pieces]
     sigma = []
     for (a, b), poly in zip(pieces, ar):
-        w = TransferFunction(poly, [1.0], 0).filter(e0[a:b])[SETTLE:]
+        w = TransferFunction(poly, [1.0], 0).filter(free[a:b])[SETTLE:]
         sigma.append(float(np.sqrt(np.mean(w**2))))
     parity = (np.arange(n) // block) % 2
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
@@ -108,6 +116,30 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
                          n=int(weight.sum()), noise_estimated=noise_estimated)
     out.r = out.whiten(np.nan_to_num(v))
     return out
+
+
+def disturbance_steps(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, first_onset: int, grid: int,
+                      earliest: int, logn: float) -> tuple[list[int], np.ndarray]:
+    """Onsets of the step + ramp disturbances in the one-step error e and their fitted sum with
+    the level (H^-1-filtered). Greedy: each onset is the best single step + ramp (``trend_fit``) on what
+    the earlier ones left, then all steps, slopes and the level are refitted jointly (a ramp that
+    stops is two breakpoints); kept while one removes more than 3 log N variances of what is left
+    (BIC: onset, step, slope)."""
+    n = len(e)
+    onsets, total = [], np.zeros(n)
+    s, r = hinv.filter(np.ones(n)), hinv.filter(np.arange(n, dtype=float) / n)
+    columns = [np.ones(n)]
+    for _ in range(MAX_DISTURBANCE_STEPS):
+        fit = trend_fit(e - total, ok, hinv, first_onset, grid, earliest)
+        if not fit.drop > 3.0 * logn * np.var((e - total)[ok]):
+            break
+        k = fit.onset
+        onsets.append(k)
+        columns += [np.r_[np.zeros(k), s[: n - k]], np.r_[np.zeros(k), r[: n - k]]]
+        x = np.column_stack(columns)
+        coef = np.linalg.lstsq(x[ok], e[ok], rcond=None)[0]
+        total = x @ coef
+    return onsets, total
 
 
 def _pieces(segments, cuts):
@@ -136,7 +168,7 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray) -> TransferFun
     for a, b in sig.segments:
         usable[a + SETTLE:b] = True
     usable &= rows
-    free = v - trend_fit(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE).trend
+    free = v - disturbance_steps(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE, math.log(len(v)))[1]
     free -= free[usable].mean()
     return TransferFunction([1.0], stable(masked_ar(free, usable, NOISE_ORDER)), 0)
 

@@ -8,7 +8,7 @@ from mpmpp import families as fam
 from mpmpp._core import TransferFunction
 from mpmpp.diagnose import diagnose
 from mpmpp.diagnose.pipeline import diagnosis_signals, record_lengths
-from mpmpp.diagnose.whitening import SETTLE, disturbance_steps, output_residual
+from mpmpp.diagnose.whitening import SETTLE, Nuisance, disturbance_steps, output_residual
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
 
@@ -47,16 +47,34 @@ def test_ar_corrections_are_fitted_without_the_ramps(ramped_loop):
     prepared = diagnosis_signals(model, data)
     out = output_residual(prepared.sig, 0, lengths.min_segment, 0, lengths.block, True)
     # The disturbance less its ramps is nearly white here: A(1) near 1. Fitted with the ramps
-    # in, A has a root near 1 (A(1) about 0.1) and the whitening differences the record.
-    print([np.sum(a) for a in out.ar])
-    assert all(np.sum(a) > 0.6 for a in out.ar)
+    # in, A has a root nearer 1 (A(1) about 0.5) and the whitening partly differences the record.
+    assert all(0.8 < np.sum(a) < 1.25 for a in out.ar)
     with_ramps = np.sum(np.r_[1.0, -np.linalg.lstsq(
         np.column_stack([np.nan_to_num(out.e)[SETTLE - k: len(out.e) - k] for k in range(1, 6)]),
         np.nan_to_num(out.e)[SETTLE:], rcond=None)[0]])
-    assert with_ramps < 0.3
+    assert with_ramps < 0.6
 
 
 def test_no_channel_change_for_a_right_model_with_ramps(ramped_loop):
     model, data = ramped_loop
     result = diagnose(model, data)
     assert not [f for f in result.findings if f.effect not in ("output_drift", "noise_change")]
+
+
+def test_nuisance_projection_is_the_joint_least_squares_fit():
+    """Frisch-Waugh-Lovell: theta fitted to projected data equals theta of the joint weighted
+    least-squares fit on [psi, nuisance columns] (NumPy reference)."""
+    rng = np.random.default_rng(7)
+    n = 500
+    columns = np.column_stack([np.ones(n), np.arange(n) >= 200, np.maximum(np.arange(n) - 300, 0) / 100.0])
+    weight = (rng.uniform(size=n) > 0.2).astype(float)
+    nuisance = Nuisance([200, 300], columns, weight)
+    psi = rng.standard_normal(n)
+    y = 0.7 * psi + columns @ np.array([0.3, 2.0, -1.0]) + 0.1 * rng.standard_normal(n)
+    p_psi, p_y = nuisance.project(psi), nuisance.project(y)
+    theta = np.sum(weight * p_psi * p_y) / np.sum(weight * p_psi * p_psi)
+    rows = weight > 0
+    joint = np.linalg.lstsq(np.column_stack([psi, columns])[rows], y[rows], rcond=None)[0]
+    assert theta == pytest.approx(joint[0], rel=1e-10)
+    # what is left is orthogonal to every nuisance column on the weighted rows
+    assert np.abs(columns.T @ (weight * p_y)).max() < 1e-8

@@ -9,6 +9,13 @@ best onset and theta per shape (exact two-segment least squares); shapes are sea
 Held-out scoring: shape, onset and theta are chosen on the even 1 h blocks and scored on the
 odd ones and vice versa. The score is the held-out drop of the whitened squared error (a
 likelihood-ratio statistic) minus log(N)/2 per parameter (theta, grid value, onset).
+
+Every candidate is fitted jointly with the output's level and its unmeasured step + ramp
+disturbances (``whitening.Nuisance``: the residual and every candidate response are projected
+on their complement). In closed loop the controller compensates such a disturbance, and a
+level shift no candidate can carry (a gain change moves the operating point) otherwise takes
+the fit: before, the whitening's AR corrections differenced it away, and with it the
+controller's reaction to the noise correlated with the whitened error.
 """
 from __future__ import annotations
 
@@ -27,7 +34,7 @@ from .noise import drift_finding
 from .refine import refine
 from .result import Finding, InsufficientData, ModelChange
 from .scoring import ProfilePoint, ci_from_profile, confidence
-from .whitening import OutputResidual
+from .whitening import Nuisance, OutputResidual, disturbance_nuisance
 
 TIME_CONSTANT_FACTORS = (0.33, 0.5, 0.67, 0.8, 1.25, 1.5, 2.0, 3.0)
 TIME_CONSTANT_BOUNDS = (0.2, 5.0)   # refinement bounds past the grid's ends
@@ -103,8 +110,9 @@ class ShapeResponses:
     delays or drift onsets (hundreds in a long record) are rebuilt on demand from one response
     per family."""
 
-    def __init__(self, out: OutputResidual):
+    def __init__(self, out: OutputResidual, nuisance: Nuisance):
         self.out = out
+        self.project = nuisance.project
         self._shapes: dict = {}
         self._nominal: dict = {}
         self._weight: dict = {}
@@ -114,14 +122,14 @@ class ShapeResponses:
 
     def whitened(self, shape: Shape) -> WhitenedShape:
         if shape.kind == "drift":
-            return WhitenedShape(self._drift(int(shape.label), shape.drift_form), None)
+            return WhitenedShape(self.project(self._drift(int(shape.label), shape.drift_form)), None)
         if shape.effect in DELAY_GRID_EFFECTS:
-            return WhitenedShape(self._delayed(shape), self._nominal_response(shape))
+            return WhitenedShape(self.project(self._delayed(shape)), self._nominal_response(shape))
         key = id(shape)
         if key not in self._shapes:
             drive = np.nan_to_num(shape.drive)
             psi = self.out.whiten(self.out.channel_response(shape.shape, drive))
-            self._shapes[key] = WhitenedShape(psi, self._nominal_response(shape))
+            self._shapes[key] = WhitenedShape(self.project(psi), self._nominal_response(shape))
         return self._shapes[key]
 
     def _nominal_response(self, shape: Shape) -> np.ndarray | None:
@@ -129,7 +137,8 @@ class ShapeResponses:
             return None
         key = (id(shape.nominal), id(shape.drive))
         if key not in self._nominal:
-            self._nominal[key] = self.out.whiten(self.out.channel_response(shape.nominal, np.nan_to_num(shape.drive)))
+            self._nominal[key] = self.project(
+                self.out.whiten(self.out.channel_response(shape.nominal, np.nan_to_num(shape.drive))))
         return self._nominal[key]
 
     def _delayed(self, shape: Shape) -> np.ndarray:
@@ -340,10 +349,11 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
     actions = actions or {}
     sig = out.sig
     shapes = process_shapes(sig, out.i)
-    r = out.r.copy()
+    nuisance = disturbance_nuisance(out)
+    r = nuisance.project(out.r)
     found = []
     taken: set = set()
-    responses = ShapeResponses(out)
+    responses = ShapeResponses(out, nuisance)
     for _ in range(MAX_FINDINGS_PER_OUTPUT):
         fits = [_fit_shape(out, r, s, first_onset, min_segment, step, responses)
                 for s in shapes if s.column not in taken]

@@ -51,6 +51,7 @@ class OutputResidual:
     fold: list[np.ndarray] = field(repr=False)   # weights of the even / odd held-out blocks
     n: int
     noise_estimated: bool = False                # H estimated from these data, not the model's
+    disturbance_onsets: list[int] = field(default_factory=list)   # step + ramp breakpoints in e
 
     @property
     def row(self) -> list:
@@ -92,18 +93,22 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     # changes the AR fit too, and a split inside it lets each side's correction absorb a
     # different part of it; so the split is made on e with its best step + ramp removed
     # (the drift itself is a candidate of the process pool).
-    trend = disturbance_steps(e0, weight > 0, noise.inverse(), first_onset, max(min_segment // 60, 1),
-                              max(first_onset, 2 * SETTLE), math.log(n))[1]
+    trend = trend_fit(e0, weight > 0, noise.inverse(), first_onset, 4 * min_segment // 12,
+                      max(first_onset, 2 * SETTLE)).trend
     split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
     split_onset = first_onset + split.onset if split.statistic > 0 else None
     # The split is kept when it beats its parameters (AR coefficients, variance, onset).
     split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
     pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
     # The corrections and levels are those of the disturbance less its steps and ramps: fitted
-    # with them in, the AR gets roots near 1, and whitening with it differences the record, so
-    # the controller's reaction to the noise correlates with the whitened error (the direct
-    # method's closed-loop bias) and poses as a channel change present throughout.
-    free = e0 - trend
+    # with them in, the AR gets roots near 1 (A(1) 0.5 on a ramped test loop, 1.2 without),
+    # and whitening with it differences the record, so the controller's reaction to the noise
+    # correlates with the whitened error (the direct method's closed-loop bias) and poses as
+    # a channel change present throughout. The steps themselves are fitted beside every
+    # candidate (process.py).
+    onsets, steps = disturbance_steps(e0, weight > 0, noise.inverse(), first_onset, max(min_segment // 60, 1),
+                                      max(first_onset, 2 * SETTLE), math.log(n))
+    free = e0 - steps
     ar = [_core.fit_ar(free, AR_ORDER, a + SETTLE, b) for a, b in pieces]
     sigma = []
     for (a, b), poly in zip(pieces, ar):
@@ -113,7 +118,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
                          split_onset=split_onset, split_significant=split_significant, pieces=pieces,
                          ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
-                         n=int(weight.sum()), noise_estimated=noise_estimated)
+                         n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets)
     out.r = out.whiten(np.nan_to_num(v))
     return out
 
@@ -142,6 +147,34 @@ def disturbance_steps(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, fir
     return onsets, total
 
 
+@dataclass
+class Nuisance:
+    """An output's level and its unmeasured step + ramp disturbances, as whitened columns.
+    Fitting a candidate to data with these projected out is fitting it jointly with them
+    (Frisch-Waugh-Lovell). The level is there because the record mean removed from y is not
+    the mean of an output that stepped."""
+
+    onsets: list[int]
+    columns: np.ndarray = field(repr=False)      # n x (1 + 2 * len(onsets))
+    weight: np.ndarray = field(repr=False)
+
+    def project(self, x: np.ndarray) -> np.ndarray:
+        """x less its weighted least-squares fit on the columns."""
+        z = self.columns * self.weight[:, None]
+        return x - self.columns @ np.linalg.lstsq(z.T @ self.columns, z.T @ x, rcond=None)[0]
+
+
+def disturbance_nuisance(out: OutputResidual) -> Nuisance:
+    """The output's level and its step + ramp disturbances (``out.disturbance_onsets``),
+    whitened as its residual."""
+    n = len(out.e)
+    hour = 3600.0 / out.sig.sample_time_s
+    t = np.arange(n, dtype=float)
+    columns = [out.whiten(np.ones(n))] + [out.whiten(np.where(t >= k, d, 0.0)) for k in out.disturbance_onsets
+                                          for d in (np.ones(n), (t - k) / hour)]
+    return Nuisance(list(out.disturbance_onsets), np.column_stack(columns), out.weight)
+
+
 def _pieces(segments, cuts):
     out = []
     for a, b in segments:
@@ -168,7 +201,7 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray) -> TransferFun
     for a, b in sig.segments:
         usable[a + SETTLE:b] = True
     usable &= rows
-    free = v - disturbance_steps(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE, math.log(len(v)))[1]
+    free = v - trend_fit(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE).trend
     free -= free[usable].mean()
     return TransferFunction([1.0], stable(masked_ar(free, usable, NOISE_ORDER)), 0)
 

@@ -28,13 +28,13 @@ import numpy as np
 
 from .. import _core
 from .._core import TransferFunction
-from ..signals import Signals
+from ..signals import Signals, per_segment
 from .errors import held_out_error
 from .noise import drift_finding
 from .refine import refine
 from .result import Finding, InsufficientData, ModelChange
 from .scoring import ProfilePoint, ci_from_profile, confidence
-from .whitening import Nuisance, OutputResidual, disturbance_nuisance
+from .whitening import Nuisance, OutputResidual, disturbance_nuisance, disturbance_onsets
 
 TIME_CONSTANT_FACTORS = (0.33, 0.5, 0.67, 0.8, 1.25, 1.5, 2.0, 3.0)
 TIME_CONSTANT_BOUNDS = (0.2, 5.0)   # refinement bounds past the grid's ends
@@ -346,26 +346,16 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
     """Greedy: up to MAX_FINDINGS_PER_OUTPUT channel changes, each accepted change kept in the
     residual the next candidates are fitted to. ``actions``: input name -> the controller action
     of the single loop it forms with this output (``loops``), for the sign guard."""
-    actions = actions or {}
-    sig = out.sig
-    shapes = process_shapes(sig, out.i)
-    nuisance = disturbance_nuisance(out)
+    search = _Search(out, process_shapes(out.sig, out.i), first_onset, min_segment, step, logn, actions or {})
+    nuisance = search.disturbances()
     r = nuisance.project(out.r)
-    found = []
-    taken: set = set()
     responses = ShapeResponses(out, nuisance)
+    found = []
     for _ in range(MAX_FINDINGS_PER_OUTPUT):
-        fits = [_fit_shape(out, r, s, first_onset, min_segment, step, responses)
-                for s in shapes if s.column not in taken]
-        fits = [f for f in fits if not flips_sign_without_evidence(f, actions.get(f.shape.column, 0))]
-        fits = _best_per_channel(fits, logn)
-        fits = [f for f in fits if _present_in_both_halves(out, r, f, responses)]
-        if not fits:
+        top = search.best(r, responses)
+        if top is None or top.score <= 0.0 or top.heldout < min_effect * out.weight[top.onset:].sum():
             break
-        top = _preferred(fits)
-        if top.score <= 0.0 or top.heldout < min_effect * out.weight[top.onset:].sum():
-            break
-        taken.add(top.shape.column)
+        search.taken.add(top.shape.column)
         if top.shape.effect == "output_drift":
             try:
                 finding = drift_finding(out, first_onset, logn, int(top.shape.label))
@@ -383,6 +373,69 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
         w = responses.whitened(top.shape)
         r = np.where(np.arange(len(r)) >= top.onset, _without_channel(r, w) - top.theta * w.psi, r)
     return found
+
+
+@dataclass
+class _Search:
+    """One output's candidate search: the shapes, what every round shares, the columns taken."""
+
+    out: OutputResidual
+    shapes: list[Shape]
+    first_onset: int
+    min_segment: int
+    step: int
+    logn: float
+    actions: dict
+    taken: set = field(default_factory=set)
+
+    def best(self, r: np.ndarray, responses: ShapeResponses) -> Fit | None:
+        """The preferred fit of a round on residual r (None when every candidate is refused)."""
+        fits = [_fit_shape(self.out, r, s, self.first_onset, self.min_segment, self.step, responses)
+                for s in self.shapes if s.column not in self.taken]
+        fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]
+        fits = _best_per_channel(fits, self.logn)
+        fits = [f for f in fits if _present_in_both_halves(self.out, r, f, responses)]
+        return _preferred(fits) if fits else None
+
+    def disturbances(self) -> Nuisance:
+        """The level and the step + ramp disturbances every candidate is fitted beside. Two sets
+        of breakpoints compete: those of the nominal model's one-step error, and those of the
+        error with the best candidate beside the level alone applied (found on the nominal error,
+        they also take the steps a changed channel leaves at each larger input move). The set
+        whose best candidate leaves the smaller whitened squared error, with log N per
+        breakpoint parameter (onset, step, slope) and per candidate parameter, is kept."""
+        out = self.out
+        level = disturbance_nuisance(out, [])
+        top = self.best(level.project(out.r), ShapeResponses(out, level))
+        options = [out.disturbance_onsets]
+        if top is not None and top.score > 0.0:
+            options.append(disturbance_onsets(out, out.e - _one_step_change(out, top), self.first_onset, self.step))
+        if len(options) == 1 or options[0] == options[1]:
+            return disturbance_nuisance(out, options[0])
+
+        def cost(nuisance: Nuisance) -> float:
+            r = nuisance.project(out.r)
+            fit = self.best(r, ShapeResponses(out, nuisance))
+            explained = 0.0 if fit is None or fit.score <= 0.0 else fit.statistic - fit.shape.params * self.logn
+            return float(np.sum(out.weight * r * r)) - max(explained, 0.0) + 3 * len(nuisance.onsets) * self.logn
+
+        return min((disturbance_nuisance(out, o) for o in options), key=cost)
+
+
+def _one_step_change(out: OutputResidual, fit: Fit) -> np.ndarray:
+    """How the candidate ``fit`` changes the nominal model's one-step error: H^-1 of its change
+    of the output from its onset on."""
+    s = fit.shape
+    n = len(out.e)
+    if s.kind == "drift":
+        change = fit.theta * _drift_drive(n, int(s.label), s.drift_form, 3600.0 / out.sig.sample_time_s)
+    else:
+        drive = np.nan_to_num(s.drive)
+        change = fit.theta * out.channel_response(s.shape, drive)
+        if s.nominal is not None:
+            change -= out.channel_response(s.nominal, drive)
+    change[: fit.onset] = 0.0
+    return np.nan_to_num(per_segment(out.sig, out.noise.inverse().filter, change))
 
 
 def _refined_time_constant(out: OutputResidual, r: np.ndarray, top: Fit, first_onset: int, min_segment: int,

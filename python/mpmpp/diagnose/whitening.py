@@ -164,15 +164,21 @@ class Nuisance:
         return x - self.columns @ np.linalg.lstsq(z.T @ self.columns, z.T @ x, rcond=None)[0]
 
 
-def disturbance_nuisance(out: OutputResidual) -> Nuisance:
-    """The output's level and its step + ramp disturbances (``out.disturbance_onsets``),
-    whitened as its residual."""
+def disturbance_onsets(out: OutputResidual, e: np.ndarray, first_onset: int, grid: int) -> list[int]:
+    """Breakpoints of the step + ramp disturbances in a one-step error ``e`` of the output
+    (``disturbance_steps`` on an onset grid of ``grid`` samples)."""
+    return disturbance_steps(np.nan_to_num(e), out.weight > 0, out.noise.inverse(), first_onset, grid,
+                             max(first_onset, 2 * SETTLE), math.log(len(e)))[0]
+
+
+def disturbance_nuisance(out: OutputResidual, onsets: list[int]) -> Nuisance:
+    """The output's level and steps + ramps from ``onsets`` on, whitened as its residual."""
     n = len(out.e)
     hour = 3600.0 / out.sig.sample_time_s
     t = np.arange(n, dtype=float)
-    columns = [out.whiten(np.ones(n))] + [out.whiten(np.where(t >= k, d, 0.0)) for k in out.disturbance_onsets
+    columns = [out.whiten(np.ones(n))] + [out.whiten(np.where(t >= k, d, 0.0)) for k in onsets
                                           for d in (np.ones(n), (t - k) / hour)]
-    return Nuisance(list(out.disturbance_onsets), np.column_stack(columns), out.weight)
+    return Nuisance(list(onsets), np.column_stack(columns), out.weight)
 
 
 def _pieces(segments, cuts):

@@ -345,9 +345,11 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
                      min_effect: float, actions: dict | None = None) -> list[Finding]:
     """Greedy: up to MAX_FINDINGS_PER_OUTPUT channel changes, each accepted change kept in the
     residual the next candidates are fitted to. ``actions``: input name -> the controller action
-    of the single loop it forms with this output (``loops``), for the sign guard."""
+    of the single loop it forms with this output (``loops``), for the sign guard. Sets
+    ``out.nuisance``, the disturbances the candidates are fitted beside (``_Search.disturbances``),
+    for the actuator candidates."""
     search = _Search(out, process_shapes(out.sig, out.i), first_onset, min_segment, step, logn, actions or {})
-    nuisance = search.disturbances()
+    nuisance = out.nuisance = search.disturbances()
     r = nuisance.project(out.r)
     responses = ShapeResponses(out, nuisance)
     found = []

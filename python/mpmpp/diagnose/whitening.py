@@ -52,6 +52,7 @@ class OutputResidual:
     n: int
     noise_estimated: bool = False                # H estimated from these data, not the model's
     disturbance_onsets: list[int] = field(default_factory=list)   # step + ramp breakpoints in e
+    nuisance: "Nuisance | None" = field(repr=False, default=None)  # what candidates are fitted beside
 
     @property
     def row(self) -> list:

@@ -349,12 +349,13 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
     ``out.nuisance``, the disturbances the candidates are fitted beside (``_Search.disturbances``),
     for the actuator candidates."""
     search = _Search(out, process_shapes(out.sig, out.i), first_onset, min_segment, step, logn, actions or {})
-    nuisance = out.nuisance = search.disturbances()
+    first = search.disturbances()
+    nuisance = out.nuisance = first.nuisance
     r = nuisance.project(out.r)
-    responses = ShapeResponses(out, nuisance)
+    responses = first.responses
     found = []
-    for _ in range(MAX_FINDINGS_PER_OUTPUT):
-        top = search.best(r, responses)
+    for round_ in range(MAX_FINDINGS_PER_OUTPUT):
+        top = first.top if round_ == 0 else search.best(r, responses)
         if top is None or top.score <= 0.0 or top.heldout < min_effect * out.weight[top.onset:].sum():
             break
         search.taken.add(top.shape.column)
@@ -399,29 +400,42 @@ class _Search:
         fits = [f for f in fits if _present_in_both_halves(self.out, r, f, responses)]
         return _preferred(fits) if fits else None
 
-    def disturbances(self) -> Nuisance:
-        """The level and the step + ramp disturbances every candidate is fitted beside. Two sets
-        of breakpoints compete: those of the nominal model's one-step error, and those of the
-        error with the best candidate beside the level alone applied (found on the nominal error,
-        they also take the steps a changed channel leaves at each larger input move). The set
-        whose best candidate leaves the smaller whitened squared error, with log N per
-        breakpoint parameter (onset, step, slope) and per candidate parameter, is kept."""
+    def disturbances(self) -> FirstRound:
+        """The level and the step + ramp disturbances every candidate is fitted beside, with the
+        first round fitted beside them. Two sets of breakpoints compete: those of the nominal
+        model's one-step error, and those of the error with the best candidate beside the level
+        alone applied (found on the nominal error, they also take the steps a changed channel
+        leaves at each larger input move). The set whose best candidate leaves the smaller
+        whitened squared error, with log N per breakpoint parameter (onset, step, slope) and per
+        candidate parameter, is kept."""
         out = self.out
-        level = disturbance_nuisance(out, [])
-        top = self.best(level.project(out.r), ShapeResponses(out, level))
+        level = self._first_round([])
         options = [out.disturbance_onsets]
-        if top is not None and top.score > 0.0:
-            options.append(disturbance_onsets(out, out.e - _one_step_change(out, top), self.first_onset, self.step))
-        if len(options) == 1 or options[0] == options[1]:
-            return disturbance_nuisance(out, options[0])
+        if level.top is not None and level.top.score > 0.0:
+            options.append(disturbance_onsets(out, out.e - _one_step_change(out, level.top), self.first_onset,
+                                              self.step))
+        rounds = [self._first_round(list(o)) if o else level for o in dict.fromkeys(map(tuple, options))]
+        return min(rounds, key=self._cost)
 
-        def cost(nuisance: Nuisance) -> float:
-            r = nuisance.project(out.r)
-            fit = self.best(r, ShapeResponses(out, nuisance))
-            explained = 0.0 if fit is None or fit.score <= 0.0 else fit.statistic - fit.shape.params * self.logn
-            return float(np.sum(out.weight * r * r)) - max(explained, 0.0) + 3 * len(nuisance.onsets) * self.logn
+    def _first_round(self, onsets: list[int]) -> FirstRound:
+        nuisance = disturbance_nuisance(self.out, onsets)
+        responses = ShapeResponses(self.out, nuisance)
+        return FirstRound(nuisance, responses, self.best(nuisance.project(self.out.r), responses))
 
-        return min((disturbance_nuisance(out, o) for o in options), key=cost)
+    def _cost(self, first: FirstRound) -> float:
+        r = first.nuisance.project(self.out.r)
+        fit = first.top
+        explained = 0.0 if fit is None or fit.score <= 0.0 else fit.statistic - fit.shape.params * self.logn
+        return float(np.sum(self.out.weight * r * r)) - max(explained, 0.0) + 3 * len(first.nuisance.onsets) * self.logn
+
+
+@dataclass
+class FirstRound:
+    """Disturbances chosen for an output, the responses fitted beside them, the round's best fit."""
+
+    nuisance: Nuisance
+    responses: ShapeResponses
+    top: Fit | None
 
 
 def _one_step_change(out: OutputResidual, fit: Fit) -> np.ndarray:

@@ -159,10 +159,14 @@ class Nuisance:
     columns: np.ndarray = field(repr=False)      # n x (1 + 2 * len(onsets))
     weight: np.ndarray = field(repr=False)
 
+    def __post_init__(self):
+        # the weighted least-squares solve, formed once: every candidate response is projected
+        z = self.columns * self.weight[:, None]
+        self._solve = np.linalg.pinv(z.T @ self.columns) @ z.T
+
     def project(self, x: np.ndarray) -> np.ndarray:
         """x less its weighted least-squares fit on the columns."""
-        z = self.columns * self.weight[:, None]
-        return x - self.columns @ np.linalg.lstsq(z.T @ self.columns, z.T @ x, rcond=None)[0]
+        return x - self.columns @ (self._solve @ x)
 
 
 def disturbance_onsets(out: OutputResidual, e: np.ndarray, first_onset: int, grid: int) -> list[int]:

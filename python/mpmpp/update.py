@@ -110,7 +110,8 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
     errors = []
     for out_name in dict.fromkeys(c.output for c in changes):
         i = sig.outputs.index(out_name)
-        onset_s = min(f.onset_s for f in findings if f.change.output == out_name)
+        # a finding may change several outputs (an actuator drives each output of its input)
+        onset_s = min(f.onset_s for f in findings if any(c.output == out_name for c in f.model_changes()))
         rows = heldout & (time_s >= onset_s)
         before = one_step_errors(sig, i, [])
         after = one_step_errors(sig, i, changes)

@@ -35,7 +35,7 @@ def test_fitted_map_reproduces_sklearn_probabilities():
     x = np.array([conf.features(f) for f in fs])
     mean, scale = x.mean(axis=0), x.std(axis=0)
     scale[scale == 0] = 1.0
-    ref = LogisticRegression(C=1.0).fit((x - mean) / scale, labels)
+    ref = LogisticRegression(C=1.0, tol=1e-12, max_iter=10000).fit((x - mean) / scale, labels)
     want = ref.predict_proba((x - mean) / scale)[:, 1]
     got = np.array([conf.probability(cal, f) for f in fs])
     assert got == pytest.approx(want, abs=1e-9)
@@ -54,3 +54,25 @@ def test_shipped_map_was_fitted_on_tuning_families_only():
     p = conf.calibrated_confidence(finding(500.0, 1.0, 0.8, 0.6, 0.05))
     q = conf.calibrated_confidence(finding(5.0, 1.0, 0.999, 0.05, 0.049))
     assert 0.0 <= q < p <= 1.0
+
+
+def test_update_falls_only_raise_confidence():
+    """Labels that favour a small one-step fall: an unconstrained fit gives that fall a
+    negative weight; the map's is 0, so a finding whose update lowers the error less is never
+    the more confident one."""
+    rng = np.random.default_rng(1)
+    fs, labels = [], []
+    for _ in range(400):
+        score, one_step, process = float(rng.exponential(50)), float(rng.uniform(0, 0.3)), float(rng.uniform(0, 0.9))
+        fs.append(finding(score, 1.0, 1.0 - one_step, 0.5, 0.5 * (1 - process)))
+        labels.append(bool(rng.uniform() < 1 / (1 + math.exp(-(3 * process - 10 * one_step)))))
+    x = np.array([conf.features(f) for f in fs])
+    scale = np.where(x.std(axis=0) > 0, x.std(axis=0), 1.0)
+    free = LogisticRegression(C=1.0, tol=1e-12, max_iter=10000).fit((x - x.mean(axis=0)) / scale, labels)
+    assert free.coef_[0][conf.FEATURES.index("one_step_fall")] < 0
+    cal = conf.fit_map(fs, labels)
+    assert cal["coef"][conf.FEATURES.index("one_step_fall")] == 0.0
+    assert cal["coef"][conf.FEATURES.index("process_fall")] > 0
+    barely = conf.probability(cal, finding(200.0, 1.0, 0.999, 0.5, 0.49))
+    clearly = conf.probability(cal, finding(200.0, 1.0, 0.8, 0.5, 0.1))
+    assert barely < clearly

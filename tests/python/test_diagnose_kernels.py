@@ -14,7 +14,7 @@ from mpmpp.diagnose.plots import rolling_rms
 from mpmpp.diagnose.process import DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
 from mpmpp.diagnose.refine import neighbours, refine
 from mpmpp.diagnose.trend import trend_fit
-from mpmpp.diagnose.whitening import output_residual
+from mpmpp.diagnose.whitening import disturbance_nuisance, output_residual
 
 import closed_loop_case as loop
 from trend_reference import brute_trend
@@ -98,7 +98,9 @@ def test_drift_responses_match_direct_whitening():
     sig = diagnosis_signals(loop.model(), data).sig
     out = output_residual(sig, 0, 720, 0, 720)
     assert len(out.pieces) == 2
-    responses = ShapeResponses(out)
+    # beside the output's level and a step + ramp from the noise change on: responses projected
+    nuisance = disturbance_nuisance(out, [4000])
+    responses = ShapeResponses(out, nuisance)
     hour = 3600.0 / sig.sample_time_s
     n = len(sig.time_s)
     drifts = [s for s in process_shapes(sig, 0) if s.kind == "drift"]
@@ -106,7 +108,7 @@ def test_drift_responses_match_direct_whitening():
     for s in drifts:
         t = np.maximum(np.arange(n) - int(s.label), 0.0)
         drive = t / hour if s.drift_form == "ramp" else (t > 0).astype(float)
-        direct = out.whiten(out.channel_response(s.shape, drive))
+        direct = nuisance.project(out.whiten(out.channel_response(s.shape, drive)))
         np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)
 
 
@@ -121,12 +123,13 @@ def test_delayed_responses_match_direct_whitening(with_channel):
     sig = diagnosis_signals(model, data).sig
     out = output_residual(sig, 0, 720, 0, 720)
     assert len(sig.segments) == 2 and len(out.pieces) == 3
-    responses = ShapeResponses(out)
+    nuisance = disturbance_nuisance(out, [])
+    responses = ShapeResponses(out, nuisance)
     shapes = [s for s in process_shapes(sig, 0) if s.effect in DELAY_GRID_EFFECTS]
     assert {s.effect for s in shapes} == ({"delay", "unmodeled_input"} if with_channel
                                           else {"missing_coupling", "unmodeled_input"})
     for s in shapes:
-        direct = out.whiten(out.channel_response(s.shape, np.nan_to_num(s.drive)))
+        direct = nuisance.project(out.whiten(out.channel_response(s.shape, np.nan_to_num(s.drive))))
         np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)
 
 

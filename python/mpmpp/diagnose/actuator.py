@@ -53,8 +53,11 @@ class ActuatorCandidate:
 def _response(out: OutputResidual, g: TransferFunction, u: np.ndarray, moved: np.ndarray,
               first_onset: int, min_segment: int, step: int) -> ActuatorResponse:
     """Best onset of G (f(u) - u) in output ``out`` on all data, and its two-fold held-out gain."""
-    psi = out.whiten(out.channel_response(g, moved - u))
-    drop = out.weight * (out.r**2 - (out.r - psi) ** 2)
+    # beside the output's level and step + ramp disturbances, as the channel candidates
+    project = out.nuisance.project if out.nuisance is not None else (lambda x: x)
+    r = project(out.r)
+    psi = project(out.whiten(out.channel_response(g, moved - u)))
+    drop = out.weight * (r**2 - (r - psi) ** 2)
     onsets = np.r_[first_onset, np.arange(first_onset + min_segment, len(u) - min_segment + 1, step)]
 
     def best_onset(w):

@@ -9,6 +9,13 @@ best onset and theta per shape (exact two-segment least squares); shapes are sea
 Held-out scoring: shape, onset and theta are chosen on the even 1 h blocks and scored on the
 odd ones and vice versa. The score is the held-out drop of the whitened squared error (a
 likelihood-ratio statistic) minus log(N)/2 per parameter (theta, grid value, onset).
+
+Every candidate is fitted jointly with the output's level and its unmeasured step + ramp
+disturbances (``whitening.Nuisance``: the residual and every candidate response are projected
+on their complement). In closed loop the controller compensates such a disturbance, and a
+level shift no candidate can carry (a gain change moves the operating point) otherwise takes
+the fit: before, the whitening's AR corrections differenced it away, and with it the
+controller's reaction to the noise correlated with the whitened error.
 """
 from __future__ import annotations
 
@@ -21,13 +28,13 @@ import numpy as np
 
 from .. import _core
 from .._core import TransferFunction
-from ..signals import Signals
+from ..signals import Signals, per_segment
 from .errors import held_out_error
 from .noise import drift_finding
 from .refine import refine
 from .result import Finding, InsufficientData, ModelChange
 from .scoring import ProfilePoint, ci_from_profile, confidence
-from .whitening import OutputResidual
+from .whitening import Nuisance, OutputResidual, disturbance_nuisance, disturbance_onsets
 
 TIME_CONSTANT_FACTORS = (0.33, 0.5, 0.67, 0.8, 1.25, 1.5, 2.0, 3.0)
 TIME_CONSTANT_BOUNDS = (0.2, 5.0)   # refinement bounds past the grid's ends
@@ -103,8 +110,9 @@ class ShapeResponses:
     delays or drift onsets (hundreds in a long record) are rebuilt on demand from one response
     per family."""
 
-    def __init__(self, out: OutputResidual):
+    def __init__(self, out: OutputResidual, nuisance: Nuisance):
         self.out = out
+        self.project = nuisance.project
         self._shapes: dict = {}
         self._nominal: dict = {}
         self._weight: dict = {}
@@ -114,14 +122,14 @@ class ShapeResponses:
 
     def whitened(self, shape: Shape) -> WhitenedShape:
         if shape.kind == "drift":
-            return WhitenedShape(self._drift(int(shape.label), shape.drift_form), None)
+            return WhitenedShape(self.project(self._drift(int(shape.label), shape.drift_form)), None)
         if shape.effect in DELAY_GRID_EFFECTS:
-            return WhitenedShape(self._delayed(shape), self._nominal_response(shape))
+            return WhitenedShape(self.project(self._delayed(shape)), self._nominal_response(shape))
         key = id(shape)
         if key not in self._shapes:
             drive = np.nan_to_num(shape.drive)
             psi = self.out.whiten(self.out.channel_response(shape.shape, drive))
-            self._shapes[key] = WhitenedShape(psi, self._nominal_response(shape))
+            self._shapes[key] = WhitenedShape(self.project(psi), self._nominal_response(shape))
         return self._shapes[key]
 
     def _nominal_response(self, shape: Shape) -> np.ndarray | None:
@@ -129,7 +137,8 @@ class ShapeResponses:
             return None
         key = (id(shape.nominal), id(shape.drive))
         if key not in self._nominal:
-            self._nominal[key] = self.out.whiten(self.out.channel_response(shape.nominal, np.nan_to_num(shape.drive)))
+            self._nominal[key] = self.project(
+                self.out.whiten(self.out.channel_response(shape.nominal, np.nan_to_num(shape.drive))))
         return self._nominal[key]
 
     def _delayed(self, shape: Shape) -> np.ndarray:
@@ -336,26 +345,20 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
                      min_effect: float, actions: dict | None = None) -> list[Finding]:
     """Greedy: up to MAX_FINDINGS_PER_OUTPUT channel changes, each accepted change kept in the
     residual the next candidates are fitted to. ``actions``: input name -> the controller action
-    of the single loop it forms with this output (``loops``), for the sign guard."""
-    actions = actions or {}
-    sig = out.sig
-    shapes = process_shapes(sig, out.i)
-    r = out.r.copy()
+    of the single loop it forms with this output (``loops``), for the sign guard. Sets
+    ``out.nuisance``, the disturbances the candidates are fitted beside (``_Search.disturbances``),
+    for the actuator candidates."""
+    search = _Search(out, process_shapes(out.sig, out.i), first_onset, min_segment, step, logn, actions or {})
+    first = search.disturbances()
+    nuisance = out.nuisance = first.nuisance
+    r = nuisance.project(out.r)
+    responses = first.responses
     found = []
-    taken: set = set()
-    responses = ShapeResponses(out)
-    for _ in range(MAX_FINDINGS_PER_OUTPUT):
-        fits = [_fit_shape(out, r, s, first_onset, min_segment, step, responses)
-                for s in shapes if s.column not in taken]
-        fits = [f for f in fits if not flips_sign_without_evidence(f, actions.get(f.shape.column, 0))]
-        fits = _best_per_channel(fits, logn)
-        fits = [f for f in fits if _present_in_both_halves(out, r, f, responses)]
-        if not fits:
+    for round_ in range(MAX_FINDINGS_PER_OUTPUT):
+        top = first.top if round_ == 0 else search.best(r, responses)
+        if top is None or top.score <= 0.0 or top.heldout < min_effect * out.weight[top.onset:].sum():
             break
-        top = _preferred(fits)
-        if top.score <= 0.0 or top.heldout < min_effect * out.weight[top.onset:].sum():
-            break
-        taken.add(top.shape.column)
+        search.taken.add(top.shape.column)
         if top.shape.effect == "output_drift":
             try:
                 finding = drift_finding(out, first_onset, logn, int(top.shape.label))
@@ -373,6 +376,82 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
         w = responses.whitened(top.shape)
         r = np.where(np.arange(len(r)) >= top.onset, _without_channel(r, w) - top.theta * w.psi, r)
     return found
+
+
+@dataclass
+class _Search:
+    """One output's candidate search: the shapes, what every round shares, the columns taken."""
+
+    out: OutputResidual
+    shapes: list[Shape]
+    first_onset: int
+    min_segment: int
+    step: int
+    logn: float
+    actions: dict
+    taken: set = field(default_factory=set)
+
+    def best(self, r: np.ndarray, responses: ShapeResponses) -> Fit | None:
+        """The preferred fit of a round on residual r (None when every candidate is refused)."""
+        fits = [_fit_shape(self.out, r, s, self.first_onset, self.min_segment, self.step, responses)
+                for s in self.shapes if s.column not in self.taken]
+        fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]
+        fits = _best_per_channel(fits, self.logn)
+        fits = [f for f in fits if _present_in_both_halves(self.out, r, f, responses)]
+        return _preferred(fits) if fits else None
+
+    def disturbances(self) -> FirstRound:
+        """The level and the step + ramp disturbances every candidate is fitted beside, with the
+        first round fitted beside them. Two sets of breakpoints compete: those of the nominal
+        model's one-step error, and those of the error with the best candidate beside the level
+        alone applied (found on the nominal error, they also take the steps a changed channel
+        leaves at each larger input move). The set whose best candidate leaves the smaller
+        whitened squared error, with log N per breakpoint parameter (onset, step, slope) and per
+        candidate parameter, is kept."""
+        out = self.out
+        level = self._first_round([])
+        options = [out.disturbance_onsets]
+        if level.top is not None and level.top.score > 0.0:
+            options.append(disturbance_onsets(out, out.e - _one_step_change(out, level.top), self.first_onset,
+                                              self.step))
+        rounds = [self._first_round(list(o)) if o else level for o in dict.fromkeys(map(tuple, options))]
+        return min(rounds, key=self._cost)
+
+    def _first_round(self, onsets: list[int]) -> FirstRound:
+        nuisance = disturbance_nuisance(self.out, onsets)
+        responses = ShapeResponses(self.out, nuisance)
+        return FirstRound(nuisance, responses, self.best(nuisance.project(self.out.r), responses))
+
+    def _cost(self, first: FirstRound) -> float:
+        r = first.nuisance.project(self.out.r)
+        fit = first.top
+        explained = 0.0 if fit is None or fit.score <= 0.0 else fit.statistic - fit.shape.params * self.logn
+        return float(np.sum(self.out.weight * r * r)) - max(explained, 0.0) + 3 * len(first.nuisance.onsets) * self.logn
+
+
+@dataclass
+class FirstRound:
+    """Disturbances chosen for an output, the responses fitted beside them, the round's best fit."""
+
+    nuisance: Nuisance
+    responses: ShapeResponses
+    top: Fit | None
+
+
+def _one_step_change(out: OutputResidual, fit: Fit) -> np.ndarray:
+    """How the candidate ``fit`` changes the nominal model's one-step error: H^-1 of its change
+    of the output from its onset on."""
+    s = fit.shape
+    n = len(out.e)
+    if s.kind == "drift":
+        change = fit.theta * _drift_drive(n, int(s.label), s.drift_form, 3600.0 / out.sig.sample_time_s)
+    else:
+        drive = np.nan_to_num(s.drive)
+        change = fit.theta * out.channel_response(s.shape, drive)
+        if s.nominal is not None:
+            change -= out.channel_response(s.nominal, drive)
+    change[: fit.onset] = 0.0
+    return np.nan_to_num(per_segment(out.sig, out.noise.inverse().filter, change))
 
 
 def _refined_time_constant(out: OutputResidual, r: np.ndarray, top: Fit, first_onset: int, min_segment: int,

@@ -26,6 +26,9 @@ SETTLE = 60                  # samples left out after the start of each filtered
 NOISE_ORDER = 10             # AR order of a disturbance model estimated from the data
 MIN_AR_ROWS_PER_COEFFICIENT = 10
 TREND_GRID = 60              # onset grid (samples) of the step + ramp removed before that fit
+# Unmeasured step / ramp disturbances on an output: up to this many breakpoints are fitted
+# before a disturbance model or its corrections are estimated (each kept while it beats BIC).
+MAX_DISTURBANCE_STEPS = 8
 
 
 @dataclass
@@ -48,6 +51,8 @@ class OutputResidual:
     fold: list[np.ndarray] = field(repr=False)   # weights of the even / odd held-out blocks
     n: int
     noise_estimated: bool = False                # H estimated from these data, not the model's
+    disturbance_onsets: list[int] = field(default_factory=list)   # step + ramp breakpoints in e
+    nuisance: "Nuisance | None" = field(repr=False, default=None)  # what candidates are fitted beside
 
     @property
     def row(self) -> list:
@@ -96,18 +101,89 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     # The split is kept when it beats its parameters (AR coefficients, variance, onset).
     split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
     pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
-    ar = [_core.fit_ar(e0, AR_ORDER, a + SETTLE, b) for a, b in pieces]
+    # The corrections and levels are those of the disturbance less its steps and ramps: fitted
+    # with them in, the AR gets roots near 1 (A(1) 0.5 on a ramped test loop, 1.2 without),
+    # and whitening with it differences the record, so the controller's reaction to the noise
+    # correlates with the whitened error (the direct method's closed-loop bias) and poses as
+    # a channel change present throughout. The steps themselves are fitted beside every
+    # candidate (process.py).
+    onsets, steps = disturbance_steps(e0, weight > 0, noise.inverse(), first_onset, max(min_segment // 60, 1),
+                                      max(first_onset, 2 * SETTLE), math.log(n))
+    free = e0 - steps
+    ar = [_core.fit_ar(free, AR_ORDER, a + SETTLE, b) for a, b in pieces]
     sigma = []
     for (a, b), poly in zip(pieces, ar):
-        w = TransferFunction(poly, [1.0], 0).filter(e0[a:b])[SETTLE:]
+        w = TransferFunction(poly, [1.0], 0).filter(free[a:b])[SETTLE:]
         sigma.append(float(np.sqrt(np.mean(w**2))))
     parity = (np.arange(n) // block) % 2
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
                          split_onset=split_onset, split_significant=split_significant, pieces=pieces,
                          ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
-                         n=int(weight.sum()), noise_estimated=noise_estimated)
+                         n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets)
     out.r = out.whiten(np.nan_to_num(v))
     return out
+
+
+def disturbance_steps(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, first_onset: int, grid: int,
+                      earliest: int, logn: float) -> tuple[list[int], np.ndarray]:
+    """Onsets of the step + ramp disturbances in the one-step error e and their fitted sum with
+    the level (H^-1-filtered). Greedy: each onset is the best single step + ramp (``trend_fit``) on what
+    the earlier ones left, then all steps, slopes and the level are refitted jointly (a ramp that
+    stops is two breakpoints); kept while one removes more than 3 log N variances of what is left
+    (BIC: onset, step, slope)."""
+    n = len(e)
+    onsets, total = [], np.zeros(n)
+    s, r = hinv.filter(np.ones(n)), hinv.filter(np.arange(n, dtype=float) / n)
+    columns = [np.ones(n)]
+    for _ in range(MAX_DISTURBANCE_STEPS):
+        fit = trend_fit(e - total, ok, hinv, first_onset, grid, earliest)
+        if not fit.drop > 3.0 * logn * np.var((e - total)[ok]):
+            break
+        k = fit.onset
+        onsets.append(k)
+        columns += [np.r_[np.zeros(k), s[: n - k]], np.r_[np.zeros(k), r[: n - k]]]
+        x = np.column_stack(columns)
+        coef = np.linalg.lstsq(x[ok], e[ok], rcond=None)[0]
+        total = x @ coef
+    return onsets, total
+
+
+@dataclass
+class Nuisance:
+    """An output's level and its unmeasured step + ramp disturbances, as whitened columns.
+    Fitting a candidate to data with these projected out is fitting it jointly with them
+    (Frisch-Waugh-Lovell). The level is there because the record mean removed from y is not
+    the mean of an output that stepped."""
+
+    onsets: list[int]
+    columns: np.ndarray = field(repr=False)      # n x (1 + 2 * len(onsets))
+    weight: np.ndarray = field(repr=False)
+
+    def __post_init__(self):
+        # the weighted least-squares solve, formed once: every candidate response is projected
+        z = self.columns * self.weight[:, None]
+        self._solve = np.linalg.pinv(z.T @ self.columns) @ z.T
+
+    def project(self, x: np.ndarray) -> np.ndarray:
+        """x less its weighted least-squares fit on the columns."""
+        return x - self.columns @ (self._solve @ x)
+
+
+def disturbance_onsets(out: OutputResidual, e: np.ndarray, first_onset: int, grid: int) -> list[int]:
+    """Breakpoints of the step + ramp disturbances in a one-step error ``e`` of the output
+    (``disturbance_steps`` on an onset grid of ``grid`` samples)."""
+    return disturbance_steps(np.nan_to_num(e), out.weight > 0, out.noise.inverse(), first_onset, grid,
+                             max(first_onset, 2 * SETTLE), math.log(len(e)))[0]
+
+
+def disturbance_nuisance(out: OutputResidual, onsets: list[int]) -> Nuisance:
+    """The output's level and steps + ramps from ``onsets`` on, whitened as its residual."""
+    n = len(out.e)
+    hour = 3600.0 / out.sig.sample_time_s
+    t = np.arange(n, dtype=float)
+    columns = [out.whiten(np.ones(n))] + [out.whiten(np.where(t >= k, d, 0.0)) for k in onsets
+                                          for d in (np.ones(n), (t - k) / hour)]
+    return Nuisance(list(onsets), np.column_stack(columns), out.weight)
 
 
 def _pieces(segments, cuts):

@@ -109,7 +109,8 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                                   const Eigen::Ref<const Eigen::MatrixXd>& u,
                                   std::vector<Eigen::VectorXd>& beta,
                                   std::vector<Eigen::MatrixXd>& covariance,
-                                  std::string* reason) const {
+                                  std::string* reason, Eigen::VectorXd* ar,
+                                  Eigen::MatrixXd* ar_covariance) const {
   const Eigen::Index n = y.size();
   const int ne = static_cast<int>(nominal_.size());
   if (u.rows() != n || u.cols() != ne)
@@ -148,11 +149,15 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     Eigen::MatrixXd R(rows, ar_order_ + 2);
     for (int k = 1; k <= ar_order_; ++k) R.col(k - 1) = r.segment(ar_order_ - k, rows);
     R.rightCols(2) = trend;
-    if (!truncated_least_squares(R, r.tail(rows), coef, nullptr)) {
+    Eigen::MatrixXd acov;
+    const bool last = pass == kPasses - 1;
+    if (!truncated_least_squares(R, r.tail(rows), coef, last && ar_covariance ? &acov : nullptr)) {
       if (reason) *reason = "the output error does not vary in the window";
       return false;
     }
     const Eigen::VectorXd a = coef.head(ar_order_);
+    if (last && ar) *ar = -a;  // A(q) v = v - sum a_k v(t-k): ar_k = -a_k, the ARX step's signs
+    if (last && ar_covariance) *ar_covariance = acov.topLeftCorner(ar_order_, ar_order_);
     Eigen::MatrixXd Z(rows, columns + 2);
     Z.leftCols(columns) = whiten(XX, a);
     Z.rightCols(2) = trend;

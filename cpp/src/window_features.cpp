@@ -95,6 +95,7 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       residual.emplace(nominal, i, inputs, config);
       for (size_t e = 0; e < inputs.size(); ++e)
         feature_length_[channels[e]] = residual->block_size(static_cast<int>(e));
+      if (noise_wald_) feature_length_[noise_channel] = residual->ar_order();
     }
     problems_.push_back(OutputProblem{
         inputs, channels, skip, noise_channel, ArxOeEstimator(std::move(c)),
@@ -124,25 +125,36 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
   for (auto& p : problems_) {
     const int i = channels_[p.noise_channel].output;
     for (size_t e = 0; e < p.inputs.size(); ++e) p.u.col(e) = u.col(p.inputs[e]);
-    try {
-      if (p.residual && noise_wald_)  // no channel needs the OE step: the ARX step suffices
-        p.estimator.estimate_arx(y.col(i), p.u, result_.arx);
-      else
+    // With the residual process test and the Wald noise test, A(q) comes from the residual
+    // regression (NoiseTest::Wald) and no ARX-OE step is needed.
+    const bool residual_only = p.residual && noise_wald_;
+    if (!residual_only) {
+      try {
         p.estimator.estimate(y.col(i), p.u, result_);
-    } catch (const NumericalError& err) {
-      if (skip_reason) *skip_reason = err.what();
-      return false;
-    }
-    const Eigen::Index na = feature_length_[p.noise_channel];
-    features[p.noise_channel] = result_.arx.a.tail(na);  // a_1..a_na of A(q) = 1/H (Remark 5)
-    if (noise_wald_ && want_covariances) {
-      const auto block = result_.arx.covariance.topLeftCorner(na, na);
-      (*covariances)[p.noise_channel] = symmetrised(block);
+      } catch (const NumericalError& err) {
+        if (skip_reason) *skip_reason = err.what();
+        return false;
+      }
+      const Eigen::Index na = feature_length_[p.noise_channel];
+      features[p.noise_channel] = result_.arx.a.tail(na);  // a_1..a_na of A(q) = 1/H (Remark 5)
+      if (noise_wald_ && want_covariances) {
+        const auto block = result_.arx.covariance.topLeftCorner(na, na);
+        (*covariances)[p.noise_channel] = symmetrised(block);
+      }
     }
     if (p.residual) {
       std::vector<Eigen::VectorXd> beta;
       std::vector<Eigen::MatrixXd> beta_covariance;
-      if (!p.residual->estimate(y.col(i), p.u, beta, beta_covariance, skip_reason)) return false;
+      Eigen::VectorXd ar;
+      Eigen::MatrixXd ar_covariance;
+      if (!p.residual->estimate(y.col(i), p.u, beta, beta_covariance, skip_reason,
+                                residual_only ? &ar : nullptr,
+                                residual_only ? &ar_covariance : nullptr))
+        return false;
+      if (residual_only) {
+        features[p.noise_channel] = ar;
+        if (want_covariances) (*covariances)[p.noise_channel] = symmetrised(ar_covariance);
+      }
       for (size_t e = 0; e < p.inputs.size(); ++e) {
         features[p.channels[e]] = beta[e];
         if (want_covariances) (*covariances)[p.channels[e]] = symmetrised(beta_covariance[e]);

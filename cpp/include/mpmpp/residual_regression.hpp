@@ -43,11 +43,14 @@ class ResidualRegression {
   int settling_samples() const { return settle_; }
 
   // y: the output's samples, u: one column per entry of `inputs`. Fills beta[e] and
-  // covariance[e] per input; false (with the reason) when the window is too short or the
-  // whitened regressors carry no information.
+  // covariance[e] per input, and when asked the whitening A(q) = 1 + ar_1 q^-1 + ... (the
+  // disturbance model 1/H, NoiseTest::Wald) with its covariance; false (with the reason) when
+  // the window is too short or the whitened regressors carry no information.
   bool estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                 const Eigen::Ref<const Eigen::MatrixXd>& u, std::vector<Eigen::VectorXd>& beta,
-                std::vector<Eigen::MatrixXd>& covariance, std::string* reason = nullptr) const;
+                std::vector<Eigen::MatrixXd>& covariance, std::string* reason = nullptr,
+                Eigen::VectorXd* ar = nullptr, Eigen::MatrixXd* ar_covariance = nullptr) const;
+  int ar_order() const { return ar_order_; }
 
  private:
   std::vector<TransferFunction> nominal_;                  // G0_ij per input

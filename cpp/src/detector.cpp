@@ -266,7 +266,7 @@ Eigen::VectorXd Detector::score_window(WindowFeatures& features,
 bool Detector::counts_for_indicator(const Eigen::Ref<const Eigen::VectorXd>& window_scores,
                                     int k) const {
   const MonitoredChannel& c = channels_[k];
-  if (c.kind != MonitoredChannel::Kind::Noise || config_.noise_test != NoiseTest::Wald) return true;
+  if (c.kind != MonitoredChannel::Kind::Noise || !is_wald(config_.noise_test)) return true;
   for (size_t j = 0; j < channels_.size(); ++j)
     if (channels_[j].kind == MonitoredChannel::Kind::Process && channels_[j].output == c.output &&
         window_scores[static_cast<Eigen::Index>(j)] < 0)

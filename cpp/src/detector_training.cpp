@@ -252,7 +252,7 @@ ChannelScorer train_channel_scorer(const Eigen::Ref<const RowMatrixXd>& estimate
   const Eigen::Index d = estimates.cols();
   ChannelScorer s;
   const bool wald =
-      noise ? config.noise_test == NoiseTest::Wald : config.process_test == ProcessTest::Residual;
+      noise ? is_wald(config.noise_test) : config.process_test == ProcessTest::Residual;
   if ((config.resampling == Resampling::Estimator || wald) && covariances.size() != 0) {
     if (covariances.rows() != estimates.rows() || covariances.cols() != d * d)
       throw InputError("covariances: need one row of d^2 = " + std::to_string(d * d) +

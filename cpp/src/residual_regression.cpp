@@ -108,9 +108,8 @@ ResidualRegression::ResidualRegression(const Model& nominal, int output, std::ve
 bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                                   const Eigen::Ref<const Eigen::MatrixXd>& u,
                                   std::vector<Eigen::VectorXd>& beta,
-                                  std::vector<Eigen::MatrixXd>& covariance,
-                                  std::string* reason, Eigen::VectorXd* ar,
-                                  Eigen::MatrixXd* ar_covariance) const {
+                                  std::vector<Eigen::MatrixXd>& covariance, std::string* reason,
+                                  Eigen::VectorXd* ar, Eigen::MatrixXd* ar_covariance) const {
   const Eigen::Index n = y.size();
   const int ne = static_cast<int>(nominal_.size());
   if (u.rows() != n || u.cols() != ne)

@@ -62,7 +62,8 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       num_outputs_(nominal.num_outputs()),
       process_covariances_(config.resampling == Resampling::Estimator ||
                            config.process_test == ProcessTest::Residual),
-      noise_wald_(config.noise_test == NoiseTest::Wald) {
+      noise_wald_(is_wald(config.noise_test)),
+      noise_from_residual_(config.noise_test == NoiseTest::Residual) {
   config.validate();
   window_ = config.window_samples(nominal.sample_time_s);
   step_ = config.step_samples(nominal.sample_time_s);
@@ -95,7 +96,7 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       residual.emplace(nominal, i, inputs, config);
       for (size_t e = 0; e < inputs.size(); ++e)
         feature_length_[channels[e]] = residual->block_size(static_cast<int>(e));
-      if (noise_wald_) feature_length_[noise_channel] = residual->ar_order();
+      if (noise_from_residual_) feature_length_[noise_channel] = residual->ar_order();
     }
     problems_.push_back(OutputProblem{
         inputs, channels, skip, noise_channel, ArxOeEstimator(std::move(c)),
@@ -125,9 +126,8 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
   for (auto& p : problems_) {
     const int i = channels_[p.noise_channel].output;
     for (size_t e = 0; e < p.inputs.size(); ++e) p.u.col(e) = u.col(p.inputs[e]);
-    // With the residual process test and the Wald noise test, A(q) comes from the residual
-    // regression (NoiseTest::Wald) and no ARX-OE step is needed.
-    const bool residual_only = p.residual && noise_wald_;
+    // NoiseTest::Residual: A(q) comes from the residual regression, no ARX-OE step is needed.
+    const bool residual_only = noise_from_residual_;
     if (!residual_only) {
       try {
         p.estimator.estimate(y.col(i), p.u, result_);

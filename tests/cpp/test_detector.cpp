@@ -231,8 +231,9 @@ TEST(Detector, CorruptTruncatedOrNewerFilesAreClearErrors) {
   expect_error("", "truncated or corrupt");
   std::string newer = text;
   const std::string current = "\"version\": " + std::to_string(Detector::kFormatVersion);
-  newer.replace(newer.find(current), current.size(), "\"version\": 7");
-  expect_error(newer, "version 7");
+  const std::string next = std::to_string(Detector::kFormatVersion + 1);
+  newer.replace(newer.find(current), current.size(), "\"version\": " + next);
+  expect_error(newer, "version " + next);
   std::string foreign = text;
   foreign.replace(foreign.find("mpmpp-detector"), 14, "something-else");
   expect_error(foreign, "not an mpmpp detector file");

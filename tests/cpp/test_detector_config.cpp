@@ -38,16 +38,16 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
   pap_mimo.resampling = rec_mimo.resampling;
   pap_mimo.outlier_fraction = rec_mimo.outlier_fraction;
   pap_mimo.noise_alpha = rec_mimo.noise_alpha;
-  for (DetectorConfig* c : {&pap_siso, &pap_mimo}) {  // the residual and noise Wald tests
+  for (DetectorConfig* c : {&pap_siso, &pap_mimo}) {  // the residual Wald tests
     c->process_test = ProcessTest::Residual;
-    c->noise_test = NoiseTest::Wald;
+    c->noise_test = NoiseTest::Residual;
     c->threshold = 0.5;
     c->window_significance = 0.001;
   }
   EXPECT_EQ(rec_siso.process_test, ProcessTest::Residual);
   EXPECT_EQ(DetectorConfig::paper_siso().process_test, ProcessTest::Svm);
   EXPECT_EQ(DetectorConfig::paper_siso().noise_test, NoiseTest::Svm);
-  EXPECT_EQ(DetectorConfig::from_json(rec_mimo.to_json()).noise_test, NoiseTest::Wald);
+  EXPECT_EQ(DetectorConfig::from_json(rec_mimo.to_json()).noise_test, NoiseTest::Residual);
   EXPECT_EQ(rec_siso.to_json(), pap_siso.to_json());
   EXPECT_EQ(rec_mimo.to_json(), pap_mimo.to_json());
   EXPECT_GT(rec_siso.alpha, 1.5);

@@ -1,8 +1,10 @@
 """Detector: indicator/alarms against a plain NumPy eq. 23, file round trip, JSON shape,
 a short end-to-end run on a simulated SISO loop, and the Monte Carlo on a Dask LocalCluster."""
 import json
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -214,3 +216,17 @@ def test_cli_detect_json(trained, tmp_path):
     assert d["alarms"] == result.to_dict()["alarms"]
     assert (tmp_path / "det.json").exists()
     assert main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "-5"]) == 2
+
+
+def test_written_detector_version_is_the_documented_current_one(trained, tmp_path):
+    """docs/formats.md's table of versioned files and CHANGELOG.md name the version a saved
+    detector carries (docs/formats.md once said 4 while files said 6)."""
+    _, _, _, detector = trained
+    path = tmp_path / "d.json"
+    detector.save(path)
+    version = json.loads(path.read_text())["version"]
+    root = Path(__file__).resolve().parents[2]
+    table = re.search(r"\| `mpmpp-detector` \| (\d+) \|", (root / "docs" / "formats.md").read_text())
+    current = re.search(r"Version (\d+) is current \(`Detector::kFormatVersion`\)",
+                        (root / "CHANGELOG.md").read_text())
+    assert int(table.group(1)) == version and int(current.group(1)) == version

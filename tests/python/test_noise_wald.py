@@ -1,6 +1,7 @@
 """The noise channels' Wald test of the recommended presets (DetectorConfig::noise_test "wald"):
-the window features are the ARX step's a_1..a_na with sigma^2 (Phi'Phi)^-1, checked against a
-plain least-squares reference; a noise change alarms the noise channel only; a process change
+the window features are the residual regression's A(q) (noise_test "residual", the presets) or the
+ARX step's a_1..a_na (noise_test "wald", what detector files written before "residual" existed
+say), each with sigma^2 (Phi'Phi)^-1, checked against plain least-squares references; a noise change alarms the noise channel only; a process change
 does not raise a noise alarm on its output (Detector::counts_for_indicator)."""
 import json
 
@@ -9,6 +10,7 @@ import pytest
 
 import identification_reference as ref
 import mpmpp
+from residual_reference import reference_window
 from mpmpp import _core
 from mpmpp.detect import Detector, _arrays, detect, make_config
 from mpmpp.evaluate import load_scenario, nominal_model
@@ -25,7 +27,7 @@ def _paper(name, seed, hours=None):
 
 
 def test_presets_use_the_wald_noise_test_and_the_paper_presets_do_not():
-    assert make_config("siso").noise_test == "wald" and make_config("mimo").noise_test == "wald"
+    assert make_config("siso").noise_test == "residual" and make_config("mimo").noise_test == "residual"
     assert make_config("paper_siso").noise_test == "svm" and make_config("paper_mimo").noise_test == "svm"
     with pytest.raises(ValueError, match="noise_test"):
         make_config({"preset": "siso", "noise_test": "bogus"})
@@ -49,24 +51,49 @@ def test_wald_noise_channels_beside_svm_process_channels():
     assert (r.scores[end_h >= 8, k] < 0).all() and (r.scores[(end_h > 3) & (end_h <= 7), k] > 0).all()
 
 
-def test_noise_features_are_the_arx_step_with_its_covariance():
-    model, data = _paper("paper_siso", 4, hours=5)
-    config = make_config("siso", model)
+def _noise_windows(model, data, config):
     time_s, u, y = _arrays(model, data)
-    series = _core.WindowFeatures(model, config).extract_series(time_s, u, y)
-    noise = [k for k, c in enumerate(_core.WindowFeatures(model, config).channels) if c[0] == "noise"][0]
-    n, na = config.window_samples(model.sample_time_s), config.arx_order_a
-    delay = model.process(model.outputs[0], model.inputs[0]).delay
+    features = _core.WindowFeatures(model, config)
+    series = features.extract_series(time_s, u, y)
+    noise = [k for k, c in enumerate(features.channels) if c[0] == "noise"][0]
+    n = config.window_samples(model.sample_time_s)
     for w in (0, len(series.windows) // 2):
         first = series.windows[w]["first"]
-        yw, uw = y[first:first + n, 0], u[first:first + n]
+        yield y[first:first + n, 0], u[first:first + n], series.features[noise][w], series.covariances[noise][w]
+
+
+def test_noise_features_are_the_arx_step_with_its_covariance():
+    model, data = _paper("paper_siso", 4, hours=5)
+    config = make_config({"preset": "siso", "noise_test": "wald"}, model)
+    na = config.arx_order_a
+    delay = model.process(model.outputs[0], model.inputs[0]).delay
+    for yw, uw, feature, covariance in _noise_windows(model, data, config):
         yw, uw = yw - yw.mean(), uw - uw.mean(axis=0)  # the ARX-OE step's mean detrending
         theta, sigma2, regularised = ref.arx(yw, uw, na, [config.arx_order_b + 1], [delay], delta=1e-4)
         assert not regularised
         Phi, _ = ref.arx_regressors(yw, uw, na, [config.arx_order_b + 1], [delay])
-        np.testing.assert_allclose(series.features[noise][w], theta[:na], rtol=1e-7, atol=1e-9)
+        np.testing.assert_allclose(feature, theta[:na], rtol=1e-7, atol=1e-9)
         cov = (sigma2 * np.linalg.inv(Phi.T @ Phi))[:na, :na]
-        np.testing.assert_allclose(series.covariances[noise][w].reshape(na, na), cov, rtol=1e-6)
+        np.testing.assert_allclose(covariance.reshape(na, na), cov, rtol=1e-6)
+
+
+def test_preset_noise_features_are_the_residual_regressions_own_ar():
+    model, data = _paper("paper_siso", 4, hours=5)
+    config = make_config("siso", model)
+    na = config.residual_ar_order or config.arx_order_a
+    g = model.process(model.outputs[0], model.inputs[0])
+    for yw, uw, feature, covariance in _noise_windows(model, data, config):
+        settle = _core.residual_regression(model, 0, [0], config, yw, uw)[2]
+        _, _, ar, ar_cov = reference_window(g, yw, uw[:, 0], na, config.laguerre_terms, settle)
+        np.testing.assert_allclose(feature, ar, rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(covariance.reshape(na, na), ar_cov, rtol=1e-6,
+                                   atol=1e-9 * np.abs(ar_cov).max())
+
+
+def test_the_residual_noise_test_needs_the_residual_process_test():
+    with pytest.raises(ValueError, match='noise_test "residual" needs process_test "residual"'):
+        make_config({"preset": "siso", "process_test": "svm"})
+    make_config({"preset": "siso", "process_test": "svm", "noise_test": "wald"}).validate()
 
 
 def test_noise_change_alarms_the_noise_channel_with_the_paper_training_length():

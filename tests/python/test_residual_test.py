@@ -5,7 +5,6 @@ import math
 
 import numpy as np
 import pytest
-from scipy.signal import lfilter
 from scipy.stats import chi2
 
 from mpmpp import _core
@@ -13,6 +12,7 @@ from mpmpp import families as fam
 from mpmpp.detect import detect, make_config
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
+from residual_reference import reference_window
 
 
 def test_chi_square_survival_matches_scipy():
@@ -34,57 +34,6 @@ def test_chi_square_survival_matches_scipy():
             assert _core.chi_square_log_survival(x, dof) == pytest.approx(reference, rel=1e-12)
 
 
-# ------------------------------------------------------------------ NumPy reference of one window
-
-def _tf(num, den, delay, x):
-    return lfilter(np.concatenate([np.zeros(delay), num]), den, x)
-
-
-def _directions(g, x, terms):
-    num, den, d = np.asarray(g.num), np.asarray(g.den), int(g.delay)
-    cols = [_tf(num, den, d, x), _tf(num, den, d + 1, x), _tf(num, den, d - 1 if d >= 2 else d + 2, x)]
-    p = float(np.clip(np.max(np.abs(np.roots(den))) if len(den) > 1 else 0.5, 0.2, 0.99))
-    c = np.sqrt(1 - p * p)
-    cur = lfilter([0.0, c], [1.0, -p], x)  # L_0 = c q^-1 / (1 - p q^-1)
-    for _ in range(terms):
-        cols.append(cur)
-        cur = lfilter([-p, 1.0], [1.0, -p], cur)
-    return np.column_stack(cols), p
-
-
-def _lstsq(Z, z):
-    """Least squares on the column-scaled regressors by a truncated SVD, and sigma^2 (Z'Z)^+."""
-    scale = np.sqrt((Z**2).mean(0))
-    scale[scale == 0] = 1.0
-    U, s, Vt = np.linalg.svd(Z / scale, full_matrices=False)
-    k = s > 1e-8 * s[0]
-    bs = Vt[k].T @ ((U[:, k].T @ z) / s[k])
-    sigma2 = np.sum((z - (Z / scale) @ bs) ** 2) / (len(z) - k.sum())
-    Vs = Vt[k].T / s[k]
-    return bs / scale, sigma2 * (Vs @ Vs.T) / np.outer(scale, scale)
-
-
-def reference_window(g, y, u, na, terms, settle):
-    yc, uc = y - y.mean(), u - u.mean()
-    v = yc - _tf(np.asarray(g.num), np.asarray(g.den), int(g.delay), uc)
-    X, _ = _directions(g, uc, terms)
-    skip = min(settle, len(y) // 3)
-    v, X = v[skip:], X[skip:]
-    rows = len(v) - na
-    trend = np.column_stack([np.ones(rows), np.linspace(0.0, 1.0, rows)])
-    b = np.zeros(X.shape[1])
-    for _ in range(2):
-        r = v - X @ b
-        R = np.column_stack([r[na - k:len(r) - k] for k in range(1, na + 1)] + [trend])
-        a = _lstsq(R, r[na:])[0][:na]
-        A = np.concatenate([[1.0], -a])
-        coef, cov = _lstsq(np.column_stack([lfilter(A, [1.0], X, axis=0)[na:], trend]),
-                           lfilter(A, [1.0], v)[na:])
-        b = coef[:X.shape[1]]
-    p = X.shape[1]
-    return b, cov[:p, :p]
-
-
 @pytest.fixture(scope="module")
 def pi_loop():
     spec, _ = fam.family("pi_siso").draw(1, record_s=6 * 3600, effect="none")
@@ -98,7 +47,7 @@ def test_one_window_matches_numpy(pi_loop):
     y = data["y1"].to_numpy()[:1440]
     u = data[["u1"]].to_numpy()[:1440]
     beta, cov, settle = _core.residual_regression(model, 0, [0], config, y, u)
-    ref_b, ref_c = reference_window(model.process("y1", "u1"), y, u[:, 0], config.arx_order_a,
+    ref_b, ref_c, _, _ = reference_window(model.process("y1", "u1"), y, u[:, 0], config.arx_order_a,
                                     config.laguerre_terms, settle)
     np.testing.assert_allclose(beta[0], ref_b, rtol=1e-6, atol=1e-9 * np.abs(ref_b).max())
     np.testing.assert_allclose(cov[0], ref_c, rtol=1e-6, atol=1e-9 * np.abs(ref_c).max())

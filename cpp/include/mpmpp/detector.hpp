@@ -62,7 +62,7 @@ struct ChannelScorer {
   // -0.93 -> -0.99) sees the mean's error as a change in its thin direction (mean squared
   // Mahalanobis distance per coefficient 2.5 instead of 1 over 30 seeds; 1.0 with C_mean).
   Eigen::MatrixXd mean_covariance;
-  // Wald-test channels (ProcessTest::Residual process channels, NoiseTest::Wald noise
+  // Wald-test channels (ProcessTest::Residual process channels, Wald noise
   // channels; else 0): the window level of the Wald test that replaces the SVM.
   // T = (x - mean)' (C + C_mean)^+ (x - mean) ~ chi-square(rank) with no change,
   // p = P(chi-square > T) (wald_log_p_value: log p, finite where p underflows), and the score
@@ -125,7 +125,7 @@ class Detector {
                                const Eigen::Ref<const Eigen::MatrixXd>& y,
                                std::string* skip_reason = nullptr) const;
   // Whether channel k's window, with these scores, is evidence for its indicator (eq. 23).
-  // Always, except that with NoiseTest::Wald a noise channel's window is passed over (the
+  // Always, except that with a Wald noise test a noise channel's window is passed over (the
   // indicator and alarm keep their state) while a process channel of its output is negative
   // in it. A window straddling a process change leaves in the ARX's A(q) what one B(q)
   // cannot fit on both sides; the Wald test, precise to a few percent of a coefficient, then
@@ -148,7 +148,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 6;  // history in CHANGELOG.md, "File formats"
+  static constexpr int kFormatVersion = 7;  // history in CHANGELOG.md, "File formats"
 
  private:
   Model model_;

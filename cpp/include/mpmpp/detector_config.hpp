@@ -50,14 +50,19 @@ enum class NoiseTest {
   Svm,  // the paper: the ARX-OE estimate's A_i(q), one-class SVM on the resampled cloud
   // mpmpp: a_1..a_na of A(q) = 1/H with their least-squares covariance sigma^2 (Phi'Phi)^-1,
   // compared with the training mean by a Wald test at window_significance as
-  // ProcessTest::Residual's channels are. With ProcessTest::Residual, A(q) is the disturbance's
-  // own: the residual regression's whitening polynomial of the output error y - G0 u (with the
-  // window's channel changes and trend taken out), and neither ARX-OE step is run; otherwise it
-  // is the ARX step's A(q), which in closed loop also carries the process's poles.
-  // Tuning families, seeds 0-19 (docs/detection.md): false noise alarms 9/140 runs with the ARX
-  // step's A(q), 5/140 with the residual regression's.
+  // ProcessTest::Residual's channels are; A(q) is the ARX step's, which in closed loop also
+  // carries the process's poles and so moves with the excitation.
   Wald,
+  // mpmpp, the presets: the same Wald test on the disturbance's own A(q): the residual
+  // regression's whitening polynomial of the output error y - G0 u (fitted after the window's
+  // channel changes and trend are taken out); needs ProcessTest::Residual, and no ARX-OE step
+  // is run. Tuning families, seeds 0-19 (docs/detection.md): false noise alarms in 9/140 runs
+  // with Wald, 5/140 with Residual.
+  Residual,
 };
+
+// Whether noise channels carry covariances and are judged by a Wald test.
+inline bool is_wald(NoiseTest t) { return t != NoiseTest::Svm; }
 
 struct DetectorConfig {
   double window_s = 7200.0;           // W_size: moving-window length

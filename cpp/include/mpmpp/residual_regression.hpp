@@ -44,7 +44,7 @@ class ResidualRegression {
 
   // y: the output's samples, u: one column per entry of `inputs`. Fills beta[e] and
   // covariance[e] per input, and when asked the whitening A(q) = 1 + ar_1 q^-1 + ... (the
-  // disturbance model 1/H, NoiseTest::Wald) with its covariance; false (with the reason) when
+  // disturbance model 1/H, NoiseTest::Residual) with its covariance; false (with the reason) when
   // the window is too short or the whitened regressors carry no information.
   bool estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                 const Eigen::Ref<const Eigen::MatrixXd>& u, std::vector<Eigen::VectorXd>& beta,

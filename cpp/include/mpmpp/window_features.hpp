@@ -60,8 +60,9 @@ class WindowFeatures {
   // OE parameters the features themselves) and a 0 x 0 matrix for noise channels. With
   // ProcessTest::Residual a process channel's features are its residual-regression
   // coefficients (residual_regression.hpp) and `covariances` receives theirs; with
-  // NoiseTest::Wald a noise channel's covariance is that of the ARX step's a_1..a_na (and
-  // with both, the OE step is not run).
+  // NoiseTest::Wald a noise channel's covariance is that of the ARX step's a_1..a_na (the OE
+  // step is then not run), with NoiseTest::Residual that of the residual regression's A(q)
+  // (no ARX-OE step at all).
   bool extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                const Eigen::Ref<const Eigen::MatrixXd>& y, std::vector<Eigen::VectorXd>& features,
                std::string* skip_reason = nullptr,
@@ -75,8 +76,8 @@ class WindowFeatures {
         features;  // per channel: windows x feature_length, NaN rows when skipped
     // Empty unless has_covariances(): per channel, windows x d^2, each row the window's
     // feature covariance in row-major order; 0 columns for the channels without one (process
-    // channels under the SVM without Resampling::Estimator, noise channels without
-    // NoiseTest::Wald).
+    // channels under the SVM without Resampling::Estimator, noise channels under
+    // NoiseTest::Svm).
     std::vector<Eigen::MatrixXd> covariances;
   };
   Series extract_series(const Eigen::Ref<const Eigen::VectorXd>& time_s,
@@ -92,14 +93,16 @@ class WindowFeatures {
     ArxOeEstimator estimator;
     Eigen::MatrixXd u;  // window workspace: the problem's input columns
     // ProcessTest::Residual: the process channels' features come from here (the ARX-OE
-    // estimate, or with NoiseTest::Wald its ARX step alone, gives the noise channel's).
+    // estimate, or with NoiseTest::Wald its ARX step alone, gives the noise channel's; with
+    // NoiseTest::Residual this regression's A(q) does).
     std::optional<ResidualRegression> residual;
   };
   double sample_time_s_;
   int num_inputs_, num_outputs_;
   int window_, step_;
   bool process_covariances_;  // Resampling::Estimator (the OE step's) or ProcessTest::Residual
-  bool noise_wald_;           // NoiseTest::Wald: the ARX step's covariance of a_1..a_na
+  bool noise_wald_;           // NoiseTest::Wald: a_1..a_na with their covariance
+  bool noise_from_residual_;  // NoiseTest::Residual: A(q) from the residual regression
   std::vector<MonitoredChannel> channels_;
   std::vector<int> feature_length_;
   std::vector<OutputProblem> problems_;

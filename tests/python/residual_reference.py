@@ -1,0 +1,56 @@
+"""A plain NumPy/SciPy implementation of one window of the residual regression
+(cpp/src/residual_regression.cpp): the output error y - G0 u regressed on the Laguerre and
+delay directions after whitening by A(q), with A(q) refitted from what beta leaves, twice."""
+import numpy as np
+from scipy.signal import lfilter
+
+
+def _tf(num, den, delay, x):
+    return lfilter(np.concatenate([np.zeros(delay), num]), den, x)
+
+
+def _directions(g, x, terms):
+    num, den, d = np.asarray(g.num), np.asarray(g.den), int(g.delay)
+    cols = [_tf(num, den, d, x), _tf(num, den, d + 1, x), _tf(num, den, d - 1 if d >= 2 else d + 2, x)]
+    p = float(np.clip(np.max(np.abs(np.roots(den))) if len(den) > 1 else 0.5, 0.2, 0.99))
+    c = np.sqrt(1 - p * p)
+    cur = lfilter([0.0, c], [1.0, -p], x)  # L_0 = c q^-1 / (1 - p q^-1)
+    for _ in range(terms):
+        cols.append(cur)
+        cur = lfilter([-p, 1.0], [1.0, -p], cur)
+    return np.column_stack(cols), p
+
+
+def _lstsq(Z, z):
+    """Least squares on the column-scaled regressors by a truncated SVD, and sigma^2 (Z'Z)^+."""
+    scale = np.sqrt((Z**2).mean(0))
+    scale[scale == 0] = 1.0
+    U, s, Vt = np.linalg.svd(Z / scale, full_matrices=False)
+    k = s > 1e-8 * s[0]
+    bs = Vt[k].T @ ((U[:, k].T @ z) / s[k])
+    sigma2 = np.sum((z - (Z / scale) @ bs) ** 2) / (len(z) - k.sum())
+    Vs = Vt[k].T / s[k]
+    return bs / scale, sigma2 * (Vs @ Vs.T) / np.outer(scale, scale)
+
+
+def reference_window(g, y, u, na, terms, settle):
+    yc, uc = y - y.mean(), u - u.mean()
+    v = yc - _tf(np.asarray(g.num), np.asarray(g.den), int(g.delay), uc)
+    X, _ = _directions(g, uc, terms)
+    skip = min(settle, len(y) // 3)
+    v, X = v[skip:], X[skip:]
+    rows = len(v) - na
+    trend = np.column_stack([np.ones(rows), np.linspace(0.0, 1.0, rows)])
+    b = np.zeros(X.shape[1])
+    for _ in range(2):
+        r = v - X @ b
+        R = np.column_stack([r[na - k:len(r) - k] for k in range(1, na + 1)] + [trend])
+        a_coef, a_cov = _lstsq(R, r[na:])
+        a = a_coef[:na]
+        A = np.concatenate([[1.0], -a])
+        coef, cov = _lstsq(np.column_stack([lfilter(A, [1.0], X, axis=0)[na:], trend]),
+                           lfilter(A, [1.0], v)[na:])
+        b = coef[:X.shape[1]]
+    p = X.shape[1]
+    # A(q) of the last pass in the ARX step's signs (A = 1 + ar_1 q^-1 + ...), with its covariance.
+    return b, cov[:p, :p], -a, a_cov[:na, :na]

@@ -162,11 +162,17 @@ class Nuisance:
     def __post_init__(self):
         # the weighted least-squares solve, formed once: every candidate response is projected
         z = self.columns * self.weight[:, None]
-        self._solve = np.linalg.pinv(z.T @ self.columns) @ z.T
+        self.solve = np.linalg.pinv(z.T @ self.columns) @ z.T
 
     def project(self, x: np.ndarray) -> np.ndarray:
         """x less its weighted least-squares fit on the columns."""
-        return x - self.columns @ (self._solve @ x)
+        return x - self.columns @ (self.solve @ x)
+
+    def scan(self, r: np.ndarray, odd: np.ndarray, begin: int, min_segment: int,
+             step: int) -> _core.ProjectedOnsetScan:
+        """Cross-validated onset scans (fold ``odd``) of candidates fitted beside the columns to
+        the projected residual ``r``; a candidate is passed unprojected."""
+        return _core.ProjectedOnsetScan(r, self.weight, odd, self.columns, self.solve, begin, min_segment, step)
 
 
 def disturbance_onsets(out: OutputResidual, e: np.ndarray, first_onset: int, grid: int) -> list[int]:

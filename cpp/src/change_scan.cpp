@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -59,9 +61,14 @@ Eigen::Index first_nonzero(const Eigen::Ref<const Eigen::VectorXd>& x) {
   const Eigen::Index n = x.size();
   Eigen::Index t = 0;
   for (; t + block <= n; t += block) {
-    bool any = false;
-    for (Eigen::Index i = 0; i < block; ++i) any |= x[t + i] != 0.0;
-    if (any) break;
+    // +0 and -0 differ only in the sign bit
+    std::uint64_t bits = 0;
+    for (Eigen::Index i = 0; i < block; ++i) {
+      std::uint64_t v;
+      std::memcpy(&v, x.data() + t + i, sizeof v);
+      bits |= v << 1;
+    }
+    if (bits != 0) break;
   }
   while (t < n && x[t] == 0.0) ++t;
   return t;
@@ -83,53 +90,43 @@ class GridSums {
 
   // Walks t from the last sample down to `stop`, adding weight(t) * terms(t) (terms(t) gives
   // r^2 - r_without^2, r_without psi and psi^2 at t) to the sums of t's fold, and stores them
-  // at every grid onset passed. Returns the first row not stored (rows below `stop`, -1 when
-  // none is left).
-  template <int M, class Terms>
-  Eigen::Index accumulate(Eigen::Index n, Eigen::Index stop, const double* weight, const double* odd,
-                          Terms terms) {
+  // at every grid onset passed; onsets below `stop` get the sums from `stop` on. Without `Drop`
+  // the candidate leaves r unchanged (r_without = r) and the drop sums stay 0.
+  template <int M, bool Drop = true, class Terms>
+  void accumulate(Eigen::Index n, Eigen::Index stop, const double* weight, const double* odd, Terms terms) {
     double d0 = 0.0, x0 = 0.0, p0 = 0.0, d1 = 0.0, x1 = 0.0, p1 = 0.0, d2 = 0.0, x2 = 0.0, p2 = 0.0;
-    Eigen::Index row = rows() - 1;
+    const auto store = [&](Eigen::Index row) {
+      if constexpr (M == 3) {
+        set(row, 1, d1, x1, p1);
+        set(row, 2, d2, x2, p2);
+      } else {
+        set(row, 0, d0, x0, p0);
+      }
+    };
     const std::vector<Eigen::Index>& onsets = *onsets_;
+    Eigen::Index row = rows() - 1;
     for (Eigen::Index t = n - 1; t >= stop && row >= 0; --t) {
       double dt, xt, pt;
       terms(t, dt, xt, pt);
       if constexpr (M == 3) {
         // blocks of one fold are long runs, so the branch is well predicted
         if (odd[t] != 0.0) {
-          d2 += weight[t] * dt;
+          if constexpr (Drop) d2 += weight[t] * dt;
           x2 += weight[t] * xt;
           p2 += weight[t] * pt;
         } else {
-          d1 += weight[t] * dt;
+          if constexpr (Drop) d1 += weight[t] * dt;
           x1 += weight[t] * xt;
           p1 += weight[t] * pt;
         }
       } else {
-        d0 += weight[t] * dt;
+        if constexpr (Drop) d0 += weight[t] * dt;
         x0 += weight[t] * xt;
         p0 += weight[t] * pt;
       }
-      if (t == onsets[row]) {
-        if constexpr (M == 3) {
-          set(row, 1, d1, x1, p1);
-          set(row, 2, d2, x2, p2);
-        } else {
-          set(row, 0, d0, x0, p0);
-        }
-        --row;
-      }
+      if (t == onsets[row]) store(row--);
     }
-    // rows whose onset lies below `stop` start where the walk ended
-    for (Eigen::Index i = row; i >= 0; --i) {
-      if constexpr (M == 3) {
-        set(i, 1, d1, x1, p1);
-        set(i, 2, d2, x2, p2);
-      } else {
-        set(i, 0, d0, x0, p0);
-      }
-    }
-    return row;
+    for (; row >= 0; --row) store(row);
   }
 
   void set(Eigen::Index row, int j, double drop, double rp, double pp) {
@@ -155,9 +152,11 @@ class GridSums {
   // fold for a change applied before it happened).
   OnsetFit scan(int j, Eigen::Index* row = nullptr, bool latest_tie = false) const {
     Eigen::Index best_row = 0;
-    double best = statistic(0, j);
+    double best = statistic(0, j), s = best;
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
-      const double s = statistic(i, j);
+      // a fold's sums stand still through the other fold's blocks: same sums, same statistic
+      if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) || pp_(i, j) != pp_(i - 1, j))
+        s = statistic(i, j);
       if (s > best || (latest_tie && s == best)) {
         best = s;
         best_row = i;
@@ -358,11 +357,11 @@ CrossValidatedOnset ProjectedOnsetScan::fit(const Eigen::Ref<const Eigen::Vector
   const Eigen::Index stop = onsets[stop_row];
   const double* w = weight ? weight->data() : weight_.data();
   if (m == 1 && !nominal)
-    sums.accumulate<3>(n, stop, w, odd_.data(), terms.compiled<true, false>());
+    sums.accumulate<3, false>(n, stop, w, odd_.data(), terms.compiled<true, false>());
   else if (m == 1)
     sums.accumulate<3>(n, stop, w, odd_.data(), terms.compiled<true, true>());
   else if (!nominal)
-    sums.accumulate<3>(n, stop, w, odd_.data(), terms.compiled<false, false>());
+    sums.accumulate<3, false>(n, stop, w, odd_.data(), terms.compiled<false, false>());
   else
     sums.accumulate<3>(n, stop, w, odd_.data(), terms.compiled<false, true>());
   if (stop_row > 0) {

@@ -19,7 +19,7 @@ from .. import _core
 from .._core import TransferFunction
 from ..signals import Signals, per_segment
 from .result import InsufficientData
-from .trend import trend_fit
+from .trend import TrendScan, trend_fit
 
 AR_ORDER = 5                 # AR correction of the noise model (residual whitening)
 SETTLE = 60                  # samples left out after the start of each filtered segment
@@ -133,10 +133,11 @@ def disturbance_steps(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, fir
     (BIC: onset, step, slope)."""
     n = len(e)
     onsets, total = [], np.zeros(n)
-    s, r = hinv.filter(np.ones(n)), hinv.filter(np.arange(n, dtype=float) / n)
+    scan = TrendScan(ok, hinv, grid, earliest)
+    s, r = scan.s, scan.r
     columns = [np.ones(n)]
     for _ in range(MAX_DISTURBANCE_STEPS):
-        fit = trend_fit(e - total, ok, hinv, first_onset, grid, earliest)
+        fit = scan.fit(e - total, first_onset)
         if not fit.drop > 3.0 * logn * np.var((e - total)[ok]):
             break
         k = fit.onset

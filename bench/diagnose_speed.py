@@ -8,6 +8,8 @@
   printed apart), with the CPU per sample relative to the shortest record (1.0 = linear);
 - the cross-validated onset scan (`scan_onset_cross_validated`) against the same scan written
   with NumPy suffix sums (peer);
+- the same scan of a candidate projected beside disturbance columns inside the pass
+  (`ProjectedOnsetScan`) against NumPy projecting it and scanning with suffix sums (peer);
 - the step + ramp trend fit over all onsets (FFT cross-correlations) against one least-squares
   fit per onset with numpy.linalg.lstsq (peer);
 - the C++ k-step predictor against scipy.signal.lfilter doing the same filtering (peer).
@@ -120,6 +122,24 @@ def kernel_ratios(n: int) -> None:
     assert numpy_cross_validated_scan(r, rw, psi, w, folds, 720, 12)[0][0] == cv.full.onset
     print(f"cross-validated onset scan, {n} samples: C++ {1e3 * t_cpp:.2f} ms, NumPy suffix sums "
           f"{1e3 * t_np:.2f} ms -> C++ is {t_np / t_cpp:.1f}x faster")
+
+    # a candidate beside the level and one step + ramp disturbance: projected inside the C++
+    # pass against NumPy projecting it and scanning with suffix sums
+    t = np.arange(n, dtype=float)
+    z = np.column_stack([np.ones(n), t >= n // 3, np.maximum(t - n // 3, 0.0) / 720]) + 0.1 * rng.standard_normal((n, 3))
+    solve = np.linalg.pinv((z * w[:, None]).T @ z) @ (z * w[:, None]).T
+    rz = r - z @ (solve @ r)
+    scan = _core.ProjectedOnsetScan(rz, w, folds[1], z, solve, 0, 720, 12)
+    t_proj = best_of(lambda: scan.fit(psi), 20, time.process_time)[0]
+
+    def numpy_projected():
+        p = psi - z @ (solve @ psi)
+        return numpy_cross_validated_scan(rz, rz, p, w, folds, 720, 12)
+
+    t_np_proj = best_of(numpy_projected, 20, time.process_time)[0]
+    assert numpy_projected()[0][0] == scan.fit(psi).full.onset
+    print(f"projected onset scan (candidate beside 3 disturbance columns), {n} samples: C++ {1e3 * t_proj:.2f} ms, "
+          f"NumPy projection + suffix sums {1e3 * t_np_proj:.2f} ms -> C++ is {t_np_proj / t_proj:.1f}x faster")
 
     e = rng.standard_normal(n) + 1e-4 * np.maximum(np.arange(n) - n // 2, 0)
     ok = np.ones(n, bool)

@@ -1,6 +1,7 @@
 #include "mpmpp/change_scan.hpp"
 
 #include <pybind11/eigen.h>
+#include <pybind11/stl.h>
 
 #include "bindings.hpp"
 
@@ -35,6 +36,16 @@ void bind_change_scan(py::module_& m) {
   m.def("scan_onset_cross_validated", &scan_onset_cross_validated, py::arg("r"),
         py::arg("r_without"), py::arg("psi"), py::arg("weight"), py::arg("odd"),
         py::arg("min_segment"), py::arg("step"), py::call_guard<py::gil_scoped_release>());
+  py::class_<ProjectedOnsetScan>(m, "ProjectedOnsetScan",
+                                 "cross-validated onset scans of candidates fitted beside nuisance "
+                                 "columns, for one residual")
+      .def(py::init<const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+                    const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const RowMatrixXd>&,
+                    const Eigen::Ref<const RowMatrixXd>&, Eigen::Index, Eigen::Index, Eigen::Index>(),
+           py::arg("r"), py::arg("weight"), py::arg("odd"), py::arg("columns"), py::arg("solve"),
+           py::arg("begin"), py::arg("min_segment"), py::arg("step"))
+      .def("fit", &ProjectedOnsetScan::fit, py::arg("x"), py::arg("nominal") = py::none(),
+           py::arg("weight") = py::none(), py::call_guard<py::gil_scoped_release>());
   m.def("fit_at_onset", &fit_at_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"),
         py::arg("weight"), py::arg("onset"));
   m.def("fit_ar", &fit_ar, py::arg("e"), py::arg("order"), py::arg("begin"), py::arg("end"));

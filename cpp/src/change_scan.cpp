@@ -1,6 +1,10 @@
 #include "mpmpp/change_scan.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -42,99 +46,130 @@ double ar_variance(const Eigen::MatrixXd& gram, int order, double n) {
   return std::max(rss, 1e-300) / n;
 }
 
+// Onsets a scan considers, as sample indices: begin, then begin + min_segment,
+// begin + min_segment + step, ..., up to N - min_segment.
+std::shared_ptr<const std::vector<Eigen::Index>> scan_onsets(Eigen::Index begin, Eigen::Index n,
+                                                             Eigen::Index min_segment, Eigen::Index step) {
+  auto onsets = std::make_shared<std::vector<Eigen::Index>>(1, begin);
+  for (Eigen::Index k = begin + min_segment; k + min_segment <= n; k += step) onsets->push_back(k);
+  return onsets;
+}
+
+// Index of the first nonzero entry of x (its size when none): runs of zeros a block at a time.
+Eigen::Index first_nonzero(const Eigen::Ref<const Eigen::VectorXd>& x) {
+  constexpr Eigen::Index block = 32;
+  const Eigen::Index n = x.size();
+  Eigen::Index t = 0;
+  for (; t + block <= n; t += block) {
+    // +0 and -0 differ only in the sign bit
+    std::uint64_t bits = 0;
+    for (Eigen::Index i = 0; i < block; ++i) {
+      std::uint64_t v;
+      std::memcpy(&v, x.data() + t + i, sizeof v);
+      bits |= v << 1;
+    }
+    if (bits != 0) break;
+  }
+  while (t < n && x[t] == 0.0) ++t;
+  return t;
+}
+
 // Suffix sums over t >= k of the statistic's three terms, kept only at the onsets a scan
-// considers (k = 0 and k = min_segment, min_segment + step, ..., N - min_segment), for the
-// weighting `weight` (column 0) and, with a fold assignment, for the even and odd folds'
-// samples (columns 1 and 2; column 0 is then their sum).
+// considers, for the weighting `weight` (column 0) and, with a fold assignment, for the even
+// and odd folds' samples (columns 1 and 2; column 0 is then their sum).
 class GridSums {
  public:
-  GridSums(const Eigen::Ref<const Eigen::VectorXd>& r,
-           const Eigen::Ref<const Eigen::VectorXd>& r_without,
-           const Eigen::Ref<const Eigen::VectorXd>& psi,
-           const Eigen::Ref<const Eigen::VectorXd>& weight, const double* odd,
-           Eigen::Index min_segment, Eigen::Index step) {
-    const Eigen::Index n = r.size();
-    onsets_.push_back(0);
-    for (Eigen::Index k = min_segment; k + min_segment <= n; k += step) onsets_.push_back(k);
-    const int m = odd ? 3 : 1;
-    const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
-    drop_.setZero(rows, m);
-    rp_.setZero(rows, m);
-    pp_.setZero(rows, m);
-    if (odd)
-      accumulate<3>(r, r_without, psi, weight, odd);
-    else
-      accumulate<1>(r, r_without, psi, weight, nullptr);
-  }
+  // every row is set by accumulate (and column 0 of folded sums by sum_folds)
+  GridSums(std::shared_ptr<const std::vector<Eigen::Index>> onsets, bool folds)
+      : onsets_(std::move(onsets)),
+        drop_(rows(), folds ? 3 : 1),
+        rp_(rows(), folds ? 3 : 1),
+        pp_(rows(), folds ? 3 : 1) {}
 
- private:
-  template <int M>
-  void accumulate(const Eigen::Ref<const Eigen::VectorXd>& r,
-                  const Eigen::Ref<const Eigen::VectorXd>& r_without,
-                  const Eigen::Ref<const Eigen::VectorXd>& psi,
-                  const Eigen::Ref<const Eigen::VectorXd>& weight, const double* odd) {
-    const Eigen::Index n = r.size();
-    const Eigen::Index rows = static_cast<Eigen::Index>(onsets_.size());
-    // Before the first sample where the candidate differs from the nominal model (psi != 0 or
-    // r != r_without: a drift that starts late) every term is zero and the sums stay put.
-    Eigen::Index first = 0;
-    while (first < n && psi[first] == 0.0 && r[first] == r_without[first]) ++first;
+  Eigen::Index rows() const { return static_cast<Eigen::Index>(onsets_->size()); }
+
+  // Walks t from the last sample down to `stop`, adding weight(t) * terms(t) (terms(t) gives
+  // r^2 - r_without^2, r_without psi and psi^2 at t) to the sums of t's fold, and stores them
+  // at every grid onset passed; onsets below `stop` get the sums from `stop` on. Without `Drop`
+  // the candidate leaves r unchanged (r_without = r) and the drop sums stay 0.
+  template <int M, bool Drop = true, class Terms>
+  void accumulate(Eigen::Index n, Eigen::Index stop, const double* weight, const double* odd, Terms terms) {
     double d0 = 0.0, x0 = 0.0, p0 = 0.0, d1 = 0.0, x1 = 0.0, p1 = 0.0, d2 = 0.0, x2 = 0.0, p2 = 0.0;
     const auto store = [&](Eigen::Index row) {
       if constexpr (M == 3) {
-        drop_.row(row) << d1 + d2, d1, d2;
-        rp_.row(row) << x1 + x2, x1, x2;
-        pp_.row(row) << p1 + p2, p1, p2;
+        set(row, 1, d1, x1, p1);
+        set(row, 2, d2, x2, p2);
       } else {
-        drop_(row, 0) = d0;
-        rp_(row, 0) = x0;
-        pp_(row, 0) = p0;
+        set(row, 0, d0, x0, p0);
       }
     };
-    Eigen::Index row = rows - 1;
-    for (Eigen::Index t = n - 1; t >= first && row >= 0; --t) {
-      const double dt = r[t] * r[t] - r_without[t] * r_without[t];
-      const double xt = r_without[t] * psi[t];
-      const double pt = psi[t] * psi[t];
+    const std::vector<Eigen::Index>& onsets = *onsets_;
+    Eigen::Index row = rows() - 1;
+    for (Eigen::Index t = n - 1; t >= stop && row >= 0; --t) {
+      double dt, xt, pt;
+      terms(t, dt, xt, pt);
       if constexpr (M == 3) {
         // blocks of one fold are long runs, so the branch is well predicted
         if (odd[t] != 0.0) {
-          d2 += weight[t] * dt;
+          if constexpr (Drop) d2 += weight[t] * dt;
           x2 += weight[t] * xt;
           p2 += weight[t] * pt;
         } else {
-          d1 += weight[t] * dt;
+          if constexpr (Drop) d1 += weight[t] * dt;
           x1 += weight[t] * xt;
           p1 += weight[t] * pt;
         }
       } else {
-        d0 += weight[t] * dt;
+        if constexpr (Drop) d0 += weight[t] * dt;
         x0 += weight[t] * xt;
         p0 += weight[t] * pt;
       }
-      if (t == onsets_[row]) store(row--);
+      if (t == onsets[row]) store(row--);
     }
     for (; row >= 0; --row) store(row);
   }
 
- public:
+  void set(Eigen::Index row, int j, double drop, double rp, double pp) {
+    drop_(row, j) = drop;
+    rp_(row, j) = rp;
+    pp_(row, j) = pp;
+  }
+  double drop(Eigen::Index row, int j) const { return drop_(row, j); }
+  double rp(Eigen::Index row, int j) const { return rp_(row, j); }
+  double pp(Eigen::Index row, int j) const { return pp_(row, j); }
+
+  // With fold columns: the full weighting is the sum of the two folds.
+  void sum_folds() {
+    drop_.col(0) = drop_.col(1) + drop_.col(2);
+    rp_.col(0) = rp_.col(1) + rp_.col(2);
+    pp_.col(0) = pp_.col(1) + pp_.col(2);
+  }
+
   // Best onset for weighting j; `row` receives its grid index. With `latest_tie`, of onsets
   // with the same statistic the latest is taken: inside the other fold's block a fold's sums
   // do not move, so it cannot tell where there the change starts, and the held-out drop is
   // then only counted from where the fold saw it (the earliest onset would charge the other
   // fold for a change applied before it happened).
   OnsetFit scan(int j, Eigen::Index* row = nullptr, bool latest_tie = false) const {
-    OnsetFit best = make_fit(0, drop_(0, j), rp_(0, j), pp_(0, j));
     Eigen::Index best_row = 0;
+    double best = statistic(0, j), s = best;
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
-      const OnsetFit f = make_fit(onsets_[i], drop_(i, j), rp_(i, j), pp_(i, j));
-      if (f.statistic > best.statistic || (latest_tie && f.statistic == best.statistic)) {
-        best = f;
+      // a fold's sums stand still through the other fold's blocks: same sums, same statistic
+      if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) || pp_(i, j) != pp_(i - 1, j))
+        s = statistic(i, j);
+      if (s > best || (latest_tie && s == best)) {
+        best = s;
         best_row = i;
       }
     }
     if (row) *row = best_row;
-    return best;
+    return make_fit((*onsets_)[best_row], drop_(best_row, j), rp_(best_row, j), pp_(best_row, j));
+  }
+
+  // make_fit's statistic without the rest of the fit
+  double statistic(Eigen::Index i, int j) const {
+    const double pp = pp_(i, j), rp = rp_(i, j);
+    return pp <= 0.0 ? drop_(i, j) : drop_(i, j) + rp * rp / pp;
   }
 
   // Drop of the squared error after the grid onset `row` with channel scale theta, weighting j:
@@ -143,9 +178,75 @@ class GridSums {
     return drop_(row, j) + 2.0 * theta * rp_(row, j) - theta * theta * pp_(row, j);
   }
 
+  // The full scan, each fold's scan and each fold's fit scored on the other fold.
+  CrossValidatedOnset cross_validated() const {
+    CrossValidatedOnset out;
+    out.full = scan(0);
+    for (int k = 0; k < 2; ++k) {
+      Eigen::Index row = 0;
+      out.fold[k] = scan(1 + k, &row, true);
+      out.heldout[k] = drop_with(2 - k, row, out.fold[k].theta);
+    }
+    return out;
+  }
+
  private:
-  std::vector<Eigen::Index> onsets_;
+  std::shared_ptr<const std::vector<Eigen::Index>> onsets_;
   Eigen::MatrixXd drop_, rp_, pp_;
+};
+
+// Sums of the unprojected candidate's terms: before the first sample where the candidate
+// differs from the nominal model (psi != 0 or r != r_without: a drift that starts late) every
+// term is zero and the sums stay put.
+template <int M>
+GridSums direct_sums(const Eigen::Ref<const Eigen::VectorXd>& r,
+                     const Eigen::Ref<const Eigen::VectorXd>& r_without,
+                     const Eigen::Ref<const Eigen::VectorXd>& psi,
+                     const Eigen::Ref<const Eigen::VectorXd>& weight, const double* odd,
+                     Eigen::Index min_segment, Eigen::Index step) {
+  const Eigen::Index n = r.size();
+  GridSums sums(scan_onsets(0, n, min_segment, step), M == 3);
+  Eigen::Index first = 0;
+  while (first < n && psi[first] == 0.0 && r[first] == r_without[first]) ++first;
+  sums.accumulate<M>(n, first, weight.data(), odd, [&](Eigen::Index t, double& dt, double& xt, double& pt) {
+    dt = r[t] * r[t] - r_without[t] * r_without[t];
+    xt = r_without[t] * psi[t];
+    pt = psi[t] * psi[t];
+  });
+  if constexpr (M == 3) sums.sum_folds();
+  return sums;
+}
+
+// The scan's terms for a candidate projected beside nuisance columns z (N x m, row-major):
+// psi(t) = x(t) - z(t)' b and r_without = r + nominal. One nuisance column (the level alone)
+// and no nominal channel (r_without = r: a drift, a missing coupling) are the common cases and
+// compiled apart.
+struct ProjectedTerms {
+  const double *x, *r, *nominal, *z, *b;
+  Eigen::Index m;
+
+  template <bool OneColumn, bool WithNominal>
+  auto compiled() const {
+    return [*this](Eigen::Index t, double& dt, double& xt, double& pt) {
+      double fitted;
+      if constexpr (OneColumn) {
+        fitted = z[t] * b[0];
+      } else {
+        fitted = 0.0;
+        for (Eigen::Index j = 0; j < m; ++j) fitted += z[t * m + j] * b[j];
+      }
+      const double psi = x[t] - fitted;
+      if constexpr (WithNominal) {
+        const double rw = r[t] + nominal[t];
+        dt = r[t] * r[t] - rw * rw;
+        xt = rw * psi;
+      } else {
+        dt = 0.0;
+        xt = r[t] * psi;
+      }
+      pt = psi * psi;
+    };
+  }
 };
 
 }  // namespace
@@ -172,7 +273,7 @@ OnsetFit scan_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
                     Eigen::Index step) {
   check_same_length(r.size(), r_without.size(), psi.size(), weight.size());
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
-  return GridSums(r, r_without, psi, weight, nullptr, min_segment, step).scan(0);
+  return direct_sums<1>(r, r_without, psi, weight, nullptr, min_segment, step).scan(0);
 }
 
 CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::VectorXd>& r,
@@ -185,15 +286,103 @@ CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::Vec
   if (odd.size() != r.size()) throw InputError("odd must have the same length as r");
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
   const Eigen::VectorXd in_odd = odd;  // contiguous even if the caller passed a strided view
-  const GridSums sums(r, r_without, psi, weight, in_odd.data(), min_segment, step);
-  CrossValidatedOnset out;
-  out.full = sums.scan(0);
-  for (int k = 0; k < 2; ++k) {
-    Eigen::Index row = 0;
-    out.fold[k] = sums.scan(1 + k, &row, true);
-    out.heldout[k] = sums.drop_with(2 - k, row, out.fold[k].theta);
+  return direct_sums<3>(r, r_without, psi, weight, in_odd.data(), min_segment, step).cross_validated();
+}
+
+ProjectedOnsetScan::ProjectedOnsetScan(const Eigen::Ref<const Eigen::VectorXd>& r,
+                                       const Eigen::Ref<const Eigen::VectorXd>& weight,
+                                       const Eigen::Ref<const Eigen::VectorXd>& odd,
+                                       const Eigen::Ref<const RowMatrixXd>& columns,
+                                       const Eigen::Ref<const RowMatrixXd>& solve, Eigen::Index begin,
+                                       Eigen::Index min_segment, Eigen::Index step)
+    : r_(r), weight_(weight), odd_(odd), columns_(columns), solve_(solve), begin_(begin) {
+  const Eigen::Index n = r.size(), m = columns.cols();
+  if (weight.size() != n || odd.size() != n || columns.rows() != n)
+    throw InputError("r, weight, odd and the nuisance columns must have the same length");
+  if (m < 1 || solve.rows() != m || solve.cols() != n)
+    throw InputError("the nuisance solve must be (columns) x (samples)");
+  if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
+  if (begin < 0 || begin >= n) throw InputError("begin must be inside the record");
+  onsets_ = scan_onsets(begin, n, min_segment, step);
+  const std::vector<Eigen::Index>& onsets = *onsets_;
+  const Eigen::Index rows = static_cast<Eigen::Index>(onsets.size());
+  // Per fold (even, odd), at every scanned onset k: sum_{t >= k} w r z(t) and
+  // sum_{t >= k} w z(t) z(t)' for the nuisance row z(t).
+  Eigen::VectorXd rz[2] = {Eigen::VectorXd::Zero(m), Eigen::VectorXd::Zero(m)};
+  Eigen::MatrixXd zz[2] = {Eigen::MatrixXd::Zero(m, m), Eigen::MatrixXd::Zero(m, m)};
+  for (int f = 0; f < 2; ++f) {
+    rz_[f].resize(rows, m);
+    zz_[f].resize(rows, m * m);
   }
-  return out;
+  Eigen::Index row = rows - 1;
+  for (Eigen::Index t = n - 1; t >= begin && row >= 0; --t) {
+    const int f = odd[t] != 0.0 ? 1 : 0;
+    const auto z = columns.row(t).transpose();
+    rz[f] += (weight[t] * r[t]) * z;
+    zz[f].noalias() += (weight[t] * z) * z.transpose();
+    if (t == onsets[row]) {
+      for (int g = 0; g < 2; ++g) {
+        rz_[g].row(row) = rz[g].transpose();
+        zz_[g].row(row) = Eigen::Map<const Eigen::RowVectorXd>(zz[g].data(), m * m);
+      }
+      --row;
+    }
+  }
+}
+
+CrossValidatedOnset ProjectedOnsetScan::fit(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                            const std::optional<Eigen::VectorXd>& nominal,
+                                            const std::optional<Eigen::VectorXd>& weight) const {
+  const Eigen::Index n = r_.size(), m = columns_.cols();
+  if (x.size() != n || (nominal && nominal->size() != n) || (weight && weight->size() != n))
+    throw InputError("x, nominal and weight must have the length of r");
+  // psi = x - Z b with b = S x; x is zero before its first nonzero sample
+  const Eigen::Index x_first = first_nonzero(x);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(m);
+  if (x_first < n)
+    b.noalias() = solve_.middleCols(x_first, n - x_first) * x.segment(x_first, n - x_first);
+  // Before both x and the nominal channel start, psi = -Z b and r_without = r: the sums there
+  // follow from the nuisance's sums. That is cheaper than the samples when the grid is coarser
+  // than the nuisance is wide.
+  const std::vector<Eigen::Index>& onsets = *onsets_;
+  Eigen::Index stop_row = 0;
+  if (!nominal && !weight) {
+    const Eigen::Index first = std::max(begin_, x_first);
+    stop_row = std::upper_bound(onsets.begin(), onsets.end(), first) - onsets.begin() - 1;
+    if (stop_row * m * (m + 1) >= (onsets[stop_row] - begin_) * (m + 8)) stop_row = 0;
+  }
+  GridSums sums(onsets_, true);
+  const ProjectedTerms terms{x.data(), r_.data(), nominal ? nominal->data() : nullptr, columns_.data(),
+                             b.data(), m};
+  const Eigen::Index stop = onsets[stop_row];
+  const double* w = weight ? weight->data() : weight_.data();
+  if (m == 1 && !nominal)
+    sums.accumulate<3, false>(n, stop, w, odd_.data(), terms.compiled<true, false>());
+  else if (m == 1)
+    sums.accumulate<3>(n, stop, w, odd_.data(), terms.compiled<true, true>());
+  else if (!nominal)
+    sums.accumulate<3, false>(n, stop, w, odd_.data(), terms.compiled<false, false>());
+  else
+    sums.accumulate<3>(n, stop, w, odd_.data(), terms.compiled<false, true>());
+  if (stop_row > 0) {
+    const Eigen::MatrixXd bb = b * b.transpose();
+    for (int f = 0; f < 2; ++f) {
+      const double drop = sums.drop(stop_row, 1 + f), rp = sums.rp(stop_row, 1 + f),
+                   pp = sums.pp(stop_row, 1 + f);
+      const double* rz_stop = rz_[f].row(stop_row).data();
+      const double* zz_stop = zz_[f].row(stop_row).data();
+      for (Eigen::Index i = 0; i < stop_row; ++i) {
+        const double* rz = rz_[f].row(i).data();
+        const double* zz = zz_[f].row(i).data();
+        double rp_before = 0.0, pp_before = 0.0;
+        for (Eigen::Index j = 0; j < m; ++j) rp_before += b[j] * (rz[j] - rz_stop[j]);
+        for (Eigen::Index j = 0; j < m * m; ++j) pp_before += bb.data()[j] * (zz[j] - zz_stop[j]);
+        sums.set(i, 1 + f, drop, rp - rp_before, pp + pp_before);
+      }
+    }
+  }
+  sums.sum_folds();
+  return sums.cross_validated();
 }
 
 Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,

@@ -77,6 +77,77 @@ def test_cross_validated_scan_matches_numpy(late_start):
         assert cv.heldout[k] == pytest.approx(heldout, rel=1e-9, abs=1e-9)
 
 
+def numpy_cross_validated(r, r_without, psi, weight, odd, begin, min_segment, step):
+    """(full (onset, statistic, theta), per fold (onset, statistic, theta, held-out drop)) of
+    the scan on samples from ``begin`` on, onsets as sample indices (latest of tied onsets)."""
+    tail = slice(begin, None)
+    folds = [weight * (odd == 0), weight * (odd != 0)]
+    onset, stat, theta = brute_scan(r[tail], r_without[tail], psi[tail], weight[tail], min_segment, step)
+    per_fold = []
+    for k in (0, 1):
+        fits = list(brute_fits(r[tail], r_without[tail], psi[tail], folds[k][tail], min_segment, step))
+        best = max(f[1] for f in fits)
+        on, s, th = max((f for f in fits if f[1] == pytest.approx(best, rel=1e-10)), key=lambda f: f[0])
+        on += begin
+        test = folds[1 - k][on:]
+        heldout = np.sum(test * (r[on:] ** 2 - (r_without[on:] - th * psi[on:]) ** 2))
+        per_fold.append((on, s, th, heldout))
+    return (begin + onset, stat, theta), per_fold
+
+
+@pytest.mark.parametrize("case", ["full", "late_start", "nominal", "own_weight", "begin"])
+@pytest.mark.parametrize("width", [1, 5])
+def test_projected_scan_matches_numpy(case, width):
+    """ProjectedOnsetScan: the candidate projected beside nuisance columns Z inside the scan
+    (psi = x - Z S x), against NumPy projecting it first and scanning by brute force; the
+    late start exercises the sums taken from the nuisance's own before the candidate starts."""
+    rng = np.random.default_rng(width)
+    n, begin = 900, (130 if case == "begin" else 0)
+    t = np.arange(n)
+    z = np.column_stack([np.ones(n)] + [np.where(t >= k, d, 0.0) for k in (300, 610)[: (width - 1) // 2]
+                                         for d in (1.0, (t - k) / 100.0)])
+    z += 0.1 * rng.standard_normal(z.shape)
+    weight = (rng.random(n) > 0.05).astype(float)
+    odd = ((t // 100) % 2 == 1) * weight
+    solve = np.linalg.pinv((z * weight[:, None]).T @ z) @ (z * weight[:, None]).T
+    x = rng.standard_normal(n)
+    change = 500
+    if case == "late_start":   # a drift from 430; its projection carries the change from 200
+        x = np.where(t >= 430, 1.0 + x, 0.0)
+        change = 200
+    psi = x - z @ (solve @ x)
+    r = z @ rng.standard_normal(width) + np.where(t >= change, psi, 0.0) + rng.standard_normal(n)
+    r -= z @ (solve @ r)
+    nominal = 0.3 * (rng.standard_normal(n) - z @ (solve @ rng.standard_normal(n))) if case == "nominal" else None
+    own = weight * (rng.random(n) > 0.1) if case == "own_weight" else None
+    r_without = r if nominal is None else r + nominal
+    scan = _core.ProjectedOnsetScan(r, weight, odd, z, solve, begin, 60, 7)
+    cv = scan.fit(x, nominal, own)
+    w = weight if own is None else own
+    full, folds = numpy_cross_validated(r, r_without, psi, w, odd, begin, 60, 7)
+    if case == "late_start":
+        assert full[0] < 430 and max(f[0] for f in folds) < 430
+    assert cv.full.onset == full[0]
+    assert cv.full.statistic == pytest.approx(full[1], rel=1e-9)
+    assert cv.full.theta == pytest.approx(full[2], rel=1e-9)
+    for k in (0, 1):
+        on, stat, theta, heldout = folds[k]
+        assert cv.folds[k].onset == on
+        assert cv.folds[k].statistic == pytest.approx(stat, rel=1e-9)
+        assert cv.folds[k].theta == pytest.approx(theta, rel=1e-9)
+        assert cv.heldout[k] == pytest.approx(heldout, rel=1e-8, abs=1e-8)
+
+
+def test_projected_scan_rejects_mismatched_lengths():
+    n = 300
+    z, solve = np.ones((n, 1)), np.full((1, n), 1.0 / n)
+    with pytest.raises(ValueError, match="same length"):
+        _core.ProjectedOnsetScan(np.zeros(n), np.ones(n - 1), np.zeros(n), z, solve, 0, 60, 7)
+    scan = _core.ProjectedOnsetScan(np.zeros(n), np.ones(n), np.zeros(n), z, solve, 0, 60, 7)
+    with pytest.raises(ValueError, match="length of r"):
+        scan.fit(np.zeros(n + 1))
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_trend_fit_matches_least_squares_per_onset(seed):
     rng = np.random.default_rng(seed)

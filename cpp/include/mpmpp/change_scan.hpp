@@ -3,6 +3,11 @@
 // where do the residual statistics change. Both are exact two-segment least-squares fits
 // evaluated for every onset with running sums (O(N) per candidate instead of O(N^2)).
 #include <Eigen/Dense>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "mpmpp/eigen_types.hpp"
 
 namespace mpmpp {
 
@@ -49,6 +54,37 @@ CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::Vec
                                                const Eigen::Ref<const Eigen::VectorXd>& weight,
                                                const Eigen::Ref<const Eigen::VectorXd>& odd,
                                                Eigen::Index min_segment, Eigen::Index step);
+// The cross-validated scan of candidates fitted jointly with nuisance columns Z (N x m: an
+// output's level and its step + ramp disturbances, whitened). With S (m x N) the weighted
+// least-squares solve of Z, a candidate's whitened response x enters as its part the nuisance
+// cannot carry, psi = x - Z (S x) (Frisch-Waugh-Lovell), formed sample by sample inside the
+// scan's pass. One object per residual r (already projected) serves every candidate fitted to
+// it; the scan covers samples from `begin` on and reports onsets as sample indices. Before a
+// candidate that starts late (a drift) psi = -Z S x, and the nuisance's own suffix sums, kept
+// at the scanned onsets, give the sums there without visiting the samples.
+class ProjectedOnsetScan {
+ public:
+  ProjectedOnsetScan(const Eigen::Ref<const Eigen::VectorXd>& r,
+                     const Eigen::Ref<const Eigen::VectorXd>& weight,
+                     const Eigen::Ref<const Eigen::VectorXd>& odd,
+                     const Eigen::Ref<const RowMatrixXd>& columns,
+                     const Eigen::Ref<const RowMatrixXd>& solve, Eigen::Index begin,
+                     Eigen::Index min_segment, Eigen::Index step);
+  // `nominal`: the projected response of the nominal channel the candidate replaces
+  // (r_without = r + nominal; none for a channel the model lacks). `weight`: the candidate's
+  // own weighting when its drive is missing in places (default: the scan's).
+  CrossValidatedOnset fit(const Eigen::Ref<const Eigen::VectorXd>& x,
+                          const std::optional<Eigen::VectorXd>& nominal = std::nullopt,
+                          const std::optional<Eigen::VectorXd>& weight = std::nullopt) const;
+
+ private:
+  Eigen::VectorXd r_, weight_, odd_;
+  RowMatrixXd columns_, solve_;
+  Eigen::Index begin_;
+  std::shared_ptr<const std::vector<Eigen::Index>> onsets_;
+  RowMatrixXd rz_[2], zz_[2];  // per fold, at each onset: suffix sums of w r z and of w z z'
+};
+
 // The same fit at a given onset (no scan).
 OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
                       const Eigen::Ref<const Eigen::VectorXd>& r_without,

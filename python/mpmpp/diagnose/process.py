@@ -108,10 +108,11 @@ class ShapeResponses:
     """Whitened responses and weights per shape; they do not change between the greedy rounds,
     only the residual does. Gain and time-constant responses are kept; shapes on a grid of
     delays or drift onsets (hundreds in a long record) are rebuilt on demand from one response
-    per family."""
+    per family. The scans take a response unprojected and project it in their pass."""
 
     def __init__(self, out: OutputResidual, nuisance: Nuisance):
         self.out = out
+        self.nuisance = nuisance
         self.project = nuisance.project
         self._shapes: dict = {}
         self._nominal: dict = {}
@@ -121,18 +122,23 @@ class ShapeResponses:
         self._segment_starts = {a for a, _ in out.sig.segments}
 
     def whitened(self, shape: Shape) -> WhitenedShape:
+        """The shape's whitened response and its nominal channel's, both projected."""
+        return WhitenedShape(self.project(self.response(shape)), self.nominal_response(shape))
+
+    def response(self, shape: Shape) -> np.ndarray:
+        """The shape's whitened response, not projected."""
         if shape.kind == "drift":
-            return WhitenedShape(self.project(self._drift(int(shape.label), shape.drift_form)), None)
+            return self._drift(int(shape.label), shape.drift_form)
         if shape.effect in DELAY_GRID_EFFECTS:
-            return WhitenedShape(self.project(self._delayed(shape)), self._nominal_response(shape))
+            return self._delayed(shape)
         key = id(shape)
         if key not in self._shapes:
             drive = np.nan_to_num(shape.drive)
-            psi = self.out.whiten(self.out.channel_response(shape.shape, drive))
-            self._shapes[key] = WhitenedShape(self.project(psi), self._nominal_response(shape))
+            self._shapes[key] = self.out.whiten(self.out.channel_response(shape.shape, drive))
         return self._shapes[key]
 
-    def _nominal_response(self, shape: Shape) -> np.ndarray | None:
+    def nominal_response(self, shape: Shape) -> np.ndarray | None:
+        """The whitened, projected response of the nominal channel the shape replaces."""
         if shape.nominal is None:
             return None
         key = (id(shape.nominal), id(shape.drive))
@@ -309,16 +315,12 @@ def _preferred(fits: list[Fit]) -> Fit:
     return top
 
 
-def _fit_shape(out: OutputResidual, r: np.ndarray, shape: Shape, min_onset: int, min_segment: int,
-               step: int, responses: ShapeResponses) -> Fit:
+def _fit_shape(scan: _core.ProjectedOnsetScan, shape: Shape, responses: ShapeResponses) -> Fit:
     """Onset scan of one shape on all data and on each fold (the folds feed the held-out test)."""
-    w = responses.whitened(shape)
-    tail = slice(min_onset, None)
-    r_without = _without_channel(r, w)
-    cv = _core.scan_onset_cross_validated(r[tail], r_without[tail], w.psi[tail], responses.weight(shape)[tail],
-                                          out.fold[1][tail], min_segment, step)
+    cv = scan.fit(responses.response(shape), responses.nominal_response(shape),
+                  responses.weight(shape) if shape.kind == "extra" else None)
     folds = [FoldFit(f.statistic, h, f.theta) for f, h in zip(cv.folds, cv.heldout)]
-    return Fit(shape, min_onset + cv.full.onset, cv.full.statistic, 0.0, cv.full.theta, cv.full.theta_se, folds, 0.0)
+    return Fit(shape, cv.full.onset, cv.full.statistic, 0.0, cv.full.theta, cv.full.theta_se, folds, 0.0)
 
 
 def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
@@ -367,7 +369,7 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
             if finding is not None:
                 finding.score = top.score
         else:
-            top = _refined_time_constant(out, r, top, first_onset, min_segment, step, responses)
+            top = _refined_time_constant(top, search.scan(r, responses), responses)
             finding = _process_finding(out, top)
         if finding is None or not finding.error_after < finding.error_before:
             # the whitened-domain gain does not carry over to the model the update would write
@@ -393,12 +395,17 @@ class _Search:
 
     def best(self, r: np.ndarray, responses: ShapeResponses) -> Fit | None:
         """The preferred fit of a round on residual r (None when every candidate is refused)."""
-        fits = [_fit_shape(self.out, r, s, self.first_onset, self.min_segment, self.step, responses)
-                for s in self.shapes if s.column not in self.taken]
+        scan = self.scan(r, responses)
+        fits = [_fit_shape(scan, s, responses) for s in self.shapes if s.column not in self.taken]
         fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]
         fits = _best_per_channel(fits, self.logn)
         fits = [f for f in fits if _present_in_both_halves(self.out, r, f, responses)]
         return _preferred(fits) if fits else None
+
+    def scan(self, r: np.ndarray, responses: ShapeResponses) -> _core.ProjectedOnsetScan:
+        """The onset scans of this output's candidates on residual r, beside the responses'
+        disturbances."""
+        return responses.nuisance.scan(r, self.out.fold[1], self.first_onset, self.min_segment, self.step)
 
     def disturbances(self) -> FirstRound:
         """The level and the step + ramp disturbances every candidate is fitted beside, with the
@@ -454,8 +461,7 @@ def _one_step_change(out: OutputResidual, fit: Fit) -> np.ndarray:
     return np.nan_to_num(per_segment(out.sig, out.noise.inverse().filter, change))
 
 
-def _refined_time_constant(out: OutputResidual, r: np.ndarray, top: Fit, first_onset: int, min_segment: int,
-                           step: int, responses: ShapeResponses) -> Fit:
+def _refined_time_constant(top: Fit, scan: _core.ProjectedOnsetScan, responses: ShapeResponses) -> Fit:
     """A time-constant fit with its factor refined between the neighbouring grid points
     (refine.py) by the statistic on all the data (the one the reported onset and theta
     maximise). The held-out drop chose the structure and stays its score. Other fits as given."""
@@ -466,7 +472,7 @@ def _refined_time_constant(out: OutputResidual, r: np.ndarray, top: Fit, first_o
     @functools.cache  # the minimiser's best point is fitted again below
     def fit_at(factor: float) -> Fit:
         shape = dataclasses.replace(s, shape=first_order_with_time_constant(s.nominal, factor), label=factor)
-        return _fit_shape(out, r, shape, first_onset, min_segment, step, responses)
+        return _fit_shape(scan, shape, responses)
 
     factor = refine(lambda f: -fit_at(f).statistic, TIME_CONSTANT_FACTORS, s.label, *TIME_CONSTANT_BOUNDS)
     if factor == s.label:

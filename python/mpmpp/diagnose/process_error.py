@@ -67,8 +67,29 @@ def basis_responses(sig: Signals, columns: np.ndarray, filters: list[TransferFun
         [g.filter(xs[:, k]) for k in range(xs.shape[1]) for g in filters]), raw)
 
 
+class ProcessBasis:
+    """The regressors of the process-part fit: the explanatory columns through the basis
+    filters, a level term, and their whitening per noise model. They do not depend on the
+    model being judged, so the fits before and after a change share them."""
+
+    def __init__(self, sig: Signals, columns: np.ndarray, filters: list[TransferFunction]):
+        self.sig = sig
+        self.columns = columns
+        self.x = basis_responses(sig, columns, filters)
+        # The level term: the step from each segment's start (an operating-point offset).
+        self.regressors = np.column_stack([self.x, per_segment(sig, np.ones_like, np.ones(len(self.x)))])
+        self._whitened: dict = {}
+
+    def whitened(self, noise: TransferFunction) -> np.ndarray:
+        key = (tuple(noise.num), tuple(noise.den), noise.delay)
+        if key not in self._whitened:
+            self._whitened[key] = per_segment(self.sig, lambda xs: np.column_stack(
+                [noise.inverse().filter(xs[:, k]) for k in range(xs.shape[1])]), self.regressors)
+        return self._whitened[key]
+
+
 def process_part(sig: Signals, i: int, changes: list[ModelChange], onset: int, block: int,
-                 columns: np.ndarray, filters: list[TransferFunction]) -> np.ndarray:
+                 basis: ProcessBasis) -> np.ndarray:
     """The input-explained part of y_i - G_i u (G the model after ``changes``) on every usable
     row after ``onset``, NaN elsewhere (all NaN when the blocks after the onset are too short);
     fitted on the even blocks after ``onset`` only."""
@@ -77,19 +98,15 @@ def process_part(sig: Signals, i: int, changes: list[ModelChange], onset: int, b
         if c.output == sig.outputs[i] and c.noise is not None:
             noise = c.noise
     e = one_step_errors(sig, i, changes)
-    x = basis_responses(sig, columns, filters)
-    # The level term: the step from each segment's start (an operating-point offset).
-    regressors = np.column_stack([x, per_segment(sig, np.ones_like, np.ones(len(e)))])
-    whitened = per_segment(sig, lambda xs: np.column_stack(
-        [noise.inverse().filter(xs[:, k]) for k in range(xs.shape[1])]), regressors)
+    x, columns = basis.x, basis.columns
     t = np.arange(len(e))
     usable = (t >= onset) & np.isfinite(e) & np.isfinite(columns).all(axis=1) & np.isfinite(x).all(axis=1)
     odd = (t // block) % 2 == 1
     fit = usable & ~odd
     series = np.full(len(e), np.nan)
-    if fit.sum() < max(MIN_FIT_ROWS, 2 * regressors.shape[1]) or not (usable & odd).any():
+    if fit.sum() < max(MIN_FIT_ROWS, 2 * basis.regressors.shape[1]) or not (usable & odd).any():
         return series
-    b = np.linalg.lstsq(whitened[fit], e[fit], rcond=None)[0][:-1]
+    b = np.linalg.lstsq(basis.whitened(noise)[fit], e[fit], rcond=None)[0][:-1]
     series[usable] = x[usable] @ b
     return series
 
@@ -104,7 +121,7 @@ def process_error(sig: Signals, i: int, changes: list[ModelChange], onset: int, 
                   columns: np.ndarray, filters: list[TransferFunction]) -> float:
     """RMS on the odd blocks after ``onset`` of the input-explained part of y_i - G_i u, G the
     model after ``changes``; fitted on the even blocks after ``onset``."""
-    return held_out_rms(process_part(sig, i, changes, onset, block, columns, filters), block)
+    return held_out_rms(process_part(sig, i, changes, onset, block, ProcessBasis(sig, columns, filters)), block)
 
 
 def process_parts(sig: Signals, i: int, changes: list[ModelChange], onset: int,
@@ -112,9 +129,9 @@ def process_parts(sig: Signals, i: int, changes: list[ModelChange], onset: int,
     """(before, after): the process part with the nominal model and with ``changes``, both with
     the same explanatory columns and basis."""
     _, columns = explanatory_columns(sig, changes)
-    filters = laguerre_filters(laguerre_pole(sig, i))
-    return (process_part(sig, i, [], onset, block, columns, filters),
-            process_part(sig, i, changes, onset, block, columns, filters))
+    basis = ProcessBasis(sig, columns, laguerre_filters(laguerre_pole(sig, i)))
+    return (process_part(sig, i, [], onset, block, basis),
+            process_part(sig, i, changes, onset, block, basis))
 
 
 def process_errors(sig: Signals, i: int, changes: list[ModelChange], onset: int,

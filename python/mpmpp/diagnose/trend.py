@@ -21,52 +21,64 @@ def trend_fit(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, first_onset
               earliest: int) -> TrendFit:
     """Least squares of the one-step error e on H^-1 [1, step(t - k), ramp(t - k)] for onsets
     k >= ``earliest`` on a grid (the AR correction is left out: it would whiten a drift away).
-    Without a drop, the onset is ``first_onset``.
+    Without a drop, the onset is ``first_onset``."""
+    return TrendScan(ok, hinv, grid, earliest).fit(e, first_onset)
+
+
+class TrendScan:
+    """``trend_fit`` for any number of errors with one mask, H^-1 and onset grid.
 
     The regressors for onset k are one fixed pair of sequences (s, r) = H^-1 [step, ramp]
     delayed by k, so every entry of the normal equations is a cross-correlation of the data
-    (mask, mask * e) with s, r, s^2, r^2 or s r at lag k: all onsets cost a few FFTs."""
-    n = len(e)
-    onsets = np.arange(earliest, n - 2 * grid, grid)
-    s = hinv.filter(np.ones(n))
-    r = hinv.filter(np.arange(n, dtype=float) / n)
-    w = ok.astype(float)
-    we = w * e
-    rss0 = np.sum((e[ok] - e[ok].mean()) ** 2)
-    best = TrendFit(first_onset, 0.0, np.zeros(n))
-    if len(onsets) == 0:
-        return best
-    lag = _lagged_sums([w, we], [s, r, s * s, r * r, s * r], n)
-    ws, wr, wss, wrr, wsr = (lag[0][j][onsets] for j in range(5))
-    es, er = lag[1][0][onsets], lag[1][1][onsets]
-    gram = np.empty((len(onsets), 3, 3))
-    gram[:, 0, 0] = w.sum()
-    gram[:, 0, 1] = gram[:, 1, 0] = ws
-    gram[:, 0, 2] = gram[:, 2, 0] = wr
-    gram[:, 1, 1] = wss
-    gram[:, 1, 2] = gram[:, 2, 1] = wsr
-    gram[:, 2, 2] = wrr
-    rhs = np.stack([np.full(len(onsets), we.sum()), es, er], axis=1)
-    coef = np.linalg.solve(gram + RIDGE * np.eye(3), rhs[:, :, None])[:, :, 0]
-    # residual sum of squares e'e - 2 c'X'e + c'X'X c
-    rss = np.sum(we * e) - 2.0 * np.sum(coef * rhs, axis=1) + np.einsum("ki,kij,kj->k", coef, gram, coef)
-    drop = rss0 - rss
-    j = int(np.argmax(drop))
-    if not drop[j] > 0.0:
-        return best
-    k = int(onsets[j])
-    trend = np.zeros(n)
-    trend[k:] = coef[j, 1] * s[: n - k] + coef[j, 2] * r[: n - k]
-    return TrendFit(k, float(drop[j]), trend)
+    (mask, mask * e) with s, r, s^2, r^2 or s r at lag k: all onsets cost a few FFTs. Those of
+    the mask (the Gram matrices) are formed once; an error costs one FFT and two inverse ones."""
 
+    def __init__(self, ok: np.ndarray, hinv: TransferFunction, grid: int, earliest: int):
+        n = len(ok)
+        self.ok = ok
+        self.onsets = np.arange(earliest, n - 2 * grid, grid)
+        self.s = hinv.filter(np.ones(n))
+        self.r = hinv.filter(np.arange(n, dtype=float) / n)
+        self.w = ok.astype(float)
+        if len(self.onsets) == 0:
+            return
+        self._size = 1 << (2 * n - 1).bit_length()     # zero-padded: the circular correlation is the linear one
+        s, r = self.s, self.r
+        kernels = [np.conj(np.fft.rfft(b, self._size)) for b in (s, r, s * s, r * r, s * r)]
+        self._sr = kernels[:2]
+        ws, wr, wss, wrr, wsr = self._lagged(self.w, kernels)
+        gram = np.empty((len(self.onsets), 3, 3))
+        gram[:, 0, 0] = self.w.sum()
+        gram[:, 0, 1] = gram[:, 1, 0] = ws
+        gram[:, 0, 2] = gram[:, 2, 0] = wr
+        gram[:, 1, 1] = wss
+        gram[:, 1, 2] = gram[:, 2, 1] = wsr
+        gram[:, 2, 2] = wrr
+        self.gram = gram
 
-def _lagged_sums(data: list[np.ndarray], kernels: list[np.ndarray], n: int) -> list[list[np.ndarray]]:
-    """[i][j][k] = sum_{t >= k} data_i[t] kernels_j[t - k] for every lag k < n (FFT, zero-padded
-    so the circular correlation is the linear one)."""
-    m = 1 << (2 * n - 1).bit_length()
-    fk = [np.conj(np.fft.rfft(b, m)) for b in kernels]
-    out = []
-    for a in data:
-        fa = np.fft.rfft(a, m)
-        out.append([np.fft.irfft(fa * f, m)[:n] for f in fk])
-    return out
+    def _lagged(self, a: np.ndarray, kernels: list[np.ndarray]) -> list[np.ndarray]:
+        """sum_{t >= k} a[t] kernel[t - k] at the onsets k, per kernel."""
+        fa = np.fft.rfft(a, self._size)
+        return [np.fft.irfft(fa * f, self._size)[: len(a)][self.onsets] for f in kernels]
+
+    def fit(self, e: np.ndarray, first_onset: int) -> TrendFit:
+        n, ok, w = len(e), self.ok, self.w
+        we = w * e
+        rss0 = np.sum((e[ok] - e[ok].mean()) ** 2)
+        best = TrendFit(first_onset, 0.0, np.zeros(n))
+        if len(self.onsets) == 0:
+            return best
+        es, er = self._lagged(we, self._sr)
+        gram = self.gram
+        rhs = np.stack([np.full(len(self.onsets), we.sum()), es, er], axis=1)
+        coef = np.linalg.solve(gram + RIDGE * np.eye(3), rhs[:, :, None])[:, :, 0]
+        # residual sum of squares e'e - 2 c'X'e + c'X'X c
+        rss = np.sum(we * e) - 2.0 * np.sum(coef * rhs, axis=1) + np.einsum("ki,kij,kj->k", coef, gram, coef)
+        drop = rss0 - rss
+        j = int(np.argmax(drop))
+        if not drop[j] > 0.0:
+            return best
+        k = int(self.onsets[j])
+        trend = np.zeros(n)
+        trend[k:] = coef[j, 1] * self.s[: n - k] + coef[j, 2] * self.r[: n - k]
+        return TrendFit(k, float(drop[j]), trend)

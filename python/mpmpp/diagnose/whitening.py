@@ -19,7 +19,7 @@ from .. import _core
 from .._core import TransferFunction
 from ..signals import Signals, per_segment
 from .result import InsufficientData
-from .trend import trend_fit
+from .trend import TrendScan, trend_fit
 
 AR_ORDER = 5                 # AR correction of the noise model (residual whitening)
 SETTLE = 60                  # samples left out after the start of each filtered segment
@@ -133,10 +133,11 @@ def disturbance_steps(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, fir
     (BIC: onset, step, slope)."""
     n = len(e)
     onsets, total = [], np.zeros(n)
-    s, r = hinv.filter(np.ones(n)), hinv.filter(np.arange(n, dtype=float) / n)
+    scan = TrendScan(ok, hinv, grid, earliest)
+    s, r = scan.s, scan.r
     columns = [np.ones(n)]
     for _ in range(MAX_DISTURBANCE_STEPS):
-        fit = trend_fit(e - total, ok, hinv, first_onset, grid, earliest)
+        fit = scan.fit(e - total, first_onset)
         if not fit.drop > 3.0 * logn * np.var((e - total)[ok]):
             break
         k = fit.onset
@@ -162,11 +163,17 @@ class Nuisance:
     def __post_init__(self):
         # the weighted least-squares solve, formed once: every candidate response is projected
         z = self.columns * self.weight[:, None]
-        self._solve = np.linalg.pinv(z.T @ self.columns) @ z.T
+        self.solve = np.linalg.pinv(z.T @ self.columns) @ z.T
 
     def project(self, x: np.ndarray) -> np.ndarray:
         """x less its weighted least-squares fit on the columns."""
-        return x - self.columns @ (self._solve @ x)
+        return x - self.columns @ (self.solve @ x)
+
+    def scan(self, r: np.ndarray, odd: np.ndarray, begin: int, min_segment: int,
+             step: int) -> _core.ProjectedOnsetScan:
+        """Cross-validated onset scans (fold ``odd``) of candidates fitted beside the columns to
+        the projected residual ``r``; a candidate is passed unprojected."""
+        return _core.ProjectedOnsetScan(r, self.weight, odd, self.columns, self.solve, begin, min_segment, step)
 
 
 def disturbance_onsets(out: OutputResidual, e: np.ndarray, first_onset: int, grid: int) -> list[int]:

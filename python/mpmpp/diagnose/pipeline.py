@@ -144,10 +144,12 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     for out in outputs:
         if out.name not in with_process:
             try:
-                f = noise_finding(out, first_onset, logn)
+                f, note = noise_finding(out, first_onset, logn)
             except InsufficientData as exc:
                 notes.append(str(exc))
                 continue
+            if note is not None:
+                notes.append(note)
             if f is not None:
                 found.append(f)
     found.sort(key=lambda f: -f.score)

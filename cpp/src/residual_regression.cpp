@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "mpmpp/arx_oe.hpp"
 #include "mpmpp/error.hpp"
@@ -80,12 +81,87 @@ Eigen::MatrixXd whiten(const Eigen::MatrixXd& x, const Eigen::VectorXd& a) {
   return w;
 }
 
+// A break in the output error's regression at row k: a level shift s_k(t) = 1{t >= k} and a
+// hinge h_k(t) = max(0, t - k) together, so that a ramp's start or end and a step are one break
+// whatever A(q) makes of them (near 1 it turns a ramp into a level shift; near white it leaves
+// it a hinge), and a wrong A(q) cannot be kept because only one of the two shapes was offered.
+struct Break {
+  Eigen::Index at = -1;
+  double score = 0.0;  // T_k = x_k'e (X_k'(I - P_Z)X_k)^-1 X_k'e / sigma^2, chi-square(2)
+
+  Eigen::MatrixXd columns(Eigen::Index n) const {
+    const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1));
+    const double k = static_cast<double>(at);
+    Eigen::MatrixXd x(n, 2);
+    x.col(0) = (t >= k).cast<double>().matrix();
+    x.col(1) = (t - k).max(0.0).matrix();
+    return x;
+  }
+};
+
+// The break, k in [edge, n - edge), that best explains the residual e of a fit on Z (e orthogonal
+// to Z's columns): X_k'e and Q'X_k (Q an orthonormal basis of Z's columns) are suffix sums of
+// e, t e, Q and t Q, and X_k'X_k is closed-form, so the scan costs O(n rank(Z)).
+Break best_break(const Eigen::MatrixXd& Z, const Eigen::VectorXd& e, Eigen::Index edge) {
+  const Eigen::Index n = Z.rows();
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Z);
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(n, qr.rank());
+  const double sigma2 = e.squaredNorm() / static_cast<double>(n - qr.rank());
+  Eigen::VectorXd q0 = Eigen::VectorXd::Zero(Q.cols()), q1 = q0;  // suffix sums of Q, t Q
+  double e0 = 0.0, e1 = 0.0;                                      // suffix sums of e, t e
+  Break best;
+  for (Eigen::Index k = n - 1; k >= edge; --k) {
+    const double t = static_cast<double>(k);
+    q0 += Q.row(k).transpose();
+    q1 += t * Q.row(k).transpose();
+    e0 += e[k];
+    e1 += t * e[k];
+    if (k >= n - edge) continue;
+    const double m = static_cast<double>(n - 1 - k);  // h_k = 1, 2, ..., m after row k
+    const Eigen::VectorXd qh = q1 - t * q0;
+    Eigen::Matrix2d spread;
+    spread(0, 0) = m + 1.0 - q0.squaredNorm();
+    spread(1, 1) = m * (m + 1.0) * (2.0 * m + 1.0) / 6.0 - qh.squaredNorm();
+    spread(0, 1) = spread(1, 0) = m * (m + 1.0) / 2.0 - q0.dot(qh);
+    const Eigen::Vector2d xe(e0, e1 - t * e0);
+    const Eigen::LDLT<Eigen::Matrix2d> ldlt(spread);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9 * spread.trace()))
+      continue;  // (nearly) in Z's span already
+    const double score = xe.dot(ldlt.solve(xe)) / sigma2;
+    if (score > best.score) best = Break{k, score};
+  }
+  return best;
+}
+
+struct Breaks {
+  int max;            // breaks kept at most
+  Eigen::Index edge;  // none within this many rows of either end
+  double threshold;   // the score a break must reach
+};
+
+// truncated_least_squares of z on Z, then breaks appended to Z greedily while the best one's
+// score passes the threshold (the fit and covariance are those with the breaks).
+bool fit_with_breaks(Eigen::MatrixXd& Z, const Eigen::VectorXd& z, const Breaks& breaks,
+                     Eigen::VectorXd& coef, Eigen::MatrixXd* covariance) {
+  if (!truncated_least_squares(Z, z, coef, covariance)) return false;
+  for (int s = 0; s < breaks.max; ++s) {
+    const Break b = best_break(Z, z - Z * coef, breaks.edge);
+    if (b.at < 0 || b.score < breaks.threshold) break;
+    Z.conservativeResize(Eigen::NoChange, Z.cols() + 2);
+    Z.rightCols(2) = b.columns(Z.rows());
+    if (!truncated_least_squares(Z, z, coef, covariance)) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 ResidualRegression::ResidualRegression(const Model& nominal, int output, std::vector<int> inputs,
                                        const DetectorConfig& config)
     : ar_order_(config.residual_ar_order > 0 ? config.residual_ar_order : config.arx_order_a),
-      settle_(0) {
+      settle_(0),
+      max_steps_(config.residual_steps),
+      step_significance_(config.step_significance) {
   for (int j : inputs) {
     if (j < 0 || j >= nominal.num_inputs() || !nominal.has_channel(output, j))
       throw InputError("residual regression: output '" + nominal.outputs[output] +
@@ -142,6 +218,13 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   trend.col(1) = Eigen::VectorXd::LinSpaced(rows, 0.0, 1.0);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(columns), coef;
   Eigen::MatrixXd cov;
+  // Breaks are scanned away from the window's ends (5 % of it each side), where one outlier
+  // would pass for one; Bonferroni over the positions scanned.
+  Breaks breaks{max_steps_, std::max<Eigen::Index>(ar_order_ + 1, rows / 20), 0.0};
+  // chi-square(2) upper quantile: -2 log p.
+  breaks.threshold =
+      -2.0 * std::log(step_significance_ /
+                      static_cast<double>(std::max<Eigen::Index>(rows - 2 * breaks.edge, 1)));
   for (int pass = 0; pass < kPasses; ++pass) {
     // A(q) from what the current beta leaves of v.
     const Eigen::VectorXd r = vv - XX * b;
@@ -150,7 +233,7 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     R.rightCols(2) = trend;
     Eigen::MatrixXd acov;
     const bool last = pass == kPasses - 1;
-    if (!truncated_least_squares(R, r.tail(rows), coef, last && ar_covariance ? &acov : nullptr)) {
+    if (!fit_with_breaks(R, r.tail(rows), breaks, coef, last && ar_covariance ? &acov : nullptr)) {
       if (reason) *reason = "the output error does not vary in the window";
       return false;
     }
@@ -160,7 +243,8 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     Eigen::MatrixXd Z(rows, columns + 2);
     Z.leftCols(columns) = whiten(XX, a);
     Z.rightCols(2) = trend;
-    if (!truncated_least_squares(Z, whiten(vv, a), coef, pass == kPasses - 1 ? &cov : nullptr)) {
+    const Eigen::VectorXd z = whiten(vv, a);
+    if (!fit_with_breaks(Z, z, breaks, coef, last ? &cov : nullptr)) {
       if (reason) *reason = "the inputs do not vary in the window";
       return false;
     }

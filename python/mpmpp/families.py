@@ -350,6 +350,10 @@ FAMILIES = [
            sample_times_s=(1.0, 2.0), time_constant_samples=(10.0, 100.0), dead_time_samples=(2, 20),
            model_forms=("discrete+noise", "discrete"), record_hours=(14.0, 16.0), setpoint_steps=True,
            step_ramp_disturbances=True),
+    Family("mpc_siso_move_limits", TUNING, "project MPC with binding move limits, SISO, 5-10 s "
+           "sampling, discrete model with or without noise model", "mpc_move_limits", 1,
+           _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(5.0, 10.0),
+           model_forms=("discrete+noise", "discrete")),
     Family("pi_siso_slow", TUNING, "single PI loop, 20-40 s sampling, day-long records, FOPTD model "
            "without noise model", "pi", 1, _EFFECTS_SISO + ("none",), sample_times_s=(20.0, 40.0),
            model_forms=("foptd",), record_hours=(24.0, 36.0), setpoint_steps=True),

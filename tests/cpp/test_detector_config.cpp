@@ -41,6 +41,7 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
   for (DetectorConfig* c : {&pap_siso, &pap_mimo}) {  // the residual Wald tests
     c->process_test = ProcessTest::Residual;
     c->noise_test = NoiseTest::Residual;
+    c->residual_steps = 3;
     c->threshold = 0.5;
     c->window_significance = 0.001;
   }

@@ -1,6 +1,8 @@
 """A plain NumPy/SciPy implementation of one window of the residual regression
 (cpp/src/residual_regression.cpp): the output error y - G0 u regressed on the Laguerre and
-delay directions after whitening by A(q), with A(q) refitted from what beta leaves, twice."""
+delay directions after whitening by A(q), with A(q) refitted from what beta leaves, twice;
+both fits with up to `breaks` step + hinge pairs chosen greedily by brute force (every
+position's two columns built and projected explicitly)."""
 import numpy as np
 from scipy.signal import lfilter
 
@@ -33,7 +35,38 @@ def _lstsq(Z, z):
     return bs / scale, sigma2 * (Vs @ Vs.T) / np.outer(scale, scale)
 
 
-def reference_window(g, y, u, na, terms, settle):
+def best_break(Z, e, edge):
+    """(k, score): the step + hinge pair at row k whose chi-square(2) score
+    e'X (X'MX)^-1 X'e / sigma^2 (M = I - P_Z) is largest, by explicit projection."""
+    n = len(e)
+    U, sv, _ = np.linalg.svd(Z, full_matrices=False)
+    Q = U[:, sv > 1e-10 * sv[0]]  # an orthonormal basis of Z's columns
+    sigma2 = e @ e / (n - Q.shape[1])
+    t = np.arange(n, dtype=float)
+    best = (-1, 0.0)
+    for k in range(edge, n - edge):
+        X = np.column_stack([(t >= k).astype(float), np.maximum(0.0, t - k)])
+        MX = X - Q @ (Q.T @ X)
+        xe = X.T @ e
+        score = xe @ np.linalg.solve(X.T @ MX, xe) / sigma2
+        if score > best[1]:
+            best = (k, score)
+    return best
+
+
+def _fit(Z, z, breaks, edge, threshold):
+    coef, cov = _lstsq(Z, z)
+    for _ in range(breaks):
+        k, score = best_break(Z, z - Z @ coef, edge)
+        if k < 0 or score < threshold:
+            break
+        t = np.arange(len(z), dtype=float)
+        Z = np.column_stack([Z, (t >= k).astype(float), np.maximum(0.0, t - k)])
+        coef, cov = _lstsq(Z, z)
+    return coef, cov
+
+
+def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01):
     yc, uc = y - y.mean(), u - u.mean()
     v = yc - _tf(np.asarray(g.num), np.asarray(g.den), int(g.delay), uc)
     X, _ = _directions(g, uc, terms)
@@ -41,15 +74,17 @@ def reference_window(g, y, u, na, terms, settle):
     v, X = v[skip:], X[skip:]
     rows = len(v) - na
     trend = np.column_stack([np.ones(rows), np.linspace(0.0, 1.0, rows)])
+    edge = max(na + 1, rows // 20)
+    threshold = -2.0 * np.log(significance / max(rows - 2 * edge, 1))  # chi-square(2), Bonferroni
     b = np.zeros(X.shape[1])
     for _ in range(2):
         r = v - X @ b
         R = np.column_stack([r[na - k:len(r) - k] for k in range(1, na + 1)] + [trend])
-        a_coef, a_cov = _lstsq(R, r[na:])
+        a_coef, a_cov = _fit(R, r[na:], breaks, edge, threshold)
         a = a_coef[:na]
         A = np.concatenate([[1.0], -a])
-        coef, cov = _lstsq(np.column_stack([lfilter(A, [1.0], X, axis=0)[na:], trend]),
-                           lfilter(A, [1.0], v)[na:])
+        coef, cov = _fit(np.column_stack([lfilter(A, [1.0], X, axis=0)[na:], trend]),
+                         lfilter(A, [1.0], v)[na:], breaks, edge, threshold)
         b = coef[:X.shape[1]]
     p = X.shape[1]
     # A(q) of the last pass in the ARX step's signs (A = 1 + ar_1 q^-1 + ...), with its covariance.

@@ -41,16 +41,46 @@ def pi_loop():
     return model, simulate(spec)
 
 
-def test_one_window_matches_numpy(pi_loop):
+def _window(pi_loop, sigmas=0.0):
+    """The first 1440 samples of the PI loop, with a ramp of `sigmas` one-step noise sigmas
+    between samples 600 and 900 added to y (the regression sees y and u as recorded: whether
+    the controller fought the ramp does not matter to its algebra)."""
     model, data = pi_loop
+    y = data["y1"].to_numpy()[:1440].copy()
+    t = np.arange(len(y), dtype=float)
+    y += sigmas * float(np.std(np.diff(y))) * (np.clip(t, 600, 900) - 600) / 300
+    return model, y, data[["u1"]].to_numpy()[:1440]
+
+
+@pytest.mark.parametrize("sigmas", [0.0, 60.0])
+def test_one_window_matches_numpy(pi_loop, sigmas):
+    model, y, u = _window(pi_loop, sigmas)
     config = make_config("siso", model)
-    y = data["y1"].to_numpy()[:1440]
-    u = data[["u1"]].to_numpy()[:1440]
+    assert config.residual_steps > 0
     beta, cov, settle = _core.residual_regression(model, 0, [0], config, y, u)
     ref_b, ref_c, _, _ = reference_window(model.process("y1", "u1"), y, u[:, 0], config.arx_order_a,
-                                    config.laguerre_terms, settle)
+                                          config.laguerre_terms, settle, config.residual_steps,
+                                          config.step_significance)
     np.testing.assert_allclose(beta[0], ref_b, rtol=1e-6, atol=1e-9 * np.abs(ref_b).max())
     np.testing.assert_allclose(cov[0], ref_c, rtol=1e-6, atol=1e-9 * np.abs(ref_c).max())
+
+
+def test_breaks_take_a_ramp_disturbance_out_of_beta(pi_loop):
+    """A ramp of 60 one-step noise sigmas inside the window (this loop's disturbance wanders:
+    smaller ramps pass for part of it): without breaks it moves beta far from
+    its value on the same window without the ramp; with them beta stays (the process did not
+    change)."""
+    model, y0, u = _window(pi_loop)
+    _, y, _ = _window(pi_loop, 60.0)
+    with_breaks = make_config("siso", model)
+    without = make_config({"preset": "siso", "residual_steps": 0}, model)
+
+    def shift(config):
+        b0, c0, _ = _core.residual_regression(model, 0, [0], config, y0, u)
+        b1, c1, _ = _core.residual_regression(model, 0, [0], config, y, u)
+        return _wald(b1[0] - b0[0], c0[0] + c1[0])[0]
+
+    assert shift(without) > 4 * shift(with_breaks)
 
 
 def _wald(beta, cov):

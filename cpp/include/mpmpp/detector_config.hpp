@@ -93,6 +93,11 @@ struct DetectorConfig {
   double window_significance = 0.01;  // Residual: a window is negative when its Wald p < this
   int laguerre_terms = 3;             // Residual: Laguerre directions per channel
   int residual_ar_order = 0;          // Residual: order of the whitening A(q); 0 = arx_order_a
+  // Residual: at most this many level shifts of the whitened output error fitted beside beta
+  // per window (residual_regression.hpp: an unmeasured step or ramp disturbance), each kept
+  // only when its scan-corrected chi-square test passes at step_significance; 0 = none.
+  int residual_steps = 0;
+  double step_significance = 0.01;
   NoiseTest noise_test = NoiseTest::Svm;
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the

@@ -15,7 +15,13 @@
 //   laguerre_terms Laguerre filters of u_j from lag 1, with the channel's slowest pole
 //   (time constant and any other shape).
 // A(q) (order residual_ar_order, by default arx_order_a; with a level and a ramp for drifting
-// disturbances) and beta are estimated alternately (two passes). beta_j and its covariance sigma^2
+// disturbances) and beta are estimated alternately (two passes). An unmeasured step or ramp
+// disturbance inside the window is neither: whitened by A(q) (a root near 1) a ramp becomes a
+// level shift and a step a pulse plus a shift, which the controller's moves in x_j follow and
+// so bias beta. Up to residual_steps shifts s_k(t) = 1{t >= k} join the whitened regression,
+// greedily, each where the projected score T_k = (s_k'e)^2 / (sigma^2 s_k'(I - P_Z)s_k) peaks,
+// kept while max_k T_k passes the chi-square(1) test at step_significance / (positions
+// scanned) (Bonferroni over the scan). beta_j and its covariance sigma^2
 // (Z'Z)^-1 are the channel's features; the Detector compares them with the training period's in a
 // Wald test (detector.hpp, ChannelScorer::significance). A disturbance change moves only A(q) and
 // sigma^2, which the window re-estimates, so it does not move beta: no MPM alarm for a noise
@@ -57,6 +63,8 @@ class ResidualRegression {
   std::vector<std::vector<TransferFunction>> directions_;  // x_j = directions_[e][k] u_j
   int ar_order_;
   int settle_;
+  int max_steps_;
+  double step_significance_;
 };
 
 }  // namespace mpmpp

@@ -39,9 +39,10 @@ void bind_change_scan(py::module_& m) {
   py::class_<ProjectedOnsetScan>(m, "ProjectedOnsetScan",
                                  "cross-validated onset scans of candidates fitted beside nuisance "
                                  "columns, for one residual")
-      .def(py::init<const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
-                    const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const RowMatrixXd>&,
-                    const Eigen::Ref<const RowMatrixXd>&, Eigen::Index, Eigen::Index, Eigen::Index>(),
+      .def(py::init<
+               const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+               const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const RowMatrixXd>&,
+               const Eigen::Ref<const RowMatrixXd>&, Eigen::Index, Eigen::Index, Eigen::Index>(),
            py::arg("r"), py::arg("weight"), py::arg("odd"), py::arg("columns"), py::arg("solve"),
            py::arg("begin"), py::arg("min_segment"), py::arg("step"))
       .def("fit", &ProjectedOnsetScan::fit, py::arg("x"), py::arg("nominal") = py::none(),

@@ -49,7 +49,8 @@ double ar_variance(const Eigen::MatrixXd& gram, int order, double n) {
 // Onsets a scan considers, as sample indices: begin, then begin + min_segment,
 // begin + min_segment + step, ..., up to N - min_segment.
 std::shared_ptr<const std::vector<Eigen::Index>> scan_onsets(Eigen::Index begin, Eigen::Index n,
-                                                             Eigen::Index min_segment, Eigen::Index step) {
+                                                             Eigen::Index min_segment,
+                                                             Eigen::Index step) {
   auto onsets = std::make_shared<std::vector<Eigen::Index>>(1, begin);
   for (Eigen::Index k = begin + min_segment; k + min_segment <= n; k += step) onsets->push_back(k);
   return onsets;
@@ -93,7 +94,8 @@ class GridSums {
   // at every grid onset passed; onsets below `stop` get the sums from `stop` on. Without `Drop`
   // the candidate leaves r unchanged (r_without = r) and the drop sums stay 0.
   template <int M, bool Drop = true, class Terms>
-  void accumulate(Eigen::Index n, Eigen::Index stop, const double* weight, const double* odd, Terms terms) {
+  void accumulate(Eigen::Index n, Eigen::Index stop, const double* weight, const double* odd,
+                  Terms terms) {
     double d0 = 0.0, x0 = 0.0, p0 = 0.0, d1 = 0.0, x1 = 0.0, p1 = 0.0, d2 = 0.0, x2 = 0.0, p2 = 0.0;
     const auto store = [&](Eigen::Index row) {
       if constexpr (M == 3) {
@@ -155,7 +157,8 @@ class GridSums {
     double best = statistic(0, j), s = best;
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
       // a fold's sums stand still through the other fold's blocks: same sums, same statistic
-      if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) || pp_(i, j) != pp_(i - 1, j))
+      if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) ||
+          pp_(i, j) != pp_(i - 1, j))
         s = statistic(i, j);
       if (s > best || (latest_tie && s == best)) {
         best = s;
@@ -208,11 +211,12 @@ GridSums direct_sums(const Eigen::Ref<const Eigen::VectorXd>& r,
   GridSums sums(scan_onsets(0, n, min_segment, step), M == 3);
   Eigen::Index first = 0;
   while (first < n && psi[first] == 0.0 && r[first] == r_without[first]) ++first;
-  sums.accumulate<M>(n, first, weight.data(), odd, [&](Eigen::Index t, double& dt, double& xt, double& pt) {
-    dt = r[t] * r[t] - r_without[t] * r_without[t];
-    xt = r_without[t] * psi[t];
-    pt = psi[t] * psi[t];
-  });
+  sums.accumulate<M>(n, first, weight.data(), odd,
+                     [&](Eigen::Index t, double& dt, double& xt, double& pt) {
+                       dt = r[t] * r[t] - r_without[t] * r_without[t];
+                       xt = r_without[t] * psi[t];
+                       pt = psi[t] * psi[t];
+                     });
   if constexpr (M == 3) sums.sum_folds();
   return sums;
 }
@@ -286,15 +290,17 @@ CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::Vec
   if (odd.size() != r.size()) throw InputError("odd must have the same length as r");
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
   const Eigen::VectorXd in_odd = odd;  // contiguous even if the caller passed a strided view
-  return direct_sums<3>(r, r_without, psi, weight, in_odd.data(), min_segment, step).cross_validated();
+  return direct_sums<3>(r, r_without, psi, weight, in_odd.data(), min_segment, step)
+      .cross_validated();
 }
 
 ProjectedOnsetScan::ProjectedOnsetScan(const Eigen::Ref<const Eigen::VectorXd>& r,
                                        const Eigen::Ref<const Eigen::VectorXd>& weight,
                                        const Eigen::Ref<const Eigen::VectorXd>& odd,
                                        const Eigen::Ref<const RowMatrixXd>& columns,
-                                       const Eigen::Ref<const RowMatrixXd>& solve, Eigen::Index begin,
-                                       Eigen::Index min_segment, Eigen::Index step)
+                                       const Eigen::Ref<const RowMatrixXd>& solve,
+                                       Eigen::Index begin, Eigen::Index min_segment,
+                                       Eigen::Index step)
     : r_(r), weight_(weight), odd_(odd), columns_(columns), solve_(solve), begin_(begin) {
   const Eigen::Index n = r.size(), m = columns.cols();
   if (weight.size() != n || odd.size() != n || columns.rows() != n)
@@ -352,8 +358,8 @@ CrossValidatedOnset ProjectedOnsetScan::fit(const Eigen::Ref<const Eigen::Vector
     if (stop_row * m * (m + 1) >= (onsets[stop_row] - begin_) * (m + 8)) stop_row = 0;
   }
   GridSums sums(onsets_, true);
-  const ProjectedTerms terms{x.data(), r_.data(), nominal ? nominal->data() : nullptr, columns_.data(),
-                             b.data(), m};
+  const ProjectedTerms terms{x.data(),        r_.data(), nominal ? nominal->data() : nullptr,
+                             columns_.data(), b.data(),  m};
   const Eigen::Index stop = onsets[stop_row];
   const double* w = weight ? weight->data() : weight_.data();
   if (m == 1 && !nominal)

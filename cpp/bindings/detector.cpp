@@ -98,6 +98,7 @@ void bind_detector(py::module_& m) {
       .def_readwrite("residual_ar_order", &DetectorConfig::residual_ar_order)
       .def_readwrite("residual_steps", &DetectorConfig::residual_steps)
       .def_readwrite("step_significance", &DetectorConfig::step_significance)
+      .def_readwrite("outlier_sigmas", &DetectorConfig::outlier_sigmas)
       .def_property(
           "noise_test",
           [](const DetectorConfig& c) { return std::string(to_string(c.noise_test)); },

@@ -85,6 +85,9 @@ DetectorConfig DetectorConfig::siso() {
   // Tuning families seeds 0-19 (docs/detection.md "Breaks"): false MPM alarms 3/140 -> 1/140,
   // false noise alarms 5/140 -> 0/140, detections 43/110 either way.
   c.residual_steps = 3;
+  // Rows reading an outlier left out of the window's fits (residual_regression.hpp). Tuning
+  // family mpc_2x2_spiky (high-pass / ARMA(2,2) noise with outliers): docs/detection.md "Outliers".
+  c.outlier_sigmas = 5.0;
   return c;
 }
 
@@ -138,6 +141,9 @@ DetectorConfig DetectorConfig::mimo() {
   // Tuning families seeds 0-19 (docs/detection.md "Breaks"): false MPM alarms 3/140 -> 1/140,
   // false noise alarms 5/140 -> 0/140, detections 43/110 either way.
   c.residual_steps = 3;
+  // Rows reading an outlier left out of the window's fits (residual_regression.hpp). Tuning
+  // family mpc_2x2_spiky (high-pass / ARMA(2,2) noise with outliers): docs/detection.md "Outliers".
+  c.outlier_sigmas = 5.0;
   return c;
 }
 
@@ -194,6 +200,8 @@ void DetectorConfig::validate() const {
   if (residual_steps < 0) fail("residual_steps", "must be >= 0 (0 = none)");
   if (!(step_significance > 0 && step_significance < 1))
     fail("step_significance", "must be in (0, 1)");
+  if (!(outlier_sigmas == 0 || (outlier_sigmas >= 2 && std::isfinite(outlier_sigmas))))
+    fail("outlier_sigmas", "must be 0 (none) or at least 2");
   if (noise_test == NoiseTest::Residual && process_test != ProcessTest::Residual)
     fail("noise_test", "\"residual\" needs process_test \"residual\" (or noise_test \"wald\")");
   inspection_windows();
@@ -312,6 +320,7 @@ nlohmann::json config_to_json(const DetectorConfig& c) {
       {"residual_ar_order", c.residual_ar_order},
       {"residual_steps", c.residual_steps},
       {"step_significance", c.step_significance},
+      {"outlier_sigmas", c.outlier_sigmas},
       {"noise_test", to_string(c.noise_test)}};
 }
 
@@ -393,6 +402,8 @@ DetectorConfig config_from_json(const nlohmann::json& j, const std::string& wher
       c.residual_steps = static_cast<int>(integer(key, v));
     else if (key == "step_significance")
       c.step_significance = number(key, v);
+    else if (key == "outlier_sigmas")
+      c.outlier_sigmas = number(key, v);
     else if (key == "noise_test") {
       if (!v.is_string()) throw InputError(where + ": noise_test must be a string");
       c.noise_test = noise_test_from_string(v.get<std::string>());

@@ -154,6 +154,45 @@ bool fit_with_breaks(Eigen::MatrixXd& Z, const Eigen::VectorXd& z, const Breaks&
   return true;
 }
 
+// The rows of a window's AR fit (row i reads v(i) .. v(i + na)) that read no outlier: v's
+// samples whose innovation in a first AR fit (with the trend) exceeds `sigmas` robust sigmas.
+// All rows when more than a tenth would go: heavy tails, not isolated outliers.
+std::vector<Eigen::Index> rows_clear_of_outliers(const Eigen::VectorXd& v,
+                                                 const Eigen::MatrixXd& trend, int na,
+                                                 double sigmas) {
+  const Eigen::Index rows = trend.rows();
+  std::vector<Eigen::Index> all(static_cast<size_t>(rows));
+  for (Eigen::Index i = 0; i < rows; ++i) all[static_cast<size_t>(i)] = i;
+  if (!(sigmas > 0)) return all;
+  Eigen::MatrixXd R(rows, na + 2);
+  for (int k = 1; k <= na; ++k) R.col(k - 1) = v.segment(na - k, rows);
+  R.rightCols(2) = trend;
+  Eigen::VectorXd coef;
+  if (!truncated_least_squares(R, v.tail(rows), coef, nullptr)) return all;
+  const Eigen::VectorXd e = v.tail(rows) - R * coef;
+  std::vector<double> dev(e.data(), e.data() + rows);
+  const auto mid = dev.begin() + rows / 2;
+  std::nth_element(dev.begin(), mid, dev.end());
+  const double median = *mid;
+  for (auto& d : dev) d = std::abs(d - median);
+  std::nth_element(dev.begin(), mid, dev.end());
+  const double limit = sigmas * 1.4826 * *mid;
+  std::vector<bool> out(static_cast<size_t>(rows), false);
+  Eigen::Index dropped = 0;
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    if (!(std::abs(e[i] - median) > limit)) continue;
+    for (Eigen::Index j = i; j <= std::min(rows - 1, i + na); ++j) {
+      dropped += out[static_cast<size_t>(j)] ? 0 : 1;
+      out[static_cast<size_t>(j)] = true;
+    }
+  }
+  if (dropped == 0 || dropped > rows / 10) return all;
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index i = 0; i < rows; ++i)
+    if (!out[static_cast<size_t>(i)]) kept.push_back(i);
+  return kept;
+}
+
 }  // namespace
 
 ResidualRegression::ResidualRegression(const Model& nominal, int output, std::vector<int> inputs,
@@ -161,7 +200,8 @@ ResidualRegression::ResidualRegression(const Model& nominal, int output, std::ve
     : ar_order_(config.residual_ar_order > 0 ? config.residual_ar_order : config.arx_order_a),
       settle_(0),
       max_steps_(config.residual_steps),
-      step_significance_(config.step_significance) {
+      step_significance_(config.step_significance),
+      outlier_sigmas_(config.outlier_sigmas) {
   for (int j : inputs) {
     if (j < 0 || j >= nominal.num_inputs() || !nominal.has_channel(output, j))
       throw InputError("residual regression: output '" + nominal.outputs[output] +
@@ -216,24 +256,29 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   Eigen::MatrixXd trend(rows, 2);
   trend.col(0).setOnes();
   trend.col(1) = Eigen::VectorXd::LinSpaced(rows, 0.0, 1.0);
+  const std::vector<Eigen::Index> kept =
+      rows_clear_of_outliers(vv, trend, ar_order_, outlier_sigmas_);
+  const Eigen::Index used = static_cast<Eigen::Index>(kept.size());
   Eigen::VectorXd b = Eigen::VectorXd::Zero(columns), coef;
   Eigen::MatrixXd cov;
   // Breaks are scanned away from the window's ends (5 % of it each side), where one outlier
   // would pass for one; Bonferroni over the positions scanned.
-  Breaks breaks{max_steps_, std::max<Eigen::Index>(ar_order_ + 1, rows / 20), 0.0};
+  Breaks breaks{max_steps_, std::max<Eigen::Index>(ar_order_ + 1, used / 20), 0.0};
   // chi-square(2) upper quantile: -2 log p.
   breaks.threshold =
       -2.0 * std::log(step_significance_ /
-                      static_cast<double>(std::max<Eigen::Index>(rows - 2 * breaks.edge, 1)));
+                      static_cast<double>(std::max<Eigen::Index>(used - 2 * breaks.edge, 1)));
   for (int pass = 0; pass < kPasses; ++pass) {
     // A(q) from what the current beta leaves of v.
     const Eigen::VectorXd r = vv - XX * b;
     Eigen::MatrixXd R(rows, ar_order_ + 2);
     for (int k = 1; k <= ar_order_; ++k) R.col(k - 1) = r.segment(ar_order_ - k, rows);
     R.rightCols(2) = trend;
+    R = R(kept, Eigen::all).eval();
+    const Eigen::VectorXd target = r.tail(rows)(kept);
     Eigen::MatrixXd acov;
     const bool last = pass == kPasses - 1;
-    if (!fit_with_breaks(R, r.tail(rows), breaks, coef, last && ar_covariance ? &acov : nullptr)) {
+    if (!fit_with_breaks(R, target, breaks, coef, last && ar_covariance ? &acov : nullptr)) {
       if (reason) *reason = "the output error does not vary in the window";
       return false;
     }
@@ -243,7 +288,8 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     Eigen::MatrixXd Z(rows, columns + 2);
     Z.leftCols(columns) = whiten(XX, a);
     Z.rightCols(2) = trend;
-    const Eigen::VectorXd z = whiten(vv, a);
+    Z = Z(kept, Eigen::all).eval();
+    const Eigen::VectorXd z = whiten(vv, a)(kept, 0);
     if (!fit_with_breaks(Z, z, breaks, coef, last ? &cov : nullptr)) {
       if (reason) *reason = "the inputs do not vary in the window";
       return false;

@@ -354,6 +354,10 @@ FAMILIES = [
            "sampling, discrete model with or without noise model", "mpc_move_limits", 1,
            _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(5.0, 10.0),
            model_forms=("discrete+noise", "discrete")),
+    Family("mpc_2x2_spiky", TUNING, "project MPC, 2x2, ARMA(2,2) / high-pass noise with outliers, "
+           "discrete model with or without noise model", "mpc", 2, _EFFECTS_MIMO + ("none", "noise_change"),
+           time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0), noise_colours=("arma22", "highpass"),
+           model_forms=("discrete+noise", "discrete"), setpoint_steps=True, outliers=True),
     Family("pi_siso_slow", TUNING, "single PI loop, 20-40 s sampling, day-long records, FOPTD model "
            "without noise model", "pi", 1, _EFFECTS_SISO + ("none",), sample_times_s=(20.0, 40.0),
            model_forms=("foptd",), record_hours=(24.0, 36.0), setpoint_steps=True),

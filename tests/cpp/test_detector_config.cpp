@@ -42,6 +42,7 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
     c->process_test = ProcessTest::Residual;
     c->noise_test = NoiseTest::Residual;
     c->residual_steps = 3;
+    c->outlier_sigmas = 5.0;
     c->threshold = 0.5;
     c->window_significance = 0.001;
   }

@@ -2,7 +2,7 @@
 (cpp/src/residual_regression.cpp): the output error y - G0 u regressed on the Laguerre and
 delay directions after whitening by A(q), with A(q) refitted from what beta leaves, twice;
 both fits with up to `breaks` step + hinge pairs chosen greedily by brute force (every
-position's two columns built and projected explicitly)."""
+position's two columns built and projected explicitly), on the rows that read no outlier."""
 import numpy as np
 from scipy.signal import lfilter
 
@@ -66,7 +66,27 @@ def _fit(Z, z, breaks, edge, threshold):
     return coef, cov
 
 
-def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01):
+def rows_clear_of_outliers(v, trend, na, sigmas):
+    """Rows of the AR fit (row i reads v[i .. i + na]) reading no sample whose innovation in a
+    first AR fit exceeds `sigmas` robust sigmas (1.4826 MAD); all rows when none is, or more
+    than a tenth of them would go."""
+    rows = len(trend)
+    everything = np.arange(rows)
+    if sigmas <= 0:
+        return everything
+    R = np.column_stack([v[na - k:len(v) - k] for k in range(1, na + 1)] + [trend])
+    e = v[na:] - R @ _lstsq(R, v[na:])[0]
+    med = np.median(e)
+    limit = sigmas * 1.4826 * np.median(np.abs(e - med))
+    out = np.zeros(rows, bool)
+    for i in np.flatnonzero(np.abs(e - med) > limit):
+        out[i:i + na + 1] = True
+    if not out.any() or out.sum() > rows // 10:
+        return everything
+    return np.flatnonzero(~out)
+
+
+def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01, outlier_sigmas=0.0):
     yc, uc = y - y.mean(), u - u.mean()
     v = yc - _tf(np.asarray(g.num), np.asarray(g.den), int(g.delay), uc)
     X, _ = _directions(g, uc, terms)
@@ -74,17 +94,18 @@ def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01):
     v, X = v[skip:], X[skip:]
     rows = len(v) - na
     trend = np.column_stack([np.ones(rows), np.linspace(0.0, 1.0, rows)])
-    edge = max(na + 1, rows // 20)
-    threshold = -2.0 * np.log(significance / max(rows - 2 * edge, 1))  # chi-square(2), Bonferroni
+    kept = rows_clear_of_outliers(v, trend, na, outlier_sigmas)
+    edge = max(na + 1, len(kept) // 20)
+    threshold = -2.0 * np.log(significance / max(len(kept) - 2 * edge, 1))  # chi-square(2), Bonferroni
     b = np.zeros(X.shape[1])
     for _ in range(2):
         r = v - X @ b
         R = np.column_stack([r[na - k:len(r) - k] for k in range(1, na + 1)] + [trend])
-        a_coef, a_cov = _fit(R, r[na:], breaks, edge, threshold)
+        a_coef, a_cov = _fit(R[kept], r[na:][kept], breaks, edge, threshold)
         a = a_coef[:na]
         A = np.concatenate([[1.0], -a])
-        coef, cov = _fit(np.column_stack([lfilter(A, [1.0], X, axis=0)[na:], trend]),
-                         lfilter(A, [1.0], v)[na:], breaks, edge, threshold)
+        coef, cov = _fit(np.column_stack([lfilter(A, [1.0], X, axis=0)[na:], trend])[kept],
+                         lfilter(A, [1.0], v)[na:][kept], breaks, edge, threshold)
         b = coef[:X.shape[1]]
     p = X.shape[1]
     # A(q) of the last pass in the ARX step's signs (A = 1 + ar_1 q^-1 + ...), with its covariance.

@@ -85,7 +85,8 @@ def test_preset_noise_features_are_the_residual_regressions_own_ar():
     for yw, uw, feature, covariance in _noise_windows(model, data, config):
         settle = _core.residual_regression(model, 0, [0], config, yw, uw)[2]
         _, _, ar, ar_cov = reference_window(g, yw, uw[:, 0], na, config.laguerre_terms, settle,
-                                          config.residual_steps, config.step_significance)
+                                          config.residual_steps, config.step_significance,
+                                          config.outlier_sigmas)
         np.testing.assert_allclose(feature, ar, rtol=1e-6, atol=1e-9)
         np.testing.assert_allclose(covariance.reshape(na, na), ar_cov, rtol=1e-6,
                                    atol=1e-9 * np.abs(ar_cov).max())

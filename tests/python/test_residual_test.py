@@ -12,7 +12,7 @@ from mpmpp import families as fam
 from mpmpp.detect import detect, make_config
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
-from residual_reference import reference_window
+from residual_reference import reference_window, rows_clear_of_outliers
 
 
 def test_chi_square_survival_matches_scipy():
@@ -41,46 +41,68 @@ def pi_loop():
     return model, simulate(spec)
 
 
-def _window(pi_loop, sigmas=0.0):
+def _window(pi_loop, sigmas=0.0, spikes=0.0):
     """The first 1440 samples of the PI loop, with a ramp of `sigmas` one-step noise sigmas
-    between samples 600 and 900 added to y (the regression sees y and u as recorded: whether
-    the controller fought the ramp does not matter to its algebra)."""
+    between samples 600 and 900 and spikes of `spikes` sigmas at samples 300, 700 and 1100 added
+    to y (the regression sees y and u as recorded: whether the controller fought them does not
+    matter to its algebra)."""
     model, data = pi_loop
     y = data["y1"].to_numpy()[:1440].copy()
+    sigma = float(np.std(np.diff(y)))
     t = np.arange(len(y), dtype=float)
-    y += sigmas * float(np.std(np.diff(y))) * (np.clip(t, 600, 900) - 600) / 300
+    y += sigmas * sigma * (np.clip(t, 600, 900) - 600) / 300
+    y[[300, 700, 1100]] += spikes * sigma * np.array([1.0, -1.0, 1.0])
     return model, y, data[["u1"]].to_numpy()[:1440]
 
 
-@pytest.mark.parametrize("sigmas", [0.0, 60.0])
-def test_one_window_matches_numpy(pi_loop, sigmas):
-    model, y, u = _window(pi_loop, sigmas)
+@pytest.mark.parametrize("sigmas,spikes", [(0.0, 0.0), (60.0, 0.0), (0.0, 20.0)])
+def test_one_window_matches_numpy(pi_loop, sigmas, spikes):
+    model, y, u = _window(pi_loop, sigmas, spikes)
     config = make_config("siso", model)
-    assert config.residual_steps > 0
+    assert config.residual_steps > 0 and config.outlier_sigmas > 0
     beta, cov, settle = _core.residual_regression(model, 0, [0], config, y, u)
     ref_b, ref_c, _, _ = reference_window(model.process("y1", "u1"), y, u[:, 0], config.arx_order_a,
                                           config.laguerre_terms, settle, config.residual_steps,
-                                          config.step_significance)
+                                          config.step_significance, config.outlier_sigmas)
     np.testing.assert_allclose(beta[0], ref_b, rtol=1e-6, atol=1e-9 * np.abs(ref_b).max())
     np.testing.assert_allclose(cov[0], ref_c, rtol=1e-6, atol=1e-9 * np.abs(ref_c).max())
 
 
+def _beta_shift(model, clean, disturbed, u, config):
+    """Wald distance between beta on the clean window and on the disturbed one."""
+    b0, c0, _ = _core.residual_regression(model, 0, [0], config, clean, u)
+    b1, c1, _ = _core.residual_regression(model, 0, [0], config, disturbed, u)
+    return _wald(b1[0] - b0[0], c0[0] + c1[0])[0]
+
+
 def test_breaks_take_a_ramp_disturbance_out_of_beta(pi_loop):
     """A ramp of 60 one-step noise sigmas inside the window (this loop's disturbance wanders:
-    smaller ramps pass for part of it): without breaks it moves beta far from
-    its value on the same window without the ramp; with them beta stays (the process did not
-    change)."""
+    smaller ramps pass for part of it): without breaks it moves beta far from its value on the
+    same window without the ramp; with them beta stays (the process did not change)."""
     model, y0, u = _window(pi_loop)
-    _, y, _ = _window(pi_loop, 60.0)
+    _, y, _ = _window(pi_loop, sigmas=60.0)
     with_breaks = make_config("siso", model)
     without = make_config({"preset": "siso", "residual_steps": 0}, model)
+    assert _beta_shift(model, y0, y, u, without) > 4 * _beta_shift(model, y0, y, u, with_breaks)
 
-    def shift(config):
-        b0, c0, _ = _core.residual_regression(model, 0, [0], config, y0, u)
-        b1, c1, _ = _core.residual_regression(model, 0, [0], config, y, u)
-        return _wald(b1[0] - b0[0], c0[0] + c1[0])[0]
 
-    assert shift(without) > 4 * shift(with_breaks)
+def test_outlier_rows_leave_the_fits(pi_loop):
+    """Three spikes of 20 one-step sigmas: the rows reading them (na + 1 each) leave the fits
+    (the reference's selection, which the C++ matches in test_one_window_matches_numpy), and
+    beta moves less from its value on the clean window than when they stay."""
+    model, y0, u = _window(pi_loop)
+    _, y, _ = _window(pi_loop, spikes=20.0)
+    config = make_config("siso", model)
+    na = config.arx_order_a
+    settle = _core.residual_regression(model, 0, [0], config, y, u)[2]
+    v = y[settle:] - y.mean()  # the spikes dominate v's innovations whatever G0 u removes
+    trend = np.column_stack([np.ones(len(v) - na), np.linspace(0.0, 1.0, len(v) - na)])
+    kept = set(rows_clear_of_outliers(v, trend, na, config.outlier_sigmas).tolist())
+    for p in np.array([300, 700, 1100]) - settle:  # row i reads v[i .. i + na]
+        assert kept.isdisjoint(range(p - na, p + 1))
+    assert len(v) - na - len(kept) <= 6 * (na + 1)  # the spikes' rows and the innovations they upset
+    kept_all = make_config({"preset": "siso", "outlier_sigmas": 0}, model)
+    assert _beta_shift(model, y0, y, u, kept_all) > 2 * _beta_shift(model, y0, y, u, config)
 
 
 def _wald(beta, cov):

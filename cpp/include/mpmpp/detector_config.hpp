@@ -98,6 +98,9 @@ struct DetectorConfig {
   // only when its scan-corrected chi-square test passes at step_significance; 0 = none.
   int residual_steps = 0;
   double step_significance = 0.01;
+  // Residual: samples whose innovation exceeds this many robust sigmas (1.4826 MAD) of a first
+  // AR fit are outliers, and every row of the window's fits that reads one is left out; 0 = none.
+  double outlier_sigmas = 0.0;
   NoiseTest noise_test = NoiseTest::Svm;
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the

@@ -16,12 +16,15 @@
 //   (time constant and any other shape).
 // A(q) (order residual_ar_order, by default arx_order_a; with a level and a ramp for drifting
 // disturbances) and beta are estimated alternately (two passes). An unmeasured step or ramp
-// disturbance inside the window is neither: whitened by A(q) (a root near 1) a ramp becomes a
-// level shift and a step a pulse plus a shift, which the controller's moves in x_j follow and
-// so bias beta. Up to residual_steps shifts s_k(t) = 1{t >= k} join the whitened regression,
-// greedily, each where the projected score T_k = (s_k'e)^2 / (sigma^2 s_k'(I - P_Z)s_k) peaks,
-// kept while max_k T_k passes the chi-square(1) test at step_significance / (positions
-// scanned) (Bonferroni over the scan). beta_j and its covariance sigma^2
+// disturbance inside the window is neither: the AR fit explains it with a root near 1, which
+// over-differences the rest of the disturbance, and the controller's moves against it are in
+// x_j, so beta is biased. Both fits therefore take up to residual_steps breaks, greedily: a
+// level shift 1{t >= k} and a hinge max(0, t - k) together at the row k where their
+// chi-square(2) score on the fit's residual peaks, kept while it passes step_significance /
+// (rows scanned) (Bonferroni). An isolated outlier (a spike in y) enters na + 1 rows of every
+// fit; with outlier_sigmas those rows are left out: those reading a sample whose innovation in a
+// first AR fit exceeds that many robust sigmas, unless more than a tenth of the rows would go.
+// beta_j and its covariance sigma^2
 // (Z'Z)^-1 are the channel's features; the Detector compares them with the training period's in a
 // Wald test (detector.hpp, ChannelScorer::significance). A disturbance change moves only A(q) and
 // sigma^2, which the window re-estimates, so it does not move beta: no MPM alarm for a noise
@@ -65,6 +68,7 @@ class ResidualRegression {
   int settle_;
   int max_steps_;
   double step_significance_;
+  double outlier_sigmas_;
 };
 
 }  // namespace mpmpp

@@ -81,6 +81,16 @@ Eigen::MatrixXd whiten(const Eigen::MatrixXd& x, const Eigen::VectorXd& a) {
   return w;
 }
 
+// The AR fit's regressors for r: rows t = na .. end, the lags r(t-1) .. r(t-na) beside the
+// window's trend (level and ramp).
+Eigen::MatrixXd lagged_with_trend(const Eigen::VectorXd& r, const Eigen::MatrixXd& trend, int na) {
+  const Eigen::Index rows = trend.rows();
+  Eigen::MatrixXd R(rows, na + 2);
+  for (int k = 1; k <= na; ++k) R.col(k - 1) = r.segment(na - k, rows);
+  R.rightCols(2) = trend;
+  return R;
+}
+
 // A break in the output error's regression at row k: a level shift s_k(t) = 1{t >= k} and a
 // hinge h_k(t) = max(0, t - k) together, so that a ramp's start or end and a step are one break
 // whatever A(q) makes of them (near 1 it turns a ramp into a level shift; near white it leaves
@@ -164,9 +174,7 @@ std::vector<Eigen::Index> rows_clear_of_outliers(const Eigen::VectorXd& v,
   std::vector<Eigen::Index> all(static_cast<size_t>(rows));
   for (Eigen::Index i = 0; i < rows; ++i) all[static_cast<size_t>(i)] = i;
   if (!(sigmas > 0)) return all;
-  Eigen::MatrixXd R(rows, na + 2);
-  for (int k = 1; k <= na; ++k) R.col(k - 1) = v.segment(na - k, rows);
-  R.rightCols(2) = trend;
+  const Eigen::MatrixXd R = lagged_with_trend(v, trend, na);
   Eigen::VectorXd coef;
   if (!truncated_least_squares(R, v.tail(rows), coef, nullptr)) return all;
   const Eigen::VectorXd e = v.tail(rows) - R * coef;
@@ -271,10 +279,7 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   for (int pass = 0; pass < kPasses; ++pass) {
     // A(q) from what the current beta leaves of v.
     const Eigen::VectorXd r = vv - XX * b;
-    Eigen::MatrixXd R(rows, ar_order_ + 2);
-    for (int k = 1; k <= ar_order_; ++k) R.col(k - 1) = r.segment(ar_order_ - k, rows);
-    R.rightCols(2) = trend;
-    R = R(kept, Eigen::all).eval();
+    Eigen::MatrixXd R = lagged_with_trend(r, trend, ar_order_)(kept, Eigen::all);
     const Eigen::VectorXd target = r.tail(rows)(kept);
     Eigen::MatrixXd acov;
     const bool last = pass == kPasses - 1;

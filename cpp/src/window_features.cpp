@@ -126,11 +126,14 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
   for (auto& p : problems_) {
     const int i = channels_[p.noise_channel].output;
     for (size_t e = 0; e < p.inputs.size(); ++e) p.u.col(e) = u.col(p.inputs[e]);
-    // NoiseTest::Residual: A(q) comes from the residual regression, no ARX-OE step is needed.
-    const bool residual_only = noise_from_residual_;
-    if (!residual_only) {
+    // NoiseTest::Residual: A(q) comes from the residual regression, no ARX-OE step is needed;
+    // with the residual process test and NoiseTest::Wald the ARX step alone gives A(q).
+    if (!noise_from_residual_) {
       try {
-        p.estimator.estimate(y.col(i), p.u, result_);
+        if (p.residual && noise_wald_)
+          p.estimator.estimate_arx(y.col(i), p.u, result_.arx);
+        else
+          p.estimator.estimate(y.col(i), p.u, result_);
       } catch (const NumericalError& err) {
         if (skip_reason) *skip_reason = err.what();
         return false;
@@ -148,10 +151,10 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
       Eigen::VectorXd ar;
       Eigen::MatrixXd ar_covariance;
       if (!p.residual->estimate(y.col(i), p.u, beta, beta_covariance, skip_reason,
-                                residual_only ? &ar : nullptr,
-                                residual_only ? &ar_covariance : nullptr))
+                                noise_from_residual_ ? &ar : nullptr,
+                                noise_from_residual_ ? &ar_covariance : nullptr))
         return false;
-      if (residual_only) {
+      if (noise_from_residual_) {
         features[p.noise_channel] = ar;
         if (want_covariances) (*covariances)[p.noise_channel] = symmetrised(ar_covariance);
       }

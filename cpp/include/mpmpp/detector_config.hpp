@@ -93,9 +93,10 @@ struct DetectorConfig {
   double window_significance = 0.01;  // Residual: a window is negative when its Wald p < this
   int laguerre_terms = 3;             // Residual: Laguerre directions per channel
   int residual_ar_order = 0;          // Residual: order of the whitening A(q); 0 = arx_order_a
-  // Residual: at most this many level shifts of the whitened output error fitted beside beta
-  // per window (residual_regression.hpp: an unmeasured step or ramp disturbance), each kept
-  // only when its scan-corrected chi-square test passes at step_significance; 0 = none.
+  // Residual: at most this many breaks (a level shift and a hinge at one row: an unmeasured
+  // step or ramp disturbance) fitted per window in the AR fit and the whitened regression
+  // (residual_regression.hpp), each kept only when its chi-square(2) score passes
+  // step_significance over the rows scanned (Bonferroni); 0 = none.
   int residual_steps = 0;
   double step_significance = 0.01;
   // Residual: samples whose innovation exceeds this many robust sigmas (1.4826 MAD) of a first

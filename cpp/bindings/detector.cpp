@@ -99,6 +99,7 @@ void bind_detector(py::module_& m) {
       .def_readwrite("residual_steps", &DetectorConfig::residual_steps)
       .def_readwrite("step_significance", &DetectorConfig::step_significance)
       .def_readwrite("outlier_sigmas", &DetectorConfig::outlier_sigmas)
+      .def_readwrite("pooled_windows", &DetectorConfig::pooled_windows)
       .def_property(
           "noise_test",
           [](const DetectorConfig& c) { return std::string(to_string(c.noise_test)); },
@@ -116,6 +117,7 @@ void bind_detector(py::module_& m) {
       .def("step_samples", &DetectorConfig::step_samples, py::arg("sample_time_s"))
       .def("inspection_windows", &DetectorConfig::inspection_windows)
       .def("alarm_count", &DetectorConfig::alarm_count)
+      .def("pooling_lag", &DetectorConfig::pooling_lag, py::arg("sample_time_s"))
       .def("__repr__",
            [](const DetectorConfig& c) { return "DetectorConfig(" + c.to_json() + ")"; });
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <tuple>
+#include <utility>
 
 #include "detector_config_json.hpp"
 #include "mpmpp/chi_square.hpp"
@@ -11,6 +13,7 @@
 #include "mpmpp/mismatch_indicator.hpp"
 #include "mpmpp/model_io.hpp"
 #include "mpmpp/one_class_svm.hpp"
+#include "mpmpp/window_pooling.hpp"
 #include "text_file.hpp"
 
 namespace mpmpp {
@@ -30,6 +33,20 @@ bool symmetric_root(const Eigen::MatrixXd& m, bool inverse, Eigen::MatrixXd& roo
   if (inverse) r = r.cwiseInverse();
   root = eig.eigenvectors() * r.asDiagonal() * eig.eigenvectors().transpose();
   return true;
+}
+
+// Channel k's estimate (x, c) pooled with the finite ones of `earlier` (window_pooling.hpp).
+PooledEstimate pooled_with(const Eigen::VectorXd& x, const Eigen::MatrixXd& c,
+                           const std::vector<WindowEstimates>& earlier, size_t k) {
+  std::vector<Eigen::VectorXd> xs{x};
+  std::vector<Eigen::MatrixXd> cs{c};
+  for (const WindowEstimates& e : earlier) {
+    if (e.features.size() <= k || !e.features[k].allFinite() || !e.covariances[k].allFinite())
+      continue;
+    xs.push_back(e.features[k]);
+    cs.push_back(e.covariances[k]);
+  }
+  return pool_estimates(xs, cs);
 }
 
 }  // namespace
@@ -224,9 +241,37 @@ DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
     if (with_covariance && series.covariances.size() != static_cast<size_t>(n_channels))
       throw InputError("detector: channel " + channel_label(model_, channels_[k]) +
                        " needs the window covariances (resampling 'estimator')");
-    r.scores.col(k) = with_covariance
-                          ? scorers_[k].score_rows(series.features[k], series.covariances[k])
-                          : scorers_[k].score_rows(series.features[k]);
+    if (pools(k)) {
+      // Each window pooled with the disjoint windows before it, as score_window does it.
+      const int lag = pooling_lag(), d = static_cast<int>(series.features[k].cols());
+      Eigen::MatrixXd X = series.features[k], C = series.covariances[k];
+      auto estimate = [&](int w) {
+        return std::pair<Eigen::VectorXd, Eigen::MatrixXd>(
+            series.features[k].row(w).transpose(),
+            Eigen::Map<const RowMatrixXd>(series.covariances[k].row(w).eval().data(), d, d));
+      };
+      for (int w = 0; w < n_windows; ++w) {
+        if (!series.features[k].row(w).allFinite() || !series.covariances[k].row(w).allFinite())
+          continue;
+        std::vector<WindowEstimates> earlier;
+        for (int m = 1; m < config_.pooled_windows && w - m * lag >= 0; ++m) {
+          WindowEstimates e;
+          e.features.resize(k + 1);
+          e.covariances.resize(k + 1);
+          std::tie(e.features[k], e.covariances[k]) = estimate(w - m * lag);
+          earlier.push_back(std::move(e));
+        }
+        const auto [x, c] = estimate(w);
+        const PooledEstimate p = pooled_with(x, c, earlier, static_cast<size_t>(k));
+        X.row(w) = p.mean.transpose();
+        C.row(w) = Eigen::Map<const Eigen::RowVectorXd>(RowMatrixXd(p.covariance).data(), d * d);
+      }
+      r.scores.col(k) = scorers_[k].score_rows(X, C);
+    } else {
+      r.scores.col(k) = with_covariance
+                            ? scorers_[k].score_rows(series.features[k], series.covariances[k])
+                            : scorers_[k].score_rows(series.features[k]);
+    }
     for (int w = 0; w < n_windows; ++w)
       if (r.training[w]) r.scores(w, k) = 0.0;  // as in the paper: 0 while the SVM is trained
   }
@@ -251,16 +296,35 @@ DetectionResult Detector::monitor(const WindowFeatures::Series& series) const {
 Eigen::VectorXd Detector::score_window(WindowFeatures& features,
                                        const Eigen::Ref<const Eigen::MatrixXd>& u,
                                        const Eigen::Ref<const Eigen::MatrixXd>& y,
-                                       std::string* skip_reason) const {
+                                       std::string* skip_reason,
+                                       const std::vector<WindowEstimates>& earlier,
+                                       WindowEstimates* estimates) const {
   std::vector<Eigen::VectorXd> f;
   std::vector<Eigen::MatrixXd> c;
   Eigen::VectorXd h = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(channels_.size()),
                                                 std::numeric_limits<double>::quiet_NaN());
-  if (!features.extract(u, y, f, skip_reason, &c)) return h;
-  for (size_t k = 0; k < channels_.size(); ++k)
+  const bool ok = features.extract(u, y, f, skip_reason, &c);
+  if (estimates) *estimates = ok ? WindowEstimates{f, c} : WindowEstimates{};
+  if (!ok) return h;
+  for (size_t k = 0; k < channels_.size(); ++k) {
+    if (pools(static_cast<int>(k))) {
+      if (!f[k].allFinite() || !c[k].allFinite()) continue;  // NaN, as monitor's row
+      // Through the same row form as monitor's, so that both score bit-identically.
+      const PooledEstimate p = pooled_with(f[k], c[k], earlier, k);
+      const Eigen::Index d = p.mean.size();
+      const RowMatrixXd row_major = p.covariance;
+      h[k] = scorers_[k].score(p.mean, Eigen::Map<const RowMatrixXd>(row_major.data(), d, d));
+      continue;
+    }
     h[k] = scorers_[k].reference_covariance.size() != 0 ? scorers_[k].score(f[k], c[k])
                                                         : scorers_[k].score(f[k]);
+  }
   return h;
+}
+
+bool Detector::pools(int k) const {
+  return config_.pooled_windows > 1 && channels_[k].kind == MonitoredChannel::Kind::Process &&
+         scorers_[k].significance > 0;
 }
 
 bool Detector::counts_for_indicator(const Eigen::Ref<const Eigen::VectorXd>& window_scores,

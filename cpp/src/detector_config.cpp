@@ -202,6 +202,9 @@ void DetectorConfig::validate() const {
     fail("step_significance", "must be in (0, 1)");
   if (!(outlier_sigmas == 0 || (outlier_sigmas >= 2 && std::isfinite(outlier_sigmas))))
     fail("outlier_sigmas", "must be 0 (none) or at least 2");
+  if (pooled_windows < 1) fail("pooled_windows", "must be >= 1 (1 = each window alone)");
+  if (pooled_windows > 1 && process_test != ProcessTest::Residual)
+    fail("pooled_windows", "needs process_test \"residual\" (it pools Wald-test estimates)");
   if (noise_test == NoiseTest::Residual && process_test != ProcessTest::Residual)
     fail("noise_test", "\"residual\" needs process_test \"residual\" (or noise_test \"wald\")");
   inspection_windows();
@@ -215,6 +218,10 @@ int DetectorConfig::step_samples(double sample_time_s) const {
 }
 int DetectorConfig::inspection_windows() const {
   return whole_multiple(inspection_s, step_s, "inspection_s", "steps");
+}
+int DetectorConfig::pooling_lag(double sample_time_s) const {
+  const int window = window_samples(sample_time_s), step = step_samples(sample_time_s);
+  return (window + step - 1) / step;
 }
 int DetectorConfig::alarm_count() const {
   const int n_T = inspection_windows();
@@ -321,6 +328,7 @@ nlohmann::json config_to_json(const DetectorConfig& c) {
       {"residual_steps", c.residual_steps},
       {"step_significance", c.step_significance},
       {"outlier_sigmas", c.outlier_sigmas},
+      {"pooled_windows", c.pooled_windows},
       {"noise_test", to_string(c.noise_test)}};
 }
 
@@ -404,6 +412,8 @@ DetectorConfig config_from_json(const nlohmann::json& j, const std::string& wher
       c.step_significance = number(key, v);
     else if (key == "outlier_sigmas")
       c.outlier_sigmas = number(key, v);
+    else if (key == "pooled_windows")
+      c.pooled_windows = static_cast<int>(integer(key, v));
     else if (key == "noise_test") {
       if (!v.is_string()) throw InputError(where + ": noise_test must be a string");
       c.noise_test = noise_test_from_string(v.get<std::string>());

@@ -1,6 +1,7 @@
 #include "mpmpp/streaming_detector.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
@@ -35,6 +36,13 @@ std::string seconds(double t) {
   return std::string(buf) + " s";
 }
 
+// Samples from the first sample of the earliest pooled window to the newest.
+int ring_samples(const Detector& d, int window, int step) {
+  bool pooled = false;
+  for (size_t k = 0; k < d.channels().size(); ++k) pooled = pooled || d.pools(static_cast<int>(k));
+  return pooled ? window + (d.config().pooled_windows - 1) * d.pooling_lag() * step : window;
+}
+
 }  // namespace
 
 StreamingDetector::StreamingDetector(Detector detector)
@@ -43,10 +51,11 @@ StreamingDetector::StreamingDetector(Detector detector)
       features_(detector_.make_features()),
       window_(features_.window_samples()),
       step_(features_.step_samples()),
+      ring_(ring_samples(detector_, window_, step_)),
       sample_time_s_(detector_.model().sample_time_s),
-      ring_time_(window_),
-      ring_u_(window_, detector_.model().num_inputs()),
-      ring_y_(window_, detector_.model().num_outputs()),
+      ring_time_(ring_),
+      ring_u_(ring_, detector_.model().num_inputs()),
+      ring_y_(ring_, detector_.model().num_outputs()),
       window_u_(window_, detector_.model().num_inputs()),
       window_y_(window_, detector_.model().num_outputs()) {
   for (size_t k = 0; k < detector_.channels().size(); ++k)
@@ -122,7 +131,7 @@ bool StreamingDetector::take(double time_s, const Eigen::Ref<const Eigen::Vector
   ring_time_[next_] = time_s;
   ring_u_.row(next_) = u.transpose();
   ring_y_.row(next_) = y.transpose();
-  next_ = (next_ + 1) % window_;
+  next_ = (next_ + 1) % ring_;
   last_time_ = time_s;
   ++samples_;
   // Batch windows start at samples 0, step, 2 step, ...: window w ends at sample w step + W.
@@ -131,21 +140,40 @@ bool StreamingDetector::take(double time_s, const Eigen::Ref<const Eigen::Vector
   return true;
 }
 
+void StreamingDetector::unroll(int back, Eigen::MatrixXd& u, Eigen::MatrixXd& y) const {
+  const int first = ((next_ - back - window_) % ring_ + ring_) % ring_;
+  for (int r = 0; r < window_; ++r) {
+    const int k = (first + r) % ring_;
+    u.row(r) = ring_u_.row(k);
+    y.row(r) = ring_y_.row(k);
+  }
+}
+
 void StreamingDetector::complete_window(StreamWindow& w) {
-  // Unroll the ring oldest-first into the contiguous window ARX-OE expects.
-  const int head = window_ - next_;  // rows next_ .. window_-1 are the oldest
-  window_u_.topRows(head) = ring_u_.bottomRows(head);
-  window_y_.topRows(head) = ring_y_.bottomRows(head);
-  window_u_.bottomRows(next_) = ring_u_.topRows(next_);
-  window_y_.bottomRows(next_) = ring_y_.topRows(next_);
+  // The contiguous window ARX-OE expects, oldest row first.
+  unroll(0, window_u_, window_y_);
 
   const int n_channels = static_cast<int>(indicators_.size());
   w.window = windows_++;
-  w.start_s = ring_time_[next_];  // the oldest sample
+  w.start_s = ring_time_[((next_ - window_) % ring_ + ring_) % ring_];  // its oldest sample
   w.end_s = last_time_ + sample_time_s_;
   w.training = w.end_s <= train_end_abs_;
   w.skip_reason.clear();
-  w.scores = detector_.score_window(features_, window_u_, window_y_, &w.skip_reason);
+  // The disjoint windows pooled with this one, as monitor takes them from its series (training
+  // windows score 0 whatever they pool).
+  std::vector<WindowEstimates> earlier;
+  if (ring_ > window_ && !w.training) {
+    Eigen::MatrixXd u(window_, ring_u_.cols()), y(window_, ring_y_.cols());
+    for (int m = 1; m < detector_.config().pooled_windows; ++m) {
+      const int back = m * detector_.pooling_lag() * step_;
+      if (samples_ < static_cast<std::int64_t>(window_) + back) break;
+      unroll(back, u, y);
+      WindowEstimates e;
+      if (!features_.extract(u, y, e.features, nullptr, &e.covariances)) e = WindowEstimates{};
+      earlier.push_back(std::move(e));
+    }
+  }
+  w.scores = detector_.score_window(features_, window_u_, window_y_, &w.skip_reason, earlier);
   w.skipped = !w.scores.allFinite();
   if (!w.skipped) w.skip_reason.clear();
   if (w.training) w.scores.setZero();  // as in the paper (and monitor): 0 while training
@@ -180,12 +208,12 @@ json number_or_null(double v) { return std::isnan(v) ? json(nullptr) : json(v); 
 }  // namespace
 
 std::string StreamingDetector::checkpoint_json() const {
-  // Ring rows oldest first: the min(samples, W) samples actually pushed.
-  const int filled = samples_ < window_ ? static_cast<int>(samples_) : window_;
-  const int oldest = samples_ < window_ ? 0 : next_;
+  // Ring rows oldest first: the min(samples, ring) samples actually pushed.
+  const int filled = samples_ < ring_ ? static_cast<int>(samples_) : ring_;
+  const int oldest = samples_ < ring_ ? 0 : next_;
   json time = json::array(), u = json::array(), y = json::array();
   for (int r = 0; r < filled; ++r) {
-    const int k = (oldest + r) % window_;
+    const int k = (oldest + r) % ring_;
     time.push_back(ring_time_[k]);
     json ur = json::array(), yr = json::array();
     for (Eigen::Index j = 0; j < ring_u_.cols(); ++j) ur.push_back(number_or_null(ring_u_(k, j)));
@@ -242,15 +270,15 @@ void StreamingDetector::restore_checkpoint_json(const std::string& text,
     if (windows != expected_windows)
       fail("windows: " + std::to_string(windows) + " does not match " + std::to_string(samples) +
            " samples");
-    const int filled = samples < window_ ? static_cast<int>(samples) : window_;
+    const int filled = samples < ring_ ? static_cast<int>(samples) : ring_;
     const json &time = j.at("time"), &u = j.at("u"), &y = j.at("y"), &ind = j.at("indicators");
     if (!time.is_array() || !u.is_array() || !y.is_array() ||
         time.size() != static_cast<size_t>(filled) || u.size() != time.size() ||
         y.size() != time.size())
       fail("time/u/y: expected " + std::to_string(filled) + " buffered samples each");
-    Eigen::VectorXd ring_time = Eigen::VectorXd::Zero(window_);
-    Eigen::MatrixXd ring_u = Eigen::MatrixXd::Zero(window_, ring_u_.cols());
-    Eigen::MatrixXd ring_y = Eigen::MatrixXd::Zero(window_, ring_y_.cols());
+    Eigen::VectorXd ring_time = Eigen::VectorXd::Zero(ring_);
+    Eigen::MatrixXd ring_u = Eigen::MatrixXd::Zero(ring_, ring_u_.cols());
+    Eigen::MatrixXd ring_y = Eigen::MatrixXd::Zero(ring_, ring_y_.cols());
     auto read_row = [&](const json& row, Eigen::MatrixXd& into, int r, const char* name) {
       if (!row.is_array() || row.size() != static_cast<size_t>(into.cols()))
         fail(std::string(name) + "[" + std::to_string(r) + "]: expected " +
@@ -277,11 +305,12 @@ void StreamingDetector::restore_checkpoint_json(const std::string& text,
     for (size_t k = 0; k < indicators.size(); ++k)
       indicators[k].restore(ind[k].at("history").get<std::vector<std::uint8_t>>(),
                             ind[k].at("alarm").get<bool>());
-    // Commit: the ring is stored oldest-first from row 0, so the next write goes to row filled % W.
+    // Commit: the ring is stored oldest-first from row 0, so the next write goes to row
+    // filled % ring.
     ring_time_ = ring_time;
     ring_u_ = ring_u;
     ring_y_ = ring_y;
-    next_ = filled % window_;
+    next_ = filled % ring_;
     samples_ = samples;
     windows_ = windows;
     t0_ = t0;

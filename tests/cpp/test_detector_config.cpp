@@ -79,6 +79,16 @@ TEST(DetectorConfig, JsonRoundTripAndPresetOverrides) {
   EXPECT_DOUBLE_EQ(o.alpha, 2.0);
 }
 
+TEST(DetectorConfig, PoolingLagIsTheFirstDisjointWindow) {
+  auto c = DetectorConfig::siso();
+  EXPECT_EQ(c.pooling_lag(5.0), 24);  // 2 h windows every 5 min
+  c.step_s = 2700.0;                  // 7200 / 2700 = 2.67: the third window back is disjoint
+  c.inspection_s = 8100.0;
+  EXPECT_EQ(c.pooling_lag(5.0), 3);
+  c.pooled_windows = 3;
+  EXPECT_EQ(DetectorConfig::from_json(c.to_json()).pooled_windows, 3);
+}
+
 TEST(DetectorConfig, BadFieldsNameTheField) {
   auto expect_msg = [](const std::string& text, const std::string& field) {
     try {
@@ -96,5 +106,7 @@ TEST(DetectorConfig, BadFieldsNameTheField) {
   expect_msg(R"({"oe_structure": "bj"})", "oe_structure");
   expect_msg(R"({"preset": "paper_x"})", "paper_x");
   expect_msg(R"({"window_s": 1)", "JSON");
+  expect_msg(R"({"preset": "siso", "pooled_windows": 0})", "pooled_windows");
+  expect_msg(R"({"preset": "paper_siso", "pooled_windows": 2})", "pooled_windows");  // SVM
   EXPECT_THROW(DetectorConfig::paper_siso().window_samples(7.0), mpmpp::InputError);
 }

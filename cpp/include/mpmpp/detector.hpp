@@ -89,6 +89,13 @@ struct ChannelScorer {
   void validate(int feature_length, const std::string& where) const;  // InputError on bad shapes
 };
 
+// One window's estimates per channel (WindowFeatures::extract); empty when the window is missing
+// or was skipped.
+struct WindowEstimates {
+  std::vector<Eigen::VectorXd> features;
+  std::vector<Eigen::MatrixXd> covariances;
+};
+
 struct DetectionAlarm {
   int channel = 0;     // index into channels
   int window = 0;      // the window at which the indicator first reached s_T
@@ -121,9 +128,17 @@ class Detector {
 
   // One window (window_samples rows): score per channel; all NaN when the window is skipped.
   // `features` (from make_features()) is the caller's ARX-OE workspace, reused across windows.
+  // `earlier`: the estimates of the windows 1, 2, ... pooling lags before it
+  // (DetectorConfig::pooled_windows; unused when it is 1).
   Eigen::VectorXd score_window(WindowFeatures& features, const Eigen::Ref<const Eigen::MatrixXd>& u,
                                const Eigen::Ref<const Eigen::MatrixXd>& y,
-                               std::string* skip_reason = nullptr) const;
+                               std::string* skip_reason = nullptr,
+                               const std::vector<WindowEstimates>& earlier = {},
+                               WindowEstimates* estimates = nullptr) const;
+  // Whether channel k's test pools disjoint windows (pooled_windows > 1, a Wald-test process
+  // channel), and how many windows apart they are at the model's sample time.
+  bool pools(int k) const;
+  int pooling_lag() const { return config_.pooling_lag(model_.sample_time_s); }
   // Whether channel k's window, with these scores, is evidence for its indicator (eq. 23).
   // Always, except that with a Wald noise test a noise channel's window is passed over (the
   // indicator and alarm keep their state) while a process channel of its output is negative
@@ -148,7 +163,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 7;  // history in CHANGELOG.md, "File formats"
+  static constexpr int kFormatVersion = 8;  // history in CHANGELOG.md, "File formats"
 
  private:
   Model model_;

@@ -102,6 +102,10 @@ struct DetectorConfig {
   // Residual: samples whose innovation exceeds this many robust sigmas (1.4826 MAD) of a first
   // AR fit are outliers, and every row of the window's fits that reads one is left out; 0 = none.
   double outlier_sigmas = 0.0;
+  // Residual: a process channel's Wald test judges the precision-weighted mean of the window's
+  // coefficients and those of the pooled_windows - 1 disjoint windows before it (ending one,
+  // two, ... window lengths earlier; window_pooling.hpp); 1 = the window alone.
+  int pooled_windows = 1;
   NoiseTest noise_test = NoiseTest::Svm;
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the
@@ -121,6 +125,8 @@ struct DetectorConfig {
   int window_samples(double sample_time_s) const;
   int step_samples(double sample_time_s) const;
   int inspection_windows() const;  // n_T = inspection_s / step_s
+  // Windows between a window and the disjoint one pooled with it: ceil(window / step).
+  int pooling_lag(double sample_time_s) const;
   // Number of negative windows among the last n_T that raises an alarm:
   // the smallest k with k / n_T >= s_T (integer form avoids 23/24 >= 0.95 rounding doubts).
   int alarm_count() const;

@@ -4,11 +4,13 @@
 // A StreamingDetector wraps a trained Detector (train_detector, or Detector::load of a file
 // saved by Python or C++) and is fed one sample at a time, as a historian or an MPC monitoring
 // service receives them. It keeps only the last window of samples (a ring buffer of window_samples
-// rows) plus the n_T-window ring of each channel's indicator, so memory does not grow with the run
-// length. Whenever a moving window completes (the first after window_samples samples, then every
-// step_samples samples, exactly the windows of the batch Detector::monitor on the same series), it
-// runs ARX-OE + the SVMs on that window (Detector::score_window) and returns the scores, indicator
-// values and alarm state per channel. Results equal the batch path's bit for bit:
+// rows; with DetectorConfig::pooled_windows, the span from the earliest pooled window on, whose
+// estimates are recomputed from it) plus the n_T-window ring of each channel's indicator, so
+// memory does not grow with the run length. Whenever a moving window completes (the first after
+// window_samples samples, then every step_samples samples, exactly the windows of the batch
+// Detector::monitor on the same series), it runs ARX-OE + the SVMs on that window
+// (Detector::score_window) and returns the scores, indicator values and alarm state per channel.
+// Results equal the batch path's bit for bit:
 //   * the first pushed sample is the series' start: windows ending at or before
 //     t0 + train_end_s (+ half a sample, as in monitor) are training windows, score 0;
 //   * a window holding a missing value (NaN) or one ARX-OE cannot estimate is skipped:
@@ -87,13 +89,16 @@ class StreamingDetector {
   bool take(double time_s, const Eigen::Ref<const Eigen::VectorXd>& u,
             const Eigen::Ref<const Eigen::VectorXd>& y, StreamWindow& window);
   void complete_window(StreamWindow& window);
+  // The window ending `back` samples before the newest one, oldest row first, into u and y.
+  void unroll(int back, Eigen::MatrixXd& u, Eigen::MatrixXd& y) const;
 
   Detector detector_;
   std::uint64_t fingerprint_;  // FNV-1a of the detector file text: ties checkpoints to it
   WindowFeatures features_;    // ARX-OE workspace, reused window after window
   int window_, step_;
+  int ring_;  // samples buffered: one window, or the pooled windows' span
   double sample_time_s_, train_end_abs_ = 0;
-  // Ring buffer of the last window_ samples: row next_ is the oldest once full.
+  // Ring buffer of the last ring_ samples: row next_ is the oldest once full.
   Eigen::VectorXd ring_time_;
   Eigen::MatrixXd ring_u_, ring_y_;
   int next_ = 0;

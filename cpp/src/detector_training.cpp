@@ -271,7 +271,8 @@ ChannelScorer train_channel_scorer(const Eigen::Ref<const RowMatrixXd>& estimate
       throw InputError("a Wald-test channel needs the training windows' covariances");
     s.feature_mean = estimates.colwise().mean().transpose();
     s.feature_scale = Eigen::VectorXd::Ones(d);
-    s.significance = config.window_significance;
+    s.significance = noise && config.noise_significance > 0 ? config.noise_significance
+                                                            : config.window_significance;
     s.training_windows = static_cast<int>(estimates.rows());
     return s;
   }

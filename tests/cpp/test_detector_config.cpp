@@ -46,6 +46,9 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
     c->threshold = 0.5;
     c->window_significance = 0.001;
   }
+  pap_siso.pooled_windows = 3;  // three disjoint windows pooled, at a level of 0.01
+  pap_siso.window_significance = 0.01;
+  pap_siso.noise_significance = 0.001;  // the noise channel's level as before
   EXPECT_EQ(rec_siso.process_test, ProcessTest::Residual);
   EXPECT_EQ(DetectorConfig::paper_siso().process_test, ProcessTest::Svm);
   EXPECT_EQ(DetectorConfig::paper_siso().noise_test, NoiseTest::Svm);
@@ -107,6 +110,6 @@ TEST(DetectorConfig, BadFieldsNameTheField) {
   expect_msg(R"({"preset": "paper_x"})", "paper_x");
   expect_msg(R"({"window_s": 1)", "JSON");
   expect_msg(R"({"preset": "siso", "pooled_windows": 0})", "pooled_windows");
-  expect_msg(R"({"preset": "paper_siso", "pooled_windows": 2})", "pooled_windows");  // SVM
+  expect_msg(R"({"noise_significance": 1})", "noise_significance");
   EXPECT_THROW(DetectorConfig::paper_siso().window_samples(7.0), mpmpp::InputError);
 }

@@ -132,3 +132,20 @@ def test_a_process_change_raises_no_noise_alarm_on_its_output(tmp_path):
     windows = mpmpp.StreamingDetector(loaded).push_block(
         data["time"].to_numpy(), data[list(model.inputs)].to_numpy(), data[list(model.outputs)].to_numpy())
     np.testing.assert_array_equal(np.array([w.indicator for w in windows])[:, h11], result.indicator[:, h11])
+
+
+def test_noise_channels_take_their_own_level():
+    # siso: process windows at 0.01 (pooled), the noise channel at 0.001. The noise channel's
+    # p-value does not depend on the level, so its score, log10(p / level), moves by exactly
+    # log10(0.01 / 0.001) = 1 when it is judged at the process level instead.
+    model, data = _paper("paper_siso", 3, hours=9)
+    own = detect(model, data, config="siso", return_detector=True)
+    shared = detect(model, data, config={"preset": "siso", "noise_significance": 0}, return_detector=True)
+    levels = {c["kind"]: s.significance for c, s in zip(own[0].channels, own[1]._core.scorers)}
+    assert levels == {"process": 0.01, "noise": 0.001}
+    noise = [k for k, c in enumerate(own[0].channels) if c["kind"] == "noise"]
+    monitored = ~own[0].windows["training"].to_numpy()
+    np.testing.assert_allclose(own[0].scores[monitored][:, noise] - shared[0].scores[monitored][:, noise], 1.0,
+                               atol=1e-9)
+    with pytest.raises(ValueError, match="noise_significance"):
+        make_config({"preset": "siso", "noise_significance": -0.1})

@@ -91,8 +91,10 @@ struct DetectorConfig {
   Resampling resampling = Resampling::Independent;
   ProcessTest process_test = ProcessTest::Svm;
   double window_significance = 0.01;  // Residual: a window is negative when its Wald p < this
-  int laguerre_terms = 3;             // Residual: Laguerre directions per channel
-  int residual_ar_order = 0;          // Residual: order of the whitening A(q); 0 = arx_order_a
+  // Wald noise channels' window level (NoiseTest::Wald / Residual); 0 = window_significance.
+  double noise_significance = 0.0;
+  int laguerre_terms = 3;     // Residual: Laguerre directions per channel
+  int residual_ar_order = 0;  // Residual: order of the whitening A(q); 0 = arx_order_a
   // Residual: at most this many breaks (a level shift and a hinge at one row: an unmeasured
   // step or ramp disturbance) fitted per window in the AR fit and the whitened regression
   // (residual_regression.hpp), each kept only when its chi-square(2) score passes

@@ -17,9 +17,9 @@ def test_siso_no_mpm_alarm_in_held_out_control_runs():
                                  ("mpc_siso_fast", "none"))
             for seed in range(4)]
     assert all(r["presets"]["siso"]["refused"] is None for r in runs)
-    # Measured: 3 of 12, all mpc_siso_fast no-change runs (seeds 0, 2, 3: outliers and
-    # step/ramp disturbances at 1-2 s sampling, the residual test's known weakness,
-    # docs/families.md); pid_siso_slow 0 of 8.
+    # Measured: 1 of 12, an mpc_siso_fast no-change run (seed 1: 1-2 s sampling with outliers
+    # and step/ramp disturbances, the residual test's known weakness, docs/families.md; 0 of 12
+    # with single windows at level 0.001, the preset before pooled windows); pid_siso_slow 0 of 8.
     assert false_mpm([r for r in runs if r["family"] == "pid_siso_slow"], "siso") == 0
     assert false_mpm(runs, "siso") <= 3
     # A noise change alone is not a model-plant mismatch (measured: 0 of 4).

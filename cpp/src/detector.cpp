@@ -297,15 +297,12 @@ Eigen::VectorXd Detector::score_window(WindowFeatures& features,
                                        const Eigen::Ref<const Eigen::MatrixXd>& u,
                                        const Eigen::Ref<const Eigen::MatrixXd>& y,
                                        std::string* skip_reason,
-                                       const std::vector<WindowEstimates>& earlier,
-                                       WindowEstimates* estimates) const {
+                                       const std::vector<WindowEstimates>& earlier) const {
   std::vector<Eigen::VectorXd> f;
   std::vector<Eigen::MatrixXd> c;
   Eigen::VectorXd h = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(channels_.size()),
                                                 std::numeric_limits<double>::quiet_NaN());
-  const bool ok = features.extract(u, y, f, skip_reason, &c);
-  if (estimates) *estimates = ok ? WindowEstimates{f, c} : WindowEstimates{};
-  if (!ok) return h;
+  if (!features.extract(u, y, f, skip_reason, &c)) return h;
   for (size_t k = 0; k < channels_.size(); ++k) {
     if (pools(static_cast<int>(k))) {
       if (!f[k].allFinite() || !c[k].allFinite()) continue;  // NaN, as monitor's row

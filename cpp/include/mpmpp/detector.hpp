@@ -133,8 +133,7 @@ class Detector {
   Eigen::VectorXd score_window(WindowFeatures& features, const Eigen::Ref<const Eigen::MatrixXd>& u,
                                const Eigen::Ref<const Eigen::MatrixXd>& y,
                                std::string* skip_reason = nullptr,
-                               const std::vector<WindowEstimates>& earlier = {},
-                               WindowEstimates* estimates = nullptr) const;
+                               const std::vector<WindowEstimates>& earlier = {}) const;
   // Whether channel k's test pools disjoint windows (pooled_windows > 1, a Wald-test process
   // channel), and how many windows apart they are at the model's sample time.
   bool pools(int k) const;

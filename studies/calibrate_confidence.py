@@ -2,12 +2,14 @@
 only and write it as JSON (the package ships python/mpmpp/diagnose/confidence_map.json).
 
     python studies/calibrate_confidence.py [--seeds N] [--first-seed S] [--runs STUDY.json]
-                                           -o MAP.json [--force]
+                                           -o MAP.json [--force] [--cross-fit]
 
 Either runs the diagnosis study on the tuning families (seeds S..S+N-1, default 0-19: the
 seeds docs/families.md reserves for choosing) or reads the runs of an earlier
 ``studies/diagnosis_families.py --json`` output; held-out runs are refused. Labels: a finding
 is right when it names the scheduled effect where it happened (mpmpp.diagnosis_study).
+``--cross-fit`` also prints the reliability of maps fitted on half of the seeds (even / odd)
+scored on the other half, so no finding is scored by a map fitted on it.
 """
 from __future__ import annotations
 
@@ -17,8 +19,8 @@ import sys
 from pathlib import Path
 
 from mpmpp import families as fam
-from mpmpp.diagnose.confidence import fit_map
-from mpmpp.diagnosis_study import run_study
+from mpmpp.diagnose.confidence import fit_map, probability
+from mpmpp.diagnosis_study import reliability_by_effect, reliability_rows, run_study
 from mpmpp.io import atomic_output
 
 
@@ -30,6 +32,7 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int)
     p.add_argument("-o", "--output", required=True, help="the map (JSON)")
     p.add_argument("--force", action="store_true", help="replace an existing map file")
+    p.add_argument("--cross-fit", action="store_true", help="print the reliability of half-seed maps on the other half")
     args = p.parse_args(argv)
     if Path(args.output).exists() and not args.force:
         p.error(f"-o {args.output}: exists (add --force to replace it)")
@@ -51,7 +54,29 @@ def main(argv=None) -> int:
     print(f"{calibration['findings']} findings ({calibration['right']} right) -> {args.output}")
     print("coefficients (standardised features): " + ", ".join(
         f"{n} {c:+.2f}" for n, c in zip(calibration["features"], calibration["coef"])))
+    if args.cross_fit:
+        print(cross_fitted_reliability(runs))
     return 0
+
+
+def cross_fitted_reliability(runs: list) -> str:
+    """Reliability tables with each run's findings scored by the map fitted on the runs of the
+    seeds of the other parity."""
+    scored = []
+    for parity in (0, 1):
+        train = [f for r in runs if r["seed"] % 2 != parity for f in r["findings"]]
+        calibration = fit_map(train, [f["right"] for f in train])
+        scored += [{**r, "findings": [{**f, "confidence": probability(calibration, f)} for f in r["findings"]]}
+                   for r in runs if r["seed"] % 2 == parity]
+    lines = ["cross-fitted (maps fitted on the even / odd seeds, scoring the other half)", "",
+             "| confidence | findings | right |", "| --- | --- | --- |"]
+    lines += [f"| {r['bin']} | {r['n']} | {r['right']}/{r['n']} |" for r in reliability_rows(scored)]
+    lines += ["", "| finding | findings | right | at >= 0.9 | right at >= 0.9 |", "| --- | --- | --- | --- | --- |"]
+    lines += [f"| {r['effect']} | {r['n']} | {r['right']}/{r['n']} | {r['n_high']} | {r['right_high']}/{r['n_high']} |"
+              for r in reliability_by_effect(scored)]
+    high = [f for r in scored for f in r["findings"] if f["confidence"] >= 0.9]
+    lines.append(f"\nat >= 0.9: {sum(f['right'] for f in high)}/{len(high)} right")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

@@ -41,18 +41,22 @@ class DisturbanceCandidate:
     level: float         # likelihood ratio of an innovation-level change (noise_change only)
 
 
-def noise_finding(out: OutputResidual, first_onset: int, logn: float) -> tuple[Finding | None, str | None]:
+def noise_finding(out: OutputResidual, first_onset: int, logn: float,
+                  min_effect: float) -> tuple[Finding | None, str | None]:
     """noise_change or output_drift on an output whose process model passed, or a note when
-    the change after the onset is input-driven (then no disturbance finding)."""
-    return _disturbance_finding(out, first_onset, logn, None)
+    the change after the onset is input-driven (then no disturbance finding). A new noise
+    colour must remove at least ``min_effect`` of the one-step error variance on held-out
+    blocks, as a process finding must."""
+    return _disturbance_finding(out, first_onset, logn, None, min_effect)
 
 
 def drift_finding(out: OutputResidual, first_onset: int, logn: float, drift_onset: int) -> Finding | None:
     """The output_drift finding for a drift that won in the process pool at ``drift_onset``."""
-    return _disturbance_finding(out, first_onset, logn, drift_onset)[0]
+    return _disturbance_finding(out, first_onset, logn, drift_onset, 0.0)[0]
 
 
-def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, drift_onset: int | None):
+def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, drift_onset: int | None,
+                         min_effect: float):
     sig = out.sig
     e = out.e
     ok = np.isfinite(e) & (out.weight > 0)
@@ -65,7 +69,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
         onset = ramp_onset if ramp_stat > 3 * logn else first_onset
     after = ok & (np.arange(len(e)) >= onset)
     fold = [out.fold[0].astype(bool) & after, out.fold[1].astype(bool) & after]
-    e0 = np.nan_to_num(e)
+    e0 = without_spikes(np.nan_to_num(e), ok, out.pieces, out.noise.inverse())
     n_after = int(after.sum())
     if n_after < 4 * AR_ORDER:
         return None, None
@@ -88,14 +92,20 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
 
     candidates = []
     noise_gain = heldout_gain(ar_on)
+    if noise_gain < min_effect * sum(f.sum() for f in fold):
+        noise_gain = -math.inf     # a colour change too small to matter (see min_effect)
     level = 0.0
     if out.split_significant and out.split.variance_before > 0:
-        # Innovation level: likelihood ratio of separate variances (AR colour already fitted).
+        # Innovation level: likelihood ratio of separate variances (AR colour already fitted),
+        # scaled for the innovations' tails: with kurtosis kappa the ratio is (kappa - 1) / 2
+        # times a chi-square, not one (Box 1953; Layard 1973). Spikes in a record make the
+        # Gaussian ratio call a variance split where only their count differs.
         ratio = out.split.variance_after / out.split.variance_before
         nb, na = onset - first_onset, n_after
         pooled = (nb * out.split.variance_before + na * out.split.variance_after) / (nb + na)
         level = (nb + na) * math.log(pooled) - nb * math.log(out.split.variance_before) - na * math.log(
             out.split.variance_after)
+        level *= 2.0 / max(_kurtosis(out, first_onset) - 1.0, 2.0)
     else:
         ratio = 1.0
     onset_params = 1 if onset > first_onset else 0
@@ -171,6 +181,45 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
                    confidence=confidence(conf_stat, params), estimate=estimate,
                    error_before=err.before, error_after=err.after, explanation=text,
                    score=best.score, change=change), None
+
+
+SPIKE_SIGMAS = 5.0          # an innovation this many robust sigmas out is a spike in y
+MAX_SPIKE_SHARE = 0.1       # more than this: heavy tails, not spikes; nothing is removed
+
+
+def without_spikes(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]],
+                   hinv: TransferFunction) -> np.ndarray:
+    """The one-step error ``e`` = H^-1 v with additive outliers of y taken out. A spike s in y at t enters the
+    one-step error as s h(k) at t + k, h the impulse response of H^-1, and an AR correction
+    predicts that tail: with spikes, a right noise model would pass for a wrong one. Spikes
+    are the samples beyond SPIKE_SIGMAS robust sigmas (1.4826 MAD of the piece they lie in);
+    each is taken as s = e(t) and its tail subtracted (an additive-outlier intervention), in
+    time order so that a spike is measured with the earlier ones' tails gone."""
+    limit = np.full(len(e), np.inf)
+    centre = np.zeros(len(e))
+    for a, b in pieces:
+        x = e[a:b][ok[a:b]]
+        if len(x):
+            centre[a:b] = np.median(x)
+            limit[a:b] = SPIKE_SIGMAS * 1.4826 * np.median(np.abs(x - centre[a]))
+    candidates = np.flatnonzero(ok & (np.abs(e - centre) > limit))
+    if not len(candidates) or len(candidates) > MAX_SPIKE_SHARE * ok.sum():
+        return e
+    tail = hinv.filter(np.r_[1.0, np.zeros(len(e) - 1)])
+    tail = tail[: max(int(np.flatnonzero(np.abs(tail) > 1e-6 * np.abs(tail).max()).max()) + 1, 1)]
+    cleaned = e.copy()
+    for t in candidates:
+        # a candidate made only by an earlier spike's tail is gone by now
+        if abs(cleaned[t] - centre[t]) > limit[t]:
+            k = min(len(tail), len(e) - t)
+            cleaned[t:t + k] -= cleaned[t] * tail[:k]
+    return cleaned
+
+
+def _kurtosis(out: OutputResidual, first_onset: int) -> float:
+    """Kurtosis of the whitened error (each piece at unit variance) from ``first_onset`` on."""
+    r = out.r[first_onset:][out.weight[first_onset:] > 0]
+    return float(np.mean(r**4) / np.mean(r**2) ** 2)
 
 
 def _drift_onset(out: OutputResidual, first_onset: int, grid: int = 120) -> tuple[int, float]:

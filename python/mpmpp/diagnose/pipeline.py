@@ -144,7 +144,7 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     for out in outputs:
         if out.name not in with_process:
             try:
-                f, note = noise_finding(out, first_onset, logn)
+                f, note = noise_finding(out, first_onset, logn, min_effect)
             except InsufficientData as exc:
                 notes.append(str(exc))
                 continue

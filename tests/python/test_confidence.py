@@ -16,11 +16,17 @@ def finding(score, before, after, pb, pa, effect="gain"):
 
 
 def test_features():
+    def kind(name):
+        return [1.0 if f == f"effect_{name}" else 0.0 for f in conf.FEATURES[4:]]
+
     x = conf.features(finding(99.0, 1.0, 0.9, 0.5, 0.1))
-    assert x == pytest.approx([math.log(100.0), 0.1, 0.8, math.log(0.5), 1.0])
+    assert x == pytest.approx([math.log(100.0), 0.1, 0.8, math.log(0.5), *kind("gain")])
     # unknown process errors: no fall, the smallest share; a disturbance effect
     y = conf.features(finding(-3.0, 1.0, 0.5, None, None, effect="noise_change"))
-    assert y == pytest.approx([0.0, 0.5, 0.0, math.log(1e-3), 0.0])
+    assert y == pytest.approx([0.0, 0.5, 0.0, math.log(1e-3), *kind("noise_change")])
+    # an unmodelled measured input is the same search as a missing coupling
+    z = conf.features(finding(9.0, 1.0, 0.9, 0.5, 0.4, effect="unmodeled_input"))
+    assert z[4:] == pytest.approx(kind("missing_coupling"))
 
 
 def test_fitted_map_reproduces_sklearn_probabilities():

@@ -4,8 +4,10 @@ The held-out likelihood gain alone (its chi-square CDF, ``scoring.confidence``) 
 finding on long closed-loop records, right or wrong. What tells a right finding from a wrong
 one is how much evidence it has relative to the record, whether its update lowers the held-out
 errors (a finding whose update barely lowers them is not a confident one), and how large the
-input-explained part of the error is against the disturbance. A logistic map of these features
-is fitted on the TUNING scenario families only (studies/calibrate_confidence.py writes
+input-explained part of the error is against the disturbance, and which effect it names (the
+effects differ in how often the search confuses them: a gain is what an unmodelled valve
+nonlinearity looks like to a linear fit, an output drift is rarely anything else). A logistic
+map of these features is fitted on the TUNING scenario families only (studies/calibrate_confidence.py writes
 confidence_map.json); its reliability is reported on the held-out families
 (studies/diagnosis_families.py, docs/diagnose.md).
 """
@@ -18,10 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .result import PROCESS_EFFECTS
+from .result import EFFECTS
 
 MAP_FILE = Path(__file__).with_name("confidence_map.json")
-FEATURES = ("log_score", "one_step_fall", "process_fall", "process_share", "process_effect")
+# A missing coupling and an unmodelled measured input are the same search (a new input channel).
+_EFFECT_KIND = {"unmodeled_input": "missing_coupling"}
+_KINDS = tuple(e for e in EFFECTS if e not in _EFFECT_KIND)
+FEATURES = ("log_score", "one_step_fall", "process_fall", "process_share") + tuple(f"effect_{k}" for k in _KINDS)
 
 
 def _ratio_fall(before, after) -> float:
@@ -40,7 +45,7 @@ def features(finding: dict) -> np.ndarray:
         _ratio_fall(eb, finding.get("error_after")),
         _ratio_fall(pb, finding.get("process_error_after")),
         max(share, math.log(1e-3)),
-        1.0 if finding["effect"] in PROCESS_EFFECTS else 0.0,
+        *(1.0 if _EFFECT_KIND.get(finding["effect"], finding["effect"]) == k else 0.0 for k in _KINDS),
     ])
 
 

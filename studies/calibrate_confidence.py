@@ -8,6 +8,7 @@ Either runs the diagnosis study on the tuning families (seeds S..S+N-1, default 
 seeds docs/families.md reserves for choosing) or reads the runs of an earlier
 ``studies/diagnosis_families.py --json`` output; held-out runs are refused. Labels: a finding
 is right when it names the scheduled effect where it happened (mpmpp.diagnosis_study).
+Findings that carry their own calibration (the valve fit's) are neither fitted nor rescored.
 ``--cross-fit`` also prints the reliability of maps fitted on half of the seeds (even / odd)
 scored on the other half, so no finding is scored by a map fitted on it.
 """
@@ -45,7 +46,7 @@ def main(argv=None) -> int:
     if held_out:
         print(f"calibrate_confidence: error: held-out families in the runs ({', '.join(held_out)})", file=sys.stderr)
         return 2
-    findings = [f for r in runs for f in r["findings"]]
+    findings = [f for r in runs for f in r["findings"] if not f.get("calibrated")]
     calibration = fit_map(findings, [f["right"] for f in findings])
     calibration["fitted_on"] = {"families": sorted({r["family"] for r in runs}),
                                 "seeds": sorted({r["seed"] for r in runs})}
@@ -64,9 +65,10 @@ def cross_fitted_reliability(runs: list) -> str:
     seeds of the other parity."""
     scored = []
     for parity in (0, 1):
-        train = [f for r in runs if r["seed"] % 2 != parity for f in r["findings"]]
+        train = [f for r in runs if r["seed"] % 2 != parity for f in r["findings"] if not f.get("calibrated")]
         calibration = fit_map(train, [f["right"] for f in train])
-        scored += [{**r, "findings": [{**f, "confidence": probability(calibration, f)} for f in r["findings"]]}
+        scored += [{**r, "findings": [f if f.get("calibrated") else {**f, "confidence": probability(calibration, f)}
+                                      for f in r["findings"]]}
                    for r in runs if r["seed"] % 2 == parity]
     lines = ["cross-fitted (maps fitted on the even / odd seeds, scoring the other half)", "",
              "| confidence | findings | right |", "| --- | --- | --- |"]

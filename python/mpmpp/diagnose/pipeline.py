@@ -164,7 +164,7 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
                                         sig.seconds_to_index(f.onset_s), block)
             f.process_error_before, f.process_error_after = (held_out_rms(p, block) for p in parts[f.id])
         f.evidence_confidence = f.confidence
-        calibrated = calibrated_confidence({**f.to_dict(), "score": f.score})
+        calibrated = None if f.calibrated else calibrated_confidence({**f.to_dict(), "score": f.score})
         if calibrated is not None:
             f.confidence = calibrated
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,

@@ -75,6 +75,10 @@ class Finding:
     # the chi-square CDF of the held-out gain; ``confidence`` is the calibrated probability
     # that the finding is right (diagnose/confidence.py)
     evidence_confidence: float = field(repr=False, default=float("nan"))
+    # ``confidence`` is already a probability calibrated on the population the finding belongs
+    # to (the valve fit's, on single PI loops with and without stiction): the scenario-family
+    # map (diagnose/confidence.py) leaves it as it is.
+    calibrated: bool = field(repr=False, default=False)
     # An actuator drives several outputs: the channel changes of the outputs other than
     # ``output`` (the one the finding is reported on), and every output it drives.
     extra_changes: list[ModelChange] = field(repr=False, default_factory=list)

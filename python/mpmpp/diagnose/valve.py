@@ -162,7 +162,7 @@ def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> F
     kind = {"stick_slip": "stick-slip", "he": "stick-slip (He's model)", "backlash": "backlash"}[fit.kind]
     return Finding(
         id="", effect="input_nonlinearity", output=out.name, input=name, onset_s=0.0,
-        confidence=fit.confidence,
+        confidence=fit.confidence, calibrated=True,
         estimate={"kind": fit.kind, "S": s, "J": j, "units": "input", "actuator": actuator,
                   "gain_ratio": ratio,
                   "likelihood_gain_per_sample": fit.gain_per_sample},

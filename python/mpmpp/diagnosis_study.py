@@ -30,6 +30,7 @@ from .evaluate import nominal_model
 from .parallel import run_tasks
 from .scenario import parse_scenario
 from .simulate import simulate
+from .step_response import step_response_error
 from .update import update
 
 # Effects whose changed channel is linear, so a step response measures the model error.
@@ -72,29 +73,6 @@ def finding_right(f: dict, effect: str, change: dict | None) -> bool:
     if effect in ("noise_change", "output_drift"):
         return f.get("output") == change["output"]
     return f.get("output") == change["output"] and f.get("input") == change["input"]
-
-
-def step_error(model_channel: TransferFunction | None, true_channel: TransferFunction) -> float:
-    """RMS over the settling horizon of the step-response difference, relative to the true
-    channel's steady-state gain (a missing channel has a zero response)."""
-    horizon = _settling_samples(true_channel, model_channel)
-    s_true = np.asarray(true_channel.step(horizon))
-    s_model = np.zeros(horizon) if model_channel is None else np.asarray(model_channel.step(horizon))
-    scale = max(abs(float(true_channel.dc_gain())), 1e-12)
-    return float(np.sqrt(np.mean((s_true - s_model) ** 2)) / scale)
-
-
-def _settling_samples(*channels) -> int:
-    """Longest delay plus 5 of the slowest time constant (in samples) of the channels."""
-    slowest, delay = 1.0, 0
-    for g in channels:
-        if g is None:
-            continue
-        delay = max(delay, int(g.delay))
-        for p in np.abs(np.asarray(g.poles())):
-            if 0.0 < p < 1.0:
-                slowest = max(slowest, -1.0 / math.log(p))
-    return int(min(delay + 5.0 * slowest + 10, 20000))
 
 
 def _channel(model, output: str, column: str) -> TransferFunction | None:
@@ -152,12 +130,12 @@ def update_quality(model, data, top, change: dict) -> dict:
     """Shown error and true step-response error of the changed channel, before and after
     applying the top process finding (no finding: nothing applied, nothing falls)."""
     truth = change["channel"]
-    before = step_error(_channel(model, change["output"], change["input"]), truth)
+    before = step_response_error(_channel(model, change["output"], change["input"]), truth)
     if top is None:
         return {"true_before": before, "true_after": before, "shown_before": None, "shown_after": None,
                 "process_before": None, "process_after": None}
     up = update(model, data, top.id)
-    after = step_error(_channel(up.model, change["output"], change["input"]), truth)
+    after = step_response_error(_channel(up.model, change["output"], change["input"]), truth)
     shown = next((e for e in up.errors if e.output == top.output), up.errors[0])
     return {"true_before": before, "true_after": after,
             "shown_before": shown.error_before, "shown_after": shown.error_after,

@@ -29,6 +29,7 @@ import numpy as np
 from .. import _core
 from .._core import TransferFunction
 from ..signals import Signals, per_segment
+from ..step_response import step_response_error
 from .errors import held_out_error
 from .noise import drift_finding
 from .refine import refine
@@ -50,6 +51,12 @@ DELAY_GRID_EFFECTS = ("delay", "missing_coupling", "unmodeled_input")
 # loop the controller's feedback path has the inverse sign and fits readily as a "process".
 SIGN_FLIP_Z = 5.0
 SCALED_CHANNEL_EFFECTS = ("gain", "time_constant", "delay")
+# A changed channel is material when its step response moves by this much (RMS over the
+# settling horizon, relative to the model's gain), whatever share of the one-step error it
+# explains: with little excitation under a disturbance-dominated error, a 1.6x gain removes
+# less than the min_effect share of the one-step error variance. 0.2 is the model error MPC
+# tuning is commonly made robust to (gain errors of 20-30 %); chosen a priori.
+MATERIAL_STEP_CHANGE = 0.2
 
 
 @dataclass
@@ -286,6 +293,19 @@ def _present_in_both_halves(out: OutputResidual, r: np.ndarray, fit: Fit, respon
     return drop[fit.onset:mid].sum() > 0.0 and drop[mid:].sum() > 0.0
 
 
+def _material(out: OutputResidual, fit: Fit, min_effect: float) -> bool:
+    """Practical significance: the fit removes ``min_effect`` of the one-step error variance
+    after its onset on held-out data, or it moves a modelled channel's step response by
+    MATERIAL_STEP_CHANGE."""
+    if fit.heldout >= min_effect * out.weight[fit.onset:].sum():
+        return True
+    if fit.shape.effect not in SCALED_CHANNEL_EFFECTS:
+        return False
+    s = fit.shape.shape
+    changed = TransferFunction(np.asarray(s.num) * fit.theta, s.den, s.delay)
+    return step_response_error(changed, fit.shape.nominal) >= MATERIAL_STEP_CHANGE
+
+
 def flips_sign_without_evidence(fit: Fit, action: int = 0) -> bool:
     """A gain / time-constant / delay fit whose channel scale theta is negative reverses the
     channel's sign. It stands only with |theta| >= SIGN_FLIP_Z se and, in a single loop whose
@@ -358,7 +378,7 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
     found = []
     for round_ in range(MAX_FINDINGS_PER_OUTPUT):
         top = first.top if round_ == 0 else search.best(r, responses)
-        if top is None or top.score <= 0.0 or top.heldout < min_effect * out.weight[top.onset:].sum():
+        if top is None or top.score <= 0.0 or not _material(out, top, min_effect):
             break
         search.taken.add(top.shape.column)
         if top.shape.effect == "output_drift":

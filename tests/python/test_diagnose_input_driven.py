@@ -78,11 +78,15 @@ def run(family, seed, effect):
 
 
 def test_process_change_below_the_floor_is_not_a_noise_change():
-    """A tuning-family dead-time change no process candidate explains: it was reported as
-    noise_change at confidence 0.92; the inputs explain the change, so a note says so."""
+    """A tuning-family dead-time change (2 -> 4 samples) the candidates did not explain in the
+    split's whitened domain: it was reported as noise_change at confidence 0.92. The inputs
+    explain the change, so no noise change is named and the candidates, scored again with the
+    disturbance unchanged, find the delay."""
     res = run("mpc_siso_disturbed", 1, "delay")
     assert not any(f.effect == "noise_change" for f in res.findings)
-    assert any("inputs explain the change" in n for n in res.notes)
+    top = res.findings[0]
+    assert top.effect == "delay" and top.estimate["delay_samples"] == 4
+    assert abs(top.onset_s - 39705.0) < 900.0
 
 
 def test_noise_change_control_is_still_named():

@@ -124,9 +124,12 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
                for i, name in enumerate(sig.outputs)]
     loops = single_loops(sig, data)
     found: list[Finding] = []
+
+    def actions_of(out):
+        return {sig.inputs[lp.input]: lp.action for lp in loops if lp.output == out.i}
+
     for out in outputs:
-        actions = {sig.inputs[lp.input]: lp.action for lp in loops if lp.output == out.i}
-        found += process_findings(out, first_onset, min_segment, step, logn, min_effect, actions)
+        found += process_findings(out, first_onset, min_segment, step, logn, min_effect, actions_of(out))
     # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels.
     # A single loop's valve is judged by the closed-loop Hammerstein fit; its stiction replaces
     # them. An input that drives several outputs gets the actuator candidates, which replace
@@ -144,14 +147,26 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     for out in outputs:
         if out.name not in with_process:
             try:
-                f, note = noise_finding(out, first_onset, logn, min_effect)
+                verdict = noise_finding(out, first_onset, logn, min_effect)
             except InsufficientData as exc:
                 notes.append(str(exc))
                 continue
-            if note is not None:
-                notes.append(note)
-            if f is not None:
-                found.append(f)
+            if verdict.input_driven and out.split_significant:
+                # The disturbance split found where the error changed, and each side's AR
+                # correction absorbed what the process change made predictable; the inputs
+                # explain the change, so the candidates are scored again with the disturbance
+                # unchanged (one correction throughout).
+                unchanged = output_residual(sig, out.i, min_segment, first_onset, block,
+                                            out.noise_estimated, disturbance_split=False)
+                redo = process_findings(unchanged, first_onset, min_segment, step, logn, min_effect,
+                                        actions_of(out))
+                if redo:
+                    found += redo
+                    continue
+            if verdict.note is not None:
+                notes.append(verdict.note)
+            if verdict.finding is not None:
+                found.append(verdict.finding)
     found.sort(key=lambda f: -f.score)
     for k, f in enumerate(found, start=1):
         f.id = f"F{k}"

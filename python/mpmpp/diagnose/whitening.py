@@ -79,9 +79,10 @@ class OutputResidual:
 
 
 def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, block: int,
-                    noise_estimated: bool = False) -> OutputResidual:
+                    noise_estimated: bool = False, disturbance_split: bool = True) -> OutputResidual:
     """Residuals of output i, its disturbance split and whitening, and the held-out blocks
-    (even / odd blocks of ``block`` samples)."""
+    (even / odd blocks of ``block`` samples). ``disturbance_split`` False: one AR correction
+    per data segment, the hypothesis that the disturbance did not change."""
     n = len(sig.time_s)
     row, noise = sig.rows[i], sig.noise[i]
     v = per_segment(sig, lambda yy, uu: _core.output_error(row, yy, uu), sig.y[:, i], sig.u)
@@ -99,7 +100,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
     split_onset = first_onset + split.onset if split.statistic > 0 else None
     # The split is kept when it beats its parameters (AR coefficients, variance, onset).
-    split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
+    split_significant = disturbance_split and split.statistic > (AR_ORDER + 2) * math.log(n)
     pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
     # The corrections and levels are those of the disturbance less its steps and ramps: fitted
     # with them in, the AR gets roots near 1 (A(1) 0.5 on a ramped test loop, 1.2 without),

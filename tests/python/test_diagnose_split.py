@@ -1,0 +1,38 @@
+"""A process change the disturbance split has absorbed (diagnose/pipeline.py, noise.py): the AR
+split of the one-step error finds where the error changed and gives each side its own
+correction, which also absorbs what a process change made predictable. When the inputs explain
+the change, the process candidates are scored again with the disturbance unchanged."""
+import importlib
+
+import pytest
+
+from mpmpp import families as fam
+from mpmpp.diagnose import diagnose
+from mpmpp.diagnosis_study import nominal_model, simulate
+
+whitening = importlib.import_module("mpmpp.diagnose.whitening")
+pipeline = importlib.import_module("mpmpp.diagnose.pipeline")
+
+
+@pytest.mark.parametrize("seed", [3, 12])
+def test_a_tripled_time_constant_hidden_by_the_split_is_found(seed):
+    spec, expect = fam.family("pi_siso").draw(seed, None, "time_constant")
+    model, data = nominal_model(spec), simulate(spec)
+    res = diagnose(model, data)
+    top = next(f for f in res.findings if f.effect in ("gain", "time_constant", "delay"))
+    assert top.effect == "time_constant"
+    assert top.estimate["time_constant_ratio"] == pytest.approx(expect["size"], rel=0.35)
+    assert abs(top.onset_s - expect["onset_s"]) < 3600.0
+    # the split alone hides it: it lands at the change (within a few minutes)
+    sig = pipeline.diagnosis_signals(model, data, None).sig
+    lengths = pipeline.record_lengths(len(data), model.sample_time_s)
+    out = whitening.output_residual(sig, 0, lengths.min_segment, 0, lengths.block, True)
+    assert out.split_significant
+    assert abs(sig.time_s[out.split_onset] - expect["onset_s"]) < 900.0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_noise_change_alone_gets_no_process_finding(seed):
+    spec, _ = fam.family("mpc_siso_controls").draw(seed, None, "noise_change")
+    res = diagnose(nominal_model(spec), simulate(spec))
+    assert not any(f.effect in ("gain", "time_constant", "delay", "missing_coupling") for f in res.findings)

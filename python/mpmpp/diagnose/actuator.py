@@ -33,120 +33,136 @@ PARAMS = 2 + 1 + 1   # kind and size, onset, noise correction (nominal or refitt
 
 @dataclass
 class ActuatorCandidate:
-    """One valve block (the model file's actuator form, absolute input units) and its fit."""
+    """One valve block (the model file's actuator form, absolute input units) and its fit under
+    the noise correction that fits it best: per training fold k, the in-fold statistic at the
+    onset chosen on fold k (``fit[k]``) and the other fold's held-out statistic there
+    (``held[k]``, per driven output)."""
 
     block: dict
-    onset: int = 0
-    heldout: float = -np.inf
-    heldout_per_output: list = field(default_factory=list)
+    correction: str                # "model" (the output's nominal correction) or "refitted"
+    onset: int                     # chosen on both folds together
+    fit: np.ndarray                # (2,)
+    held: np.ndarray               # (2, outputs)
 
     @property
     def kind(self) -> str:
         return self.block["kind"]
 
-    def score(self, logn: float) -> float:
-        return self.heldout - 0.5 * PARAMS * logn
+
+def _in_fold(k):
+    """Search objective of training fold k (None: both folds, the block that is reported)."""
+    return (lambda c: c.fit.sum()) if k is None else (lambda c: c.fit[k])
 
 
 class ActuatorSearch:
-    """The actuator candidates of one input, scored on the outputs its channels drive."""
+    """The actuator candidates of one input, scored on the outputs its channels drive.
+
+    Kind, size and onset are chosen on each fold's in-fold statistic and scored on the other
+    fold (cross-validation: the held-out statistic of the chosen candidate carries no
+    selection over the ~80 candidates); the reported block is the one chosen on both folds."""
 
     def __init__(self, outputs: list[OutputResidual], sig: Signals, j: int, onsets: np.ndarray):
         self.sig, self.j, self.onsets = sig, j, onsets
         self.op = sig.u[:, j] + sig.operating_point[sig.inputs[j]]
         self.driven = [out for out in outputs if out.row[j] is not None]
-        self.refitted = [RefittedNoise(out.free, out.fold, onsets) for out in self.driven]
+        self.refitted = [RefittedNoise(_one_step_error(out), out.fold, onsets) for out in self.driven]
+        self.corrections = {"model": lambda i, out, d: model_correction_gains(out, d, self.onsets),
+                            "refitted": lambda i, out, d: self.refitted[i].gains(out.noise.inverse().filter(d))}
+        moves = np.abs(np.diff(self.op[np.isfinite(self.op)]))
+        self.scale = float(np.median(moves[moves > 0])) if np.any(moves > 0) else 0.0   # median move
+        self._cache: dict = {}
+        # the input's median before each onset (throughout for the first): a saturation sets
+        # in on an input that worked inside its band, so the band holds that median
+        finite = np.isfinite(self.op)
+        self.median_before = np.array([np.median(self.op[:k][finite[:k]]) if finite[:k].any() else np.median(self.op[finite])
+                                       for k in onsets])
 
     def evaluate(self, block: dict) -> ActuatorCandidate:
-        """The candidate's onset (one for all its outputs: chosen on each fold's in-fold
-        statistic, summed over the outputs) and its held-out statistic, under the better of two
-        noise corrections: the nominal one (the output's step + ramp disturbances fitted
-        beside), and one refitted with the candidate. The first suits slow effects (a
-        saturated input wandering off, which a refitted AR would difference away in the
-        nominal residual too), the second effects the nominal correction has absorbed (a
-        limit cycle)."""
+        """The candidate under the better of two noise corrections: the nominal one (the
+        output's step + ramp disturbances fitted beside), and one refitted with the candidate.
+        The first suits slow effects (a saturated input wandering off, which a refitted AR
+        would difference away in the nominal residual too), the second effects the nominal
+        correction has absorbed (a limit cycle). One onset for all the input's outputs."""
+        key = tuple(sorted(block.items()))
+        if key in self._cache:
+            return self._cache[key]
         position = per_segment(self.sig, lambda x: valve_position(block, x), self.op)
         moved = np.nan_to_num(position - self.op)
+        responses = [out.channel_response(out.row[self.j], moved) for out in self.driven]
+        allowed = np.ones(len(self.onsets), bool)
+        if block["kind"] == "saturation":
+            allowed = (block["lower"] <= self.median_before) & (self.median_before <= block["upper"])
         best = None
-        for domain in (self._nominal_gains, self._refitted_gains):
-            gains = [domain(k, out, out.channel_response(out.row[self.j], moved)) for k, out in enumerate(self.driven)]
-            in_fold = sum(g.in_fold for g in gains)
+        for correction, domain in self.corrections.items():
+            gains = [domain(i, out, d) for i, (out, d) in enumerate(zip(self.driven, responses))]
+            in_fold = np.where(allowed[:, None], sum(g.in_fold for g in gains), -np.inf)
             picks = np.argmax(in_fold, axis=0)                    # per training fold
-            per_output = [float(sum(g.held_out[picks[k], k] for k in (0, 1))) for g in gains]
-            cand = ActuatorCandidate(block, int(self.onsets[np.argmax(in_fold.sum(axis=1))]), sum(per_output),
-                                     per_output)
-            if best is None or cand.heldout > best.heldout:
+            cand = ActuatorCandidate(block, correction, int(self.onsets[np.argmax(in_fold.sum(axis=1))]),
+                                     in_fold[picks, [0, 1]],
+                                     np.array([[g.held_out[picks[k], k] for g in gains] for k in (0, 1)]))
+            if best is None or cand.fit.sum() > best.fit.sum():
                 best = cand
+        self._cache[key] = best
         return best
 
-    def _refitted_gains(self, k: int, out: OutputResidual, response: np.ndarray) -> OnsetGains:
-        """``response``: the candidate's G (f(u) - u) in output ``out``."""
-        return self.refitted[k].gains(out.noise.inverse().filter(response))
+    def best(self, k: int | None) -> ActuatorCandidate:
+        """The best candidate on training fold k's in-fold statistic (both folds: None)."""
+        objective = _in_fold(k)
+        return max(self.best_hysteresis(objective), self.best_saturation(objective), key=objective)
 
-    def _nominal_gains(self, k: int, out: OutputResidual, response: np.ndarray) -> OnsetGains:
-        """Drop of the whitened squared error (nominal AR, beside the output's level and steps +
-        ramps) from each onset on, per fold."""
-        project = out.nuisance.project if out.nuisance is not None else (lambda x: x)
-        r = project(out.r)
-        w = project(out.whiten(response))
-        drop = out.weight * (r**2 - (r - w) ** 2)
-        suffix = [np.cumsum((drop * f)[::-1])[::-1][self.onsets] for f in out.fold]
-        return OnsetGains(self.onsets, np.column_stack(suffix), np.column_stack(suffix[::-1]))
-
-    def best_hysteresis(self, logn: float) -> ActuatorCandidate | None:
+    def best_hysteresis(self, objective) -> ActuatorCandidate:
         """The best kind and size on a grid of thirds of an octave of the median input move
         (fine: a deadband or stick-slip a quarter too wide predicts its jumps at the wrong
         samples and explains nothing)."""
-        moves = np.abs(np.diff(self.op[np.isfinite(self.op)]))
-        scale = float(np.median(moves[moves > 0])) if np.any(moves > 0) else 0.0
-        if scale == 0.0:
-            return None
         blocks = []
-        for w in scale * WIDTHS:
+        for w in self.scale * WIDTHS:
             blocks += [{"kind": "backlash", "S": w}, {"kind": "deadband", "width": w},
                        {"kind": "stick_slip", "S": w, "J": SLIP_RATIO * w}]
-        return max((self.evaluate(b) for b in blocks), key=lambda c: c.score(logn))
+        return max((self.evaluate(b) for b in blocks), key=objective)
 
-    def best_saturation(self, logn: float) -> ActuatorCandidate:
+    def best_saturation(self, objective) -> ActuatorCandidate:
         """Upper limits alone, lower limits alone, then the best of them with the other side;
-        each limit on a quantile grid of the input, refined by halving the quantile step."""
+        each limit on a quantile grid of the input, refined by halving the quantile step. The
+        band is at least the smallest hysteresis width wide: a narrower one is a valve that no
+        longer moves, a dead channel (a gain change), not a limit the input runs into."""
         op = self.op[np.isfinite(self.op)]
         ends = {"lower": float(op.min()), "upper": float(op.max())}
 
         def best_limit(block, side):
             other = block["upper"] if side == "lower" else block["lower"]
 
-            def valid(level):   # on its side of the other limit
-                return level < other if side == "lower" else level > other
-
             def tried(q):
                 level = float(np.quantile(op, min(max(q, 0.0), 1.0)))
-                return self.evaluate({**block, side: level}) if valid(level) else None
+                band = other - level if side == "lower" else level - other
+                return self.evaluate({**block, side: level}) if band >= WIDTHS[0] * self.scale else None
 
             grid = [(c, q) for q in LIMIT_QUANTILES if (c := tried(q)) is not None]
             if not grid:
                 return None
-            best, q = max(grid, key=lambda cq: cq[0].score(logn))
+            best, q = max(grid, key=lambda cq: objective(cq[0]))
             dq = LIMIT_QUANTILES[1] - LIMIT_QUANTILES[0]
             for _ in range(3):
                 dq /= 2
                 for q_try in (q - dq, q + dq):
                     cand = tried(q_try)
-                    if cand is not None and cand.score(logn) > best.score(logn):
+                    if cand is not None and objective(cand) > objective(best):
                         best, q = cand, q_try
             return best
 
         start = {"kind": "saturation", **ends}
-        one = max((best_limit(start, side) for side in ("lower", "upper")), key=lambda c: c.score(logn))
+        one = max((best_limit(start, side) for side in ("lower", "upper")), key=objective)
         other = "lower" if one.block["lower"] == ends["lower"] else "upper"
         two = best_limit(one.block, other)
-        return two if two is not None and two.score(logn) > one.score(logn) else one
+        return two if two is not None and objective(two) > objective(one) else one
 
 
 def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: int, min_segment: int,
-                      step: int, logn: float, min_effect: float, skip=frozenset()) -> list[Finding]:
+                      step: int, logn: float, min_effect: float, skip=frozenset(),
+                      judged_throughout=frozenset()) -> list[Finding]:
     """Per input (except those in ``skip``), the best actuator candidate when it passes the
-    held-out tests."""
+    held-out tests. For inputs in ``judged_throughout`` (single loops, whose valve the
+    Hammerstein fit judged over the whole record) only a nonlinearity that set in during the
+    record is reported."""
     n = len(sig.time_s)
     onsets = np.unique(np.r_[first_onset, np.arange(first_onset + min_segment, n - min_segment + 1, step)])
     found = []
@@ -154,18 +170,19 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
         if name in skip:
             continue
         search = ActuatorSearch(outputs, sig, j, onsets)
-        if not search.driven:
+        if not search.driven or search.scale == 0.0:
             continue
-        hysteresis = search.best_hysteresis(logn)
-        if hysteresis is None:
-            continue
-        best = max(hysteresis, search.best_saturation(logn), key=lambda c: c.score(logn))
-        if best.score(logn) <= 0.0:
+        # per output: the held-out statistic of the candidates chosen on fold 0 and on fold 1
+        heldout_per_output = search.best(0).held[0] + search.best(1).held[1]
+        heldout = float(heldout_per_output.sum())
+        score = heldout - 0.5 * PARAMS * logn
+        best = search.best(None)
+        if score <= 0.0 or (name in judged_throughout and best.onset <= first_onset):
             continue
         n_after = sum(out.weight[best.onset:].sum() for out in search.driven)
-        if best.heldout < min_effect * n_after:
+        if heldout < min_effect * n_after:
             continue
-        k_top = int(np.argmax(best.heldout_per_output))
+        k_top = int(np.argmax(heldout_per_output))
         top = search.driven[k_top]
         changes = [ModelChange(output=out.name, input=name, actuator=best.block) for out in search.driven]
         err = held_out_error(top, best.onset, changes[k_top])
@@ -174,16 +191,70 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
         onset_s = float(sig.time_s[best.onset])
         found.append(Finding(
             id="", effect="input_nonlinearity", output=top.name, input=name, onset_s=onset_s,
-            confidence=confidence(best.heldout, PARAMS),
-            estimate={"kind": best.kind, "units": "input", "actuator": best.block,
+            confidence=confidence(heldout, PARAMS),
+            estimate={"kind": best.kind, "units": "input", "actuator": best.block, "noise_correction": best.correction,
                       **{k: v for k, v in best.block.items() if k != "kind"}},
             error_before=err.before, error_after=err.after,
             explanation=(f"actuator {name} behaves like {_describe(best.block)}"
                          + (f" since t={onset_s / 3600:.1f} h" if best.onset > 0 else "")),
-            score=best.score(logn), change=changes[k_top],
+            score=score, change=changes[k_top],
             extra_changes=[c for k, c in enumerate(changes) if k != k_top],
             outputs_driven=tuple(out.name for out in search.driven)))
     return found
+
+
+def model_correction_gains(out: OutputResidual, response: np.ndarray, onsets: np.ndarray) -> OnsetGains:
+    """Statistics of the output-error term ``response`` switched on at each onset, whitened
+    with the output's own correction (nominal AR, beside its level and steps + ramps): per
+    fold, n log(SSE nominal / SSE with the term), the variance re-estimated as the refitted
+    correction does, so the two compare on one likelihood scale."""
+    project = out.nuisance.project if out.nuisance is not None else (lambda x: x)
+    r = project(out.r)
+    w = project(out.whiten(response))
+    total = [float(np.sum(f * r**2)) for f in out.fold]
+    drop = out.weight * (r**2 - (r - w) ** 2)
+    stat = np.column_stack([f.sum() * np.log(t / np.maximum(t - np.cumsum((drop * f)[::-1])[::-1][onsets], 1e-300 * t))
+                            for f, t in zip(out.fold, total)])
+    return OnsetGains(onsets, stat, stat[:, ::-1])
+
+
+def rival_score(rival: Finding, nl: Finding, outputs: list[OutputResidual]) -> float:
+    """The held-out statistic of a linear stand-in ``rival`` for the actuator finding ``nl``
+    under the noise correction ``nl`` was scored with, so the two compare on one likelihood:
+    the rival's channel change from its onset, or a drift's step + ramp from its onset
+    (amplitudes by least squares on all rows). No penalty: the comparison leans to the linear
+    explanation."""
+    out = next(o for o in outputs if o.name == rival.output)
+    onset = out.sig.seconds_to_index(rival.onset_s)
+    hinv = out.noise.inverse()
+    e = _one_step_error(out)
+    if rival.effect == "output_drift":
+        t = np.arange(len(e), dtype=float)
+        shapes = np.column_stack([np.where(t >= onset, d, 0.0) for d in (np.ones_like(t), t - onset)])
+        columns = np.column_stack([hinv.filter(c) for c in shapes.T])
+        rows = (out.weight > 0) & (t >= onset)
+        response = shapes @ np.linalg.lstsq(columns[rows], e[rows], rcond=None)[0]
+    elif rival.change is not None and rival.change.channel is not None:
+        j = out.sig.inputs.index(rival.input)
+        u = np.nan_to_num(out.sig.u[:, j])
+        response = out.channel_response(rival.change.channel, u) - out.channel_response(out.row[j], u)
+    else:
+        return rival.score
+    at = np.array([onset])
+    if nl.estimate.get("noise_correction") == "refitted":
+        gains = RefittedNoise(e, out.fold, at).gains(hinv.filter(response))
+    else:
+        gains = model_correction_gains(out, response, at)
+    return float(gains.held_out.sum())
+
+
+def _one_step_error(out: OutputResidual) -> np.ndarray:
+    """The output's one-step error less its level. Its step + ramp disturbances stay in: the
+    refitted AR takes them as it takes them with the candidate, and fitted on the nominal
+    error alone they would absorb part of what a candidate explains (a deadband's slow
+    wander)."""
+    e = np.nan_to_num(out.e)
+    return e - np.sum(e * out.weight) / out.weight.sum()
 
 
 def _describe(block: dict) -> str:

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..record_length import minimum_rows, require_rows, scaled_rows
 from ..signals import Signals, extract
-from .actuator import actuator_findings
+from .actuator import actuator_findings, rival_score
 from .confidence import calibrated_confidence
 from .errors import one_step_errors
 from .loops import single_loops
@@ -138,9 +138,10 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     for nl in valves:
         found = [f for f in found if not _actuator_rival(f, nl)] + [nl]
     judged = actuated | {nl.input for nl in valves}
-    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect, skip=judged):
+    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect, skip=judged,
+                                judged_throughout={sig.inputs[lp.input] for lp in loops}):
         rivals = [f for f in found if _actuator_rival(f, nl)]
-        if nl.score > sum(f.score for f in rivals):
+        if nl.score > sum(rival_score(f, nl, outputs) for f in rivals):
             found = [f for f in found if all(f is not r for r in rivals)] + [nl]
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:

@@ -61,31 +61,34 @@ class RefittedNoise:
 
     def __init__(self, e: np.ndarray, folds: list[np.ndarray], onsets: np.ndarray, order: int = AR_ORDER):
         self.ze = lag_vectors(np.nan_to_num(e), order)
-        self.folds = [np.asarray(w, float) for w in folds]
+        folds = [np.asarray(w, float) for w in folds]
         self.onsets = np.asarray(onsets, int)
-        self.rows = [float(w.sum()) for w in self.folds]
-        self.gram = np.stack([self._gram(self.ze, w) for w in self.folds])
+        self.rows = np.array([w.sum() for w in folds])
+        self.gram = np.stack([(self.ze * w[:, None]).T @ self.ze for w in folds])
         self.nominal_fit, self.nominal_held = ar_errors(self.gram, self.gram[::-1])
-
-    @staticmethod
-    def _gram(z: np.ndarray, w: np.ndarray) -> np.ndarray:
-        return (z * w[:, None]).T @ z
+        # Row blocks that lie in one fold and between two grid onsets: the suffix sums are
+        # block sums, accumulated backwards per fold.
+        self.weight = folds[0] + folds[1]
+        label = np.where(folds[0] > 0, 0, np.where(folds[1] > 0, 1, -1))
+        changes = np.flatnonzero(np.diff(label)) + 1
+        self.starts = np.unique(np.r_[self.onsets, changes[changes > self.onsets[0]]])
+        self.block_fold = label[self.starts]
+        self.block_onset = np.searchsorted(self.onsets, self.starts, side="right") - 1
 
     def gains(self, psi: np.ndarray) -> OnsetGains:
         """The statistics of the candidate term ``psi`` (H^-1-filtered, on e's rows) switched on
         at each onset."""
         zp = lag_vectors(np.nan_to_num(psi), self.ze.shape[1] - 1)
         p1 = zp.shape[1]
-        cross = zp[:, :, None] * zp[:, None, :] - self.ze[:, :, None] * zp[:, None, :]
-        per_row = (cross + np.swapaxes(cross, 1, 2) - zp[:, :, None] * zp[:, None, :]).reshape(len(zp), -1)
-        grams = []
-        for w in self.folds:
-            # suffix sums from each onset: block sums between grid onsets, accumulated backwards
-            blocks = np.add.reduceat(per_row * w[:, None], self.onsets, axis=0)
-            grams.append(np.cumsum(blocks[::-1], axis=0)[::-1].reshape(-1, p1, p1))
-        m = np.stack(grams, axis=1) + self.gram[None]          # (onsets, fold, p1, p1)
+        # z^p z^p' - z^e z^p' - z^p z^e' is the symmetric part of (z^p - 2 z^e) z^p'
+        per_row = ((zp - 2.0 * self.ze) * self.weight[:, None])[:, :, None] * zp[:, None, :]
+        blocks = np.add.reduceat(per_row.reshape(len(zp), -1), self.starts, axis=0)
+        m = np.zeros((len(self.onsets), 2, p1 * p1))
+        keep = self.block_fold >= 0
+        np.add.at(m, (self.block_onset[keep], self.block_fold[keep]), blocks[keep])
+        m = np.cumsum(m[::-1], axis=0)[::-1].reshape(len(self.onsets), 2, p1, p1)
+        m = 0.5 * (m + np.swapaxes(m, 2, 3)) + self.gram[None]          # (onsets, fold, p1, p1)
         fit, held = ar_errors(m, m[:, ::-1])
-        rows = np.array(self.rows)
-        in_fold = rows * np.log(self.nominal_fit / fit)
-        held_out = rows[::-1] * np.log(self.nominal_held / held)
+        in_fold = self.rows * np.log(self.nominal_fit / fit)
+        held_out = self.rows[::-1] * np.log(self.nominal_held / held)
         return OnsetGains(self.onsets, in_fold, held_out)

@@ -204,48 +204,42 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
 
 
 def model_correction_gains(out: OutputResidual, response: np.ndarray, onsets: np.ndarray) -> OnsetGains:
-    """Statistics of the output-error term ``response`` switched on at each onset, whitened
-    with the output's own correction (nominal AR, beside its level and steps + ramps): per
-    fold, n log(SSE nominal / SSE with the term), the variance re-estimated as the refitted
-    correction does, so the two compare on one likelihood scale."""
+    """Drop of the whitened squared error from each onset on, per fold, for the output-error
+    term ``response`` whitened with the output's own correction (nominal AR, beside its level
+    and steps + ramps): the statistic every process candidate is scored with."""
     project = out.nuisance.project if out.nuisance is not None else (lambda x: x)
     r = project(out.r)
     w = project(out.whiten(response))
-    total = [float(np.sum(f * r**2)) for f in out.fold]
     drop = out.weight * (r**2 - (r - w) ** 2)
-    stat = np.column_stack([f.sum() * np.log(t / np.maximum(t - np.cumsum((drop * f)[::-1])[::-1][onsets], 1e-300 * t))
-                            for f, t in zip(out.fold, total)])
-    return OnsetGains(onsets, stat, stat[:, ::-1])
+    suffix = np.column_stack([np.cumsum((drop * f)[::-1])[::-1][onsets] for f in out.fold])
+    return OnsetGains(onsets, suffix, suffix[:, ::-1])
 
 
 def rival_score(rival: Finding, nl: Finding, outputs: list[OutputResidual]) -> float:
-    """The held-out statistic of a linear stand-in ``rival`` for the actuator finding ``nl``
-    under the noise correction ``nl`` was scored with, so the two compare on one likelihood:
-    the rival's channel change from its onset, or a drift's step + ramp from its onset
-    (amplitudes by least squares on all rows). No penalty: the comparison leans to the linear
-    explanation."""
+    """The score of a linear stand-in ``rival`` for the actuator finding ``nl`` under the noise
+    correction ``nl`` was scored with, so the two compare on one likelihood. Under the model's
+    correction that is the rival's own score; under a refitted one the held-out statistic, with
+    the AR refitted, of the rival's channel change from its onset, or of a drift's step + ramp
+    from its onset (amplitudes by least squares on all rows; no penalty: the comparison leans
+    to the linear explanation)."""
+    if nl.estimate.get("noise_correction") != "refitted":
+        return rival.score
     out = next(o for o in outputs if o.name == rival.output)
     onset = out.sig.seconds_to_index(rival.onset_s)
     hinv = out.noise.inverse()
     e = _one_step_error(out)
     if rival.effect == "output_drift":
         t = np.arange(len(e), dtype=float)
-        shapes = np.column_stack([np.where(t >= onset, d, 0.0) for d in (np.ones_like(t), t - onset)])
-        columns = np.column_stack([hinv.filter(c) for c in shapes.T])
+        columns = np.column_stack([hinv.filter(np.where(t >= onset, d, 0.0)) for d in (np.ones_like(t), t - onset)])
         rows = (out.weight > 0) & (t >= onset)
-        response = shapes @ np.linalg.lstsq(columns[rows], e[rows], rcond=None)[0]
+        psi = columns @ np.linalg.lstsq(columns[rows], e[rows], rcond=None)[0]
     elif rival.change is not None and rival.change.channel is not None:
         j = out.sig.inputs.index(rival.input)
         u = np.nan_to_num(out.sig.u[:, j])
-        response = out.channel_response(rival.change.channel, u) - out.channel_response(out.row[j], u)
+        psi = hinv.filter(out.channel_response(rival.change.channel, u) - out.channel_response(out.row[j], u))
     else:
         return rival.score
-    at = np.array([onset])
-    if nl.estimate.get("noise_correction") == "refitted":
-        gains = RefittedNoise(e, out.fold, at).gains(hinv.filter(response))
-    else:
-        gains = model_correction_gains(out, response, at)
-    return float(gains.held_out.sum())
+    return float(RefittedNoise(e, out.fold, np.array([onset])).gains(psi).held_out.sum())
 
 
 def _one_step_error(out: OutputResidual) -> np.ndarray:

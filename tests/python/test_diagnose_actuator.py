@@ -60,6 +60,7 @@ def _case(family, seed):
 
 @pytest.mark.parametrize("family, seed, kind, size_key, truth_key", [
     ("mpc_siso", 0, "deadband", "width", "deadband"),      # positioner deadband at 2 noise-offsetting moves
+    ("mpc_siso", 3, "stick_slip", "S", "stiction_s"),      # two-parameter stick-slip
     ("mpc_siso", 5, "saturation", None, None),            # MV limited to a band around its target
 ])
 def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, kind, size_key, truth_key):

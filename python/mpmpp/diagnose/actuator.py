@@ -28,6 +28,7 @@ WIDTHS = 2.0 ** (np.arange(-3, 13) / 3.0)  # times the median absolute input mov
 SLIP_RATIO = 0.5                           # stick-slip J / S
 # saturation limits at these quantiles of the input; each side alone, then the other side added
 LIMIT_QUANTILES = np.linspace(0.05, 0.95, 10)
+LIMIT_BISECTIONS = 5
 PARAMS = 2 + 1 + 1   # kind and size, onset, noise correction (nominal or refitted)
 
 
@@ -131,22 +132,26 @@ class ActuatorSearch:
         def best_limit(block, side):
             other = block["upper"] if side == "lower" else block["lower"]
 
-            def tried(q):
-                level = float(np.quantile(op, min(max(q, 0.0), 1.0)))
+            def tried(level):
                 band = other - level if side == "lower" else level - other
-                return self.evaluate({**block, side: level}) if band >= WIDTHS[0] * self.scale else None
+                return self.evaluate({**block, side: float(level)}) if band >= WIDTHS[0] * self.scale else None
 
-            grid = [(c, q) for q in LIMIT_QUANTILES if (c := tried(q)) is not None]
+            levels = np.quantile(op, LIMIT_QUANTILES)
+            grid = [(c, level) for level in levels if (c := tried(level)) is not None]
             if not grid:
                 return None
-            best, q = max(grid, key=lambda cq: objective(cq[0]))
-            dq = LIMIT_QUANTILES[1] - LIMIT_QUANTILES[0]
-            for _ in range(3):
-                dq /= 2
-                for q_try in (q - dq, q + dq):
-                    cand = tried(q_try)
+            best, level = max(grid, key=lambda cl: objective(cl[0]))
+            # refined by bisection (a limit a little off moves the samples where the input
+            # leaves the band), to a 32nd of the grid's widest gap or a quarter median move
+            step = float(np.max(np.diff(levels)))
+            for _ in range(LIMIT_BISECTIONS):
+                if step <= 0.25 * self.scale:
+                    break
+                step /= 2
+                for level_try in (level - step, level + step):
+                    cand = tried(level_try)
                     if cand is not None and objective(cand) > objective(best):
-                        best, q = cand, q_try
+                        best, level = cand, level_try
             return best
 
         start = {"kind": "saturation", **ends}
@@ -243,11 +248,11 @@ def rival_score(rival: Finding, nl: Finding, outputs: list[OutputResidual]) -> f
 
 
 def _one_step_error(out: OutputResidual) -> np.ndarray:
-    """The output's one-step error less its level. Its step + ramp disturbances stay in: the
-    refitted AR takes them as it takes them with the candidate, and fitted on the nominal
-    error alone they would absorb part of what a candidate explains (a deadband's slow
-    wander)."""
-    e = np.nan_to_num(out.e)
+    """The output's one-step error less its level and its step + ramp disturbances (fitted on
+    the nominal error): left in, a stuck-valve candidate would explain the controller's
+    compensation of a ramp (switching off the input that cancels it), the closed-loop
+    confounding the process candidates avoid by fitting the disturbances beside them."""
+    e = np.nan_to_num(out.free)
     return e - np.sum(e * out.weight) / out.weight.sum()
 
 

@@ -59,9 +59,9 @@ def _case(family, seed):
 
 
 @pytest.mark.parametrize("family, seed, kind, size_key, truth_key", [
-    ("mpc_siso", 0, "deadband", "width", "deadband"),      # positioner deadband at 2 noise-offsetting moves
+    ("mpc_2x2", 19, "deadband", "width", "deadband"),      # positioner deadband on an MV driving two outputs
     ("mpc_siso", 3, "stick_slip", "S", "stiction_s"),      # two-parameter stick-slip
-    ("mpc_siso", 5, "saturation", None, None),            # MV limited to a band around its target
+    ("mpc_siso", 13, "saturation", None, None),           # MV limited to a band around its target
 ])
 def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, kind, size_key, truth_key):
     spec, linear, actuator = _case(family, seed)
@@ -69,7 +69,8 @@ def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, 
     res = diagnose(model, simulate(spec))
     top = res.findings[0]
     assert (top.effect, top.input, top.estimate["kind"]) == ("input_nonlinearity", actuator["input"], kind)
-    tolerance = 0.05 * spec["duration_s"]
+    # an actuator shows only once the input moves across it: within two 1 h segments
+    tolerance = 2 * 3600.0
     if size_key is not None:
         assert abs(top.onset_s - actuator["time_s"]) < tolerance
         assert top.estimate[size_key] == pytest.approx(actuator[truth_key], rel=0.15)

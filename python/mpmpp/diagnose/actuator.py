@@ -19,6 +19,8 @@ import numpy as np
 from ..signals import Signals, per_segment
 from ..stiction.valve import valve_position
 from .errors import held_out_error
+from .process import first_lag
+from .process_error import laguerre_filters, laguerre_pole
 from .refitted_noise import OnsetGains, RefittedNoise
 from .result import Finding, ModelChange
 from .scoring import confidence
@@ -29,6 +31,7 @@ SLIP_RATIO = 0.5                           # stick-slip J / S
 # saturation limits at these quantiles of the input; each side alone, then the other side added
 LIMIT_QUANTILES = np.linspace(0.05, 0.95, 10)
 LIMIT_BISECTIONS = 5
+LAGUERRE_LEAD = 3   # samples the linear stand-in's basis starts before the channel's first lag
 PARAMS = 2 + 1 + 1   # kind and size, onset, noise correction (nominal or refitted)
 
 
@@ -187,6 +190,10 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
         n_after = sum(out.weight[best.onset:].sum() for out in search.driven)
         if heldout < min_effect * n_after:
             continue
+        # a nonlinearity must beat any linear change of the input's channels from its onset
+        # (a backlash delays small moves: a delay change would otherwise pass for one)
+        if heldout <= sum(linear_change_statistic(out, j, best.onset, best.correction) for out in search.driven):
+            continue
         k_top = int(np.argmax(heldout_per_output))
         top = search.driven[k_top]
         changes = [ModelChange(output=out.name, input=name, actuator=best.block) for out in search.driven]
@@ -218,6 +225,39 @@ def model_correction_gains(out: OutputResidual, response: np.ndarray, onsets: np
     drop = out.weight * (r**2 - (r - w) ** 2)
     suffix = np.column_stack([np.cumsum((drop * f)[::-1])[::-1][onsets] for f in out.fold])
     return OnsetGains(onsets, suffix, suffix[:, ::-1])
+
+
+def linear_change_statistic(out: OutputResidual, j: int, onset: int, correction: str) -> float:
+    """Held-out statistic of the best linear change of channel out <- input j from ``onset``,
+    under the noise correction ``correction``: a Laguerre basis (process_error's, on the
+    output's slowest pole) of the input delayed to a few samples before the channel's first
+    lag, its coefficients fitted on each fold and scored on the other (a gain, time-constant
+    or dead-time change, or a mix, lies in its span)."""
+    u = np.nan_to_num(out.sig.u[:, j])
+    shift = max(first_lag(out.row[j]) - LAGUERRE_LEAD, 0)
+    delayed = np.r_[np.zeros(shift), u[: len(u) - shift]]
+    after = np.arange(len(u)) >= onset
+    basis = np.column_stack([np.where(after, out.channel_response(f, delayed), 0.0)
+                             for f in laguerre_filters(laguerre_pole(out.sig, out.i))])
+    at = np.array([onset])
+    hinv = out.noise.inverse()
+    if correction == "refitted":
+        e = _one_step_error(out)
+        regressors = np.column_stack([hinv.filter(c) for c in basis.T])
+        target, noise = e, RefittedNoise(e, out.fold, at)
+    else:
+        project = out.nuisance.project if out.nuisance is not None else (lambda x: x)
+        regressors = np.column_stack([project(out.whiten(c)) for c in basis.T])
+        target = project(out.r)
+    total = 0.0
+    for k in (0, 1):
+        rows = (out.fold[k] > 0) & after
+        if rows.sum() <= basis.shape[1]:
+            continue
+        response = basis @ np.linalg.lstsq(regressors[rows], target[rows], rcond=None)[0]
+        gains = noise.gains(hinv.filter(response)) if correction == "refitted" else model_correction_gains(out, response, at)
+        total += float(gains.held_out[0, k])
+    return total
 
 
 def rival_score(rival: Finding, nl: Finding, outputs: list[OutputResidual]) -> float:

@@ -6,13 +6,14 @@ present throughout a single loop's record is judged by the closed-loop Hammerste
 The plant sees f(u) = u + (f(u) - u): the candidate adds G (f(u) - u) to the nominal G u with
 no free scale (the channel itself is unchanged). A free scale would let a very wide backlash
 (f(u) nearly constant, f(u) - u ~ -u) pose as a plain gain change. Each candidate is scored
-with the output's AR noise correction refitted together with it (``refitted_noise``): the
-correction fitted to the nominal residual has already absorbed a limit cycle or the sticking
-phases, and every candidate would look worse in its domain.
+with the output's own noise correction and with the AR correction refitted together with it
+(``refitted_noise``), and keeps the better: the correction fitted to the nominal residual has
+already absorbed a limit cycle or the sticking phases, and in its domain every such candidate
+would look worse.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -30,7 +31,7 @@ WIDTHS = 2.0 ** (np.arange(-3, 13) / 3.0)  # times the median absolute input mov
 SLIP_RATIO = 0.5                           # stick-slip J / S
 # saturation limits at these quantiles of the input; each side alone, then the other side added
 LIMIT_QUANTILES = np.linspace(0.05, 0.95, 10)
-LIMIT_BISECTIONS = 5
+LIMIT_BISECTIONS = 5                        # halvings of the grid's widest gap
 LAGUERRE_LEAD = 3   # samples the linear stand-in's basis starts before the channel's first lag
 PARAMS = 2 + 1 + 1   # kind and size, onset, noise correction (nominal or refitted)
 

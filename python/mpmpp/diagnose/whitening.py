@@ -52,7 +52,6 @@ class OutputResidual:
     n: int
     noise_estimated: bool = False                # H estimated from these data, not the model's
     disturbance_onsets: list[int] = field(default_factory=list)   # step + ramp breakpoints in e
-    free: np.ndarray | None = field(repr=False, default=None)      # e less those steps + ramps
     nuisance: "Nuisance | None" = field(repr=False, default=None)  # what candidates are fitted beside
 
     @property
@@ -121,8 +120,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
                          split_onset=split_onset, split_significant=split_significant, pieces=pieces,
                          ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
-                         n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets,
-                         free=free)
+                         n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets)
     out.r = out.whiten(np.nan_to_num(v))
     return out
 

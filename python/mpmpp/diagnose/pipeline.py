@@ -18,7 +18,8 @@ from .process import process_findings
 from .process_error import held_out_rms, process_parts
 from .result import DiagnoseResult, Finding, InsufficientData
 from .valve import valve_findings
-from .whitening import AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual
+from .whitening import (AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual,
+                        without_split)
 
 
 SEGMENT_S = 3600.0           # preferred shortest stretch a change is fitted on
@@ -156,9 +157,7 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
                 # correction absorbed what the process change made predictable; the inputs
                 # explain the change, so the candidates are scored again with the disturbance
                 # unchanged (one correction throughout).
-                unchanged = output_residual(sig, out.i, min_segment, first_onset, block,
-                                            out.noise_estimated, disturbance_split=False)
-                redo = process_findings(unchanged, first_onset, min_segment, step, logn, min_effect,
+                redo = process_findings(without_split(out), first_onset, min_segment, step, logn, min_effect,
                                         actions_of(out))
                 if redo:
                     found += redo

@@ -73,6 +73,10 @@ class Shape:
     drive: np.ndarray = field(repr=False, default=None)   # the column the channel filters
     drift_form: str = ""          # "ramp" or "step" for an output drift (its drive is built on demand)
 
+    def scaled(self, theta: float) -> TransferFunction:
+        """The channel theta * shape."""
+        return TransferFunction(np.asarray(self.shape.num) * theta, self.shape.den, self.shape.delay)
+
 
 @dataclass
 class FoldFit:
@@ -301,9 +305,7 @@ def _material(out: OutputResidual, fit: Fit, min_effect: float) -> bool:
         return True
     if fit.shape.effect not in SCALED_CHANNEL_EFFECTS:
         return False
-    s = fit.shape.shape
-    changed = TransferFunction(np.asarray(s.num) * fit.theta, s.den, s.delay)
-    return step_response_error(changed, fit.shape.nominal) >= MATERIAL_STEP_CHANGE
+    return step_response_error(fit.shape.scaled(fit.theta), fit.shape.nominal) >= MATERIAL_STEP_CHANGE
 
 
 def flips_sign_without_evidence(fit: Fit, action: int = 0) -> bool:
@@ -542,8 +544,7 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
         what = "input" if s.kind == "input" else "data column"
         text = (f"{out.name} responds to {what} {s.column} (gain about {theta:.3g}, "
                 f"delay {int(s.label)} samples) but the model has no such channel, {when}")
-    new_channel = TransferFunction(np.asarray(s.shape.num) * theta_fit, s.shape.den, s.shape.delay)
-    change = ModelChange(output=out.name, input=s.column, channel=new_channel, new_input=s.kind == "extra")
+    change = ModelChange(output=out.name, input=s.column, channel=s.scaled(theta_fit), new_input=s.kind == "extra")
     err = held_out_error(out, fit.onset, change)
     params = s.params + (1 if fit.onset > 0 else 0)
     return Finding(id="", effect=s.effect, output=out.name, input=s.column, onset_s=onset_s,

@@ -10,6 +10,7 @@ alone, not jointly with the inputs, so it cannot manufacture an input correlatio
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -52,6 +53,7 @@ class OutputResidual:
     n: int
     noise_estimated: bool = False                # H estimated from these data, not the model's
     disturbance_onsets: list[int] = field(default_factory=list)   # step + ramp breakpoints in e
+    free: np.ndarray | None = field(repr=False, default=None)      # e less those steps + ramps
     nuisance: "Nuisance | None" = field(repr=False, default=None)  # what candidates are fitted beside
 
     @property
@@ -79,10 +81,9 @@ class OutputResidual:
 
 
 def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, block: int,
-                    noise_estimated: bool = False, disturbance_split: bool = True) -> OutputResidual:
+                    noise_estimated: bool = False) -> OutputResidual:
     """Residuals of output i, its disturbance split and whitening, and the held-out blocks
-    (even / odd blocks of ``block`` samples). ``disturbance_split`` False: one AR correction
-    per data segment, the hypothesis that the disturbance did not change."""
+    (even / odd blocks of ``block`` samples)."""
     n = len(sig.time_s)
     row, noise = sig.rows[i], sig.noise[i]
     v = per_segment(sig, lambda yy, uu: _core.output_error(row, yy, uu), sig.y[:, i], sig.u)
@@ -100,7 +101,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
     split_onset = first_onset + split.onset if split.statistic > 0 else None
     # The split is kept when it beats its parameters (AR coefficients, variance, onset).
-    split_significant = disturbance_split and split.statistic > (AR_ORDER + 2) * math.log(n)
+    split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
     pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
     # The corrections and levels are those of the disturbance less its steps and ramps: fitted
     # with them in, the AR gets roots near 1 (A(1) 0.5 on a ramped test loop, 1.2 without),
@@ -111,18 +112,35 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     onsets, steps = disturbance_steps(e0, weight > 0, noise.inverse(), first_onset, max(min_segment // 60, 1),
                                       max(first_onset, 2 * SETTLE), math.log(n))
     free = e0 - steps
+    ar, sigma = _corrections(free, pieces)
+    parity = (np.arange(n) // block) % 2
+    out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
+                         split_onset=split_onset, split_significant=split_significant, pieces=pieces,
+                         ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
+                         n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets,
+                         free=free)
+    out.r = out.whiten(np.nan_to_num(v))
+    return out
+
+
+def without_split(out: OutputResidual) -> OutputResidual:
+    """The same residual under the hypothesis that the disturbance did not change: one AR
+    correction per data segment, no split."""
+    pieces = _pieces(out.sig.segments, [])
+    ar, sigma = _corrections(out.free, pieces)
+    flat = dataclasses.replace(out, split_significant=False, pieces=pieces, ar=ar, sigma=sigma, nuisance=None)
+    flat.r = flat.whiten(np.nan_to_num(out.v))
+    return flat
+
+
+def _corrections(free: np.ndarray, pieces: list[tuple[int, int]]) -> tuple[list[np.ndarray], list[float]]:
+    """The AR correction A_s and innovation RMS of each piece."""
     ar = [_core.fit_ar(free, AR_ORDER, a + SETTLE, b) for a, b in pieces]
     sigma = []
     for (a, b), poly in zip(pieces, ar):
         w = TransferFunction(poly, [1.0], 0).filter(free[a:b])[SETTLE:]
         sigma.append(float(np.sqrt(np.mean(w**2))))
-    parity = (np.arange(n) // block) % 2
-    out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
-                         split_onset=split_onset, split_significant=split_significant, pieces=pieces,
-                         ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
-                         n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets)
-    out.r = out.whiten(np.nan_to_num(v))
-    return out
+    return ar, sigma
 
 
 def disturbance_steps(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, first_onset: int, grid: int,

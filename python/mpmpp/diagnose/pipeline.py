@@ -9,7 +9,7 @@ import numpy as np
 
 from ..record_length import minimum_rows, require_rows, scaled_rows
 from ..signals import Signals, extract
-from .actuator import actuator_findings
+from .actuator import actuator_findings, rival_score
 from .confidence import calibrated_confidence
 from .errors import one_step_errors
 from .loops import single_loops
@@ -132,17 +132,20 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     for out in outputs:
         found += process_findings(out, first_onset, min_segment, step, logn, min_effect, actions_of(out))
     # An actuator nonlinearity also looks like gain/dynamics changes of that input's channels.
-    # A single loop's valve is judged by the closed-loop Hammerstein fit; its stiction replaces
-    # them. An input that drives several outputs gets the actuator candidates, which replace
-    # them when they explain more than they do together.
-    valves, valve_notes = valve_findings(outputs, sig, loops, logn, set(model.actuators_dict()))
+    # A single loop's valve sticking throughout the record is judged by the closed-loop
+    # Hammerstein fit; its stiction replaces them. Every other input (and a single loop's
+    # valve that went bad at some onset) gets the actuator candidates, which replace them
+    # when they explain more than they do together.
+    actuated = set(model.actuators_dict())
+    valves, valve_notes = valve_findings(outputs, sig, loops, logn, actuated)
     notes += valve_notes
     for nl in valves:
         found = [f for f in found if not _actuator_rival(f, nl)] + [nl]
-    in_loops = {sig.inputs[lp.input] for lp in loops}
-    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect, skip=in_loops):
+    judged = actuated | {nl.input for nl in valves}
+    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect, skip=judged,
+                                judged_throughout={sig.inputs[lp.input] for lp in loops}):
         rivals = [f for f in found if _actuator_rival(f, nl)]
-        if nl.score > sum(f.score for f in rivals):
+        if nl.score > sum(rival_score(f, nl, outputs) for f in rivals):
             found = [f for f in found if all(f is not r for r in rivals)] + [nl]
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:

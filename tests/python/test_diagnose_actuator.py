@@ -1,0 +1,83 @@
+"""Actuator nonlinearity that sets in during the record (diagnose/actuator.py): the candidates
+are scored with the AR noise correction refitted together with each (diagnose/refitted_noise.py,
+checked against a plain NumPy least-squares fit), and the right kind is named on seeded
+closed-loop records while the same records with a linear valve get no such finding."""
+import copy
+
+import numpy as np
+import pytest
+
+from mpmpp import families
+from mpmpp.diagnose import diagnose
+from mpmpp.diagnose.refitted_noise import RefittedNoise, lag_vectors
+from mpmpp.evaluate import nominal_model
+from mpmpp.simulate import simulate
+
+
+def numpy_refitted(e, psi, onset, train, test, order):
+    """AR(order) of x = e - 1[t >= onset] psi (on the lag vectors, as the module defines it)
+    fitted by least squares on the rows ``train``; squared-error sums on ``train`` and ``test``."""
+    z = lag_vectors(e, order) - (np.arange(len(e)) >= onset)[:, None] * lag_vectors(psi, order)
+    a = np.linalg.lstsq(z[train, 1:], z[train, 0], rcond=None)[0]
+    resid = z[:, 0] - z[:, 1:] @ a
+    return float(np.sum(resid[train] ** 2)), float(np.sum(resid[test] ** 2))
+
+
+def test_refitted_statistics_match_a_plain_least_squares_fit():
+    rng = np.random.default_rng(11)
+    n, order, block = 3000, 5, 250
+    e = np.zeros(n)
+    w = rng.standard_normal(n)
+    for t in range(2, n):   # a coloured disturbance
+        e[t] = 1.2 * e[t - 1] - 0.5 * e[t - 2] + w[t]
+    psi = np.sin(np.arange(n) / 7.0) + 0.3 * rng.standard_normal(n)
+    e[1700:] += psi[1700:]
+    weight = np.ones(n)
+    weight[:60] = 0.0
+    parity = (np.arange(n) // block) % 2
+    folds = [weight * (parity == 0), weight * (parity == 1)]
+    onsets = np.array([0, 500, 1000, 1700, 2200])
+    gains = RefittedNoise(e, folds, onsets, order).gains(psi)
+    rows = [f > 0 for f in folds]
+    for i, k in enumerate(onsets):
+        for fold in (0, 1):
+            train, test = rows[fold], rows[1 - fold]
+            nominal = numpy_refitted(e, np.zeros(n), n, train, test, order)
+            cand = numpy_refitted(e, psi, k, train, test, order)
+            assert gains.in_fold[i, fold] == pytest.approx(train.sum() * np.log(nominal[0] / cand[0]), rel=1e-8, abs=1e-6)
+            assert gains.held_out[i, fold] == pytest.approx(test.sum() * np.log(nominal[1] / cand[1]), rel=1e-8, abs=1e-6)
+    # the onset where the term was switched on explains most
+    assert np.argmax(gains.held_out.sum(axis=1)) == 3
+
+
+def _case(family, seed):
+    spec, expect = families.family(family).draw(seed, effect="input_nonlinearity")
+    linear = copy.deepcopy(spec)
+    linear["events"] = [ev for ev in linear["events"] if ev["type"] != "actuator"]
+    actuator = next(ev for ev in spec["events"] if ev["type"] == "actuator")
+    return spec, linear, actuator
+
+
+@pytest.mark.parametrize("family, seed, kind, size_key, truth_key", [
+    ("mpc_2x2", 19, "deadband", "width", "deadband"),      # positioner deadband on an MV driving two outputs
+    ("mpc_siso", 3, "stick_slip", "S", "stiction_s"),      # two-parameter stick-slip
+    ("mpc_siso", 13, "saturation", None, None),           # MV limited to a band around its target
+])
+def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, kind, size_key, truth_key):
+    spec, linear, actuator = _case(family, seed)
+    model = nominal_model(spec)
+    res = diagnose(model, simulate(spec))
+    top = res.findings[0]
+    assert (top.effect, top.input, top.estimate["kind"]) == ("input_nonlinearity", actuator["input"], kind)
+    # an actuator shows only once the input moves across it: within two 1 h segments
+    tolerance = 2 * 3600.0
+    if size_key is not None:
+        assert abs(top.onset_s - actuator["time_s"]) < tolerance
+        assert top.estimate[size_key] == pytest.approx(actuator[truth_key], rel=0.15)
+    else:   # a limit the input has not reached yet changes nothing: the onset is an upper bound
+        assert top.onset_s < actuator["time_s"] + tolerance
+        # once the input has run out of the band and stays pinned, the data fix the band only
+        # loosely (any band it left at that time explains the same): the bands overlap
+        assert top.estimate["lower"] < actuator["max"] and top.estimate["upper"] > actuator["min"]
+    control = diagnose(model, simulate(linear))
+    assert not any(f.effect == "input_nonlinearity" for f in control.findings)

@@ -15,6 +15,7 @@ void bind_identification(pybind11::module_& m);
 void bind_prediction(pybind11::module_& m);
 void bind_residual_analysis(pybind11::module_& m);
 void bind_change_scan(pybind11::module_& m);
+void bind_refitted_noise(pybind11::module_& m);
 void bind_one_class_svm(pybind11::module_& m);
 void bind_mpc(pybind11::module_& m);
 void bind_actuator(pybind11::module_& m);

@@ -11,6 +11,7 @@ PYBIND11_MODULE(_core, m) {
   mpmpp::bindings::bind_prediction(m);
   mpmpp::bindings::bind_residual_analysis(m);
   mpmpp::bindings::bind_change_scan(m);
+  mpmpp::bindings::bind_refitted_noise(m);
   mpmpp::bindings::bind_one_class_svm(m);
   mpmpp::bindings::bind_mpc(m);
   mpmpp::bindings::bind_actuator(m);

@@ -90,13 +90,16 @@ class UpdateResult:
 
 
 def update(model, data, apply, train_end_s: float | None = None, name: str | None = None,
-           min_segment_s: float = SEGMENT_S, block_s: float = BLOCK_S) -> UpdateResult:
+           min_segment_s: float = SEGMENT_S, block_s: float = BLOCK_S,
+           actuator_search: bool | None = None) -> UpdateResult:
     """Re-diagnose, apply the findings named in ``apply`` (ids like "F1"), return the new model.
-    ``min_segment_s`` / ``block_s`` as for ``diagnose`` (the same findings are re-derived)."""
+    ``min_segment_s`` / ``block_s`` / ``actuator_search`` as for ``diagnose`` (the same
+    findings are re-derived)."""
     ids = [a.strip() for a in (apply.split(",") if isinstance(apply, str) else apply) if a.strip()]
     if not ids:
         raise ValueError("--apply: give at least one finding id (e.g. F1)")
-    diagnosis = diagnose(model, data, train_end_s=train_end_s, min_segment_s=min_segment_s, block_s=block_s)
+    diagnosis = diagnose(model, data, train_end_s=train_end_s, min_segment_s=min_segment_s, block_s=block_s,
+                         actuator_search=actuator_search)
     findings = [diagnosis.finding(i) for i in ids]
     changes: list[ModelChange] = []
     for f in findings:

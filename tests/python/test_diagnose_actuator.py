@@ -1,6 +1,6 @@
 """Actuator nonlinearity that sets in during the record (diagnose/actuator.py): the candidates
 are scored with the AR noise correction refitted together with each (diagnose/refitted_noise.py,
-checked against a plain NumPy least-squares fit), and the right kind is named on seeded
+a C++ kernel checked against a plain NumPy least-squares fit), and the right kind is named on seeded
 closed-loop records while the same records with a linear valve get no such finding."""
 import copy
 
@@ -9,9 +9,17 @@ import pytest
 
 from mpmpp import families
 from mpmpp.diagnose import diagnose
-from mpmpp.diagnose.refitted_noise import RefittedNoise, lag_vectors
+from mpmpp.diagnose.refitted_noise import RefittedNoise
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
+
+
+def lag_vectors(x, order):
+    """Rows z_t = (x_t, x_{t-1}, ..., x_{t-order}), zeros before the start."""
+    z = np.zeros((len(x), order + 1))
+    for k in range(order + 1):
+        z[k:, k] = x[: len(x) - k]
+    return z
 
 
 def numpy_refitted(e, psi, onset, train, test, order):
@@ -23,9 +31,10 @@ def numpy_refitted(e, psi, onset, train, test, order):
     return float(np.sum(resid[train] ** 2)), float(np.sum(resid[test] ** 2))
 
 
-def test_refitted_statistics_match_a_plain_least_squares_fit():
+@pytest.mark.parametrize("order", [5, 3])   # the kernel's fixed-size path (5) and its general one
+def test_refitted_statistics_match_a_plain_least_squares_fit(order):
     rng = np.random.default_rng(11)
-    n, order, block = 3000, 5, 250
+    n, block = 3000, 250
     e = np.zeros(n)
     w = rng.standard_normal(n)
     for t in range(2, n):   # a coloured disturbance
@@ -48,6 +57,23 @@ def test_refitted_statistics_match_a_plain_least_squares_fit():
             assert gains.held_out[i, fold] == pytest.approx(test.sum() * np.log(nominal[1] / cand[1]), rel=1e-8, abs=1e-6)
     # the onset where the term was switched on explains most
     assert np.argmax(gains.held_out.sum(axis=1)) == 3
+    # a term that is zero changes nothing
+    none = RefittedNoise(e, folds, onsets, order).gains(np.zeros(n))
+    assert np.allclose(none.in_fold, 0.0, atol=1e-9) and np.allclose(none.held_out, 0.0, atol=1e-9)
+
+
+def test_refitted_noise_rejects_inconsistent_input():
+    e = np.random.default_rng(0).standard_normal(500)
+    folds = [np.ones(500), np.zeros(500)]   # everything in one fold
+    with pytest.raises(ValueError, match="both folds"):
+        RefittedNoise(e, [np.ones(500), np.ones(500)], np.array([0, 100]))
+    with pytest.raises(ValueError, match="increasing"):
+        RefittedNoise(e, folds, np.array([100, 50]))
+    with pytest.raises(ValueError, match="length"):
+        RefittedNoise(e, folds, np.array([0])).gains(np.zeros(10))
+    # a fold with no rows cannot score anything: every candidate loses, nothing raises
+    gains = RefittedNoise(e, folds, np.array([0, 100])).gains(e)
+    assert np.all(gains.held_out == -np.inf) and np.all(gains.in_fold == -np.inf)
 
 
 def _case(family, seed):

@@ -6,21 +6,27 @@ from ._pair import (add_pair_arguments, add_train_end_argument, duration, load_p
 
 
 def add_length_arguments(parser) -> None:
-    """``--segment`` / ``--block``: the diagnosis's preferred lengths (shorter records scale them)."""
+    """``--segment`` / ``--block``: the diagnosis's preferred lengths (shorter records scale them);
+    ``--actuator-search``: search actuator nonlinearities with an onset on any record length."""
     parser.add_argument("--segment", type=duration("--segment"), default=None, metavar="DURATION",
                         help="shortest stretch a change is fitted on (default 1h; a record shorter than "
                              "three of them uses a third of its length)")
     parser.add_argument("--block", type=duration("--block"), default=None, metavar="DURATION",
                         help="held-out block for the cross-validation (default 1h; a record shorter than "
                              "eight of them uses an eighth of its length)")
+    parser.add_argument("--actuator-search", action="store_true", default=None,
+                        help="search actuator nonlinearities that set in during the record even when the "
+                             "record is longer than the default budget (about a day of a 3x3 process at 5 s)")
 
 
 def length_options(args) -> dict:
-    """The ``diagnose`` / ``update`` keyword arguments of ``--segment`` / ``--block``."""
+    """The ``diagnose`` / ``update`` keyword arguments of ``--segment`` / ``--block`` /
+    ``--actuator-search``."""
     from ..diagnose.pipeline import BLOCK_S, SEGMENT_S
 
     return {"min_segment_s": SEGMENT_S if args.segment is None else args.segment,
-            "block_s": BLOCK_S if args.block is None else args.block}
+            "block_s": BLOCK_S if args.block is None else args.block,
+            "actuator_search": args.actuator_search}
 
 
 def monitoring_s(model, data, min_segment_s: float | None = None) -> float:

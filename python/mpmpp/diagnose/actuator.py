@@ -34,6 +34,13 @@ LIMIT_QUANTILES = np.linspace(0.05, 0.95, 10)
 LIMIT_BISECTIONS = 5                        # halvings of the grid's widest gap
 LAGUERRE_LEAD = 3   # samples the linear stand-in's basis starts before the channel's first lag
 PARAMS = 2 + 1 + 1   # kind and size, onset, noise correction (nominal or refitted)
+# An actuator shows only once the input moves across it, so its onset is known to the input's
+# moves, not to the sample: a tenth of a segment (6 min of a 1 h segment) is grid enough, and
+# the cost of every candidate grows with the grid.
+ONSETS_PER_SEGMENT = 60
+# Rows x channels searched by default: a day of a 3x3 process at 5 s (~2.5 s CPU); longer
+# records skip the search unless asked (diagnose's cost stays linear and within its budget).
+SEARCH_WORK = 160_000
 
 
 @dataclass
@@ -66,7 +73,7 @@ class ActuatorSearch:
     fold (cross-validation: the held-out statistic of the chosen candidate carries no
     selection over the ~80 candidates); the reported block is the one chosen on both folds."""
 
-    def __init__(self, outputs: list[OutputResidual], sig: Signals, j: int, onsets: np.ndarray):
+    def __init__(self, outputs: list[OutputResidual], sig: Signals, j: int, onsets: np.ndarray, window: int):
         self.sig, self.j, self.onsets = sig, j, onsets
         self.op = sig.u[:, j] + sig.operating_point[sig.inputs[j]]
         self.driven = [out for out in outputs if out.row[j] is not None]
@@ -76,11 +83,15 @@ class ActuatorSearch:
         moves = np.abs(np.diff(self.op[np.isfinite(self.op)]))
         self.scale = float(np.median(moves[moves > 0])) if np.any(moves > 0) else 0.0   # median move
         self._cache: dict = {}
-        # the input's median before each onset (throughout for the first): a saturation sets
-        # in on an input that worked inside its band, so the band holds that median
+        # the input's median over the segment before each onset (throughout when there is none):
+        # a saturation sets in on an input that worked inside its band, so the band holds it
         finite = np.isfinite(self.op)
-        self.median_before = np.array([np.median(self.op[:k][finite[:k]]) if finite[:k].any() else np.median(self.op[finite])
-                                       for k in onsets])
+
+        def median_before(k):
+            before = slice(max(k - window, 0), k)
+            return np.median(self.op[before][finite[before]]) if finite[before].any() else np.median(self.op[finite])
+
+        self.median_before = np.array([median_before(k) for k in onsets])
 
     def evaluate(self, block: dict) -> ActuatorCandidate:
         """The candidate under the better of two noise corrections: the nominal one (the
@@ -167,18 +178,27 @@ class ActuatorSearch:
 
 def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: int, min_segment: int,
                       step: int, logn: float, min_effect: float, skip=frozenset(),
-                      judged_throughout=frozenset()) -> list[Finding]:
+                      judged_throughout=frozenset(), enabled: bool | None = None) -> tuple[list[Finding], list[str]]:
     """Per input (except those in ``skip``), the best actuator candidate when it passes the
-    held-out tests. For inputs in ``judged_throughout`` (single loops, whose valve the
-    Hammerstein fit judged over the whole record) only a nonlinearity that set in during the
-    record is reported."""
+    held-out tests, and notes. For inputs in ``judged_throughout`` (single loops, whose valve
+    the Hammerstein fit judged over the whole record) only a nonlinearity that set in during
+    the record is reported. ``enabled``: None searches when the record's rows times the
+    channels searched stay within SEARCH_WORK (the cost of the ~80 candidates grows with both),
+    True always, False never."""
     n = len(sig.time_s)
-    onsets = np.unique(np.r_[first_onset, np.arange(first_onset + min_segment, n - min_segment + 1, step)])
+    inputs = [j for j, name in enumerate(sig.inputs) if name not in skip]
+    channels = sum(out.row[j] is not None for out in outputs for j in inputs)
+    if enabled is False or not channels:
+        return [], []
+    if enabled is None and n * channels > SEARCH_WORK:
+        return [], [f"actuator nonlinearities that set in during the record not searched: {n} rows x {channels} "
+                    f"channels exceed {SEARCH_WORK} (cost); pass actuator_search=True (--actuator-search) to search"]
+    coarse = max(step, min_segment // ONSETS_PER_SEGMENT)
+    onsets = np.unique(np.r_[first_onset, np.arange(first_onset + min_segment, n - min_segment + 1, coarse)])
     found = []
-    for j, name in enumerate(sig.inputs):
-        if name in skip:
-            continue
-        search = ActuatorSearch(outputs, sig, j, onsets)
+    for j in inputs:
+        name = sig.inputs[j]
+        search = ActuatorSearch(outputs, sig, j, onsets, min_segment)
         if not search.driven or search.scale == 0.0:
             continue
         # per output: the held-out statistic of the candidates chosen on fold 0 and on fold 1
@@ -213,7 +233,7 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
             score=score, change=changes[k_top],
             extra_changes=[c for k, c in enumerate(changes) if k != k_top],
             outputs_driven=tuple(out.name for out in search.driven)))
-    return found
+    return found, []
 
 
 def model_correction_gains(out: OutputResidual, response: np.ndarray, onsets: np.ndarray) -> OnsetGains:

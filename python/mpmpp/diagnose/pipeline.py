@@ -94,7 +94,7 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
 
 
 def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float = SEGMENT_S,
-             block_s: float = BLOCK_S, min_effect: float = 0.01) -> DiagnoseResult:
+             block_s: float = BLOCK_S, min_effect: float = 0.01, actuator_search: bool | None = None) -> DiagnoseResult:
     """Ranked findings (docs/formats.md ``diagnose --json``) for ``model`` against ``data``.
 
     ``min_effect``: practical significance; a finding must remove at least this fraction of the
@@ -108,6 +108,10 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     ``min_segment_s`` / ``block_s``: preferred shortest segment and held-out block; a record
     shorter than three segments / eight blocks gets a third / an eighth of its length
     (``record_lengths``).
+
+    ``actuator_search``: search for actuator nonlinearities that set in during the record
+    (True), never (False), or when the record is within the search's cost budget (None; a day
+    of a 3x3 process at 5 s, see ``actuator.SEARCH_WORK``; a note says when it was skipped).
     """
     lengths = record_lengths(len(data), model.sample_time_s, min_segment_s, block_s)
     prepared = diagnosis_signals(model, data, train_end_s)
@@ -142,8 +146,11 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     for nl in valves:
         found = [f for f in found if not _actuator_rival(f, nl)] + [nl]
     judged = actuated | {nl.input for nl in valves}
-    for nl in actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect, skip=judged,
-                                judged_throughout={sig.inputs[lp.input] for lp in loops}):
+    actuators, actuator_notes = actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect,
+                                                  skip=judged, judged_throughout={sig.inputs[lp.input] for lp in loops},
+                                                  enabled=actuator_search)
+    notes += actuator_notes
+    for nl in actuators:
         rivals = [f for f in found if _actuator_rival(f, nl)]
         if nl.score > sum(rival_score(f, nl, outputs) for f in rivals):
             found = [f for f in found if all(f is not r for r in rivals)] + [nl]

@@ -12,6 +12,8 @@
   (`ProjectedOnsetScan`) against NumPy projecting it and scanning with suffix sums (peer);
 - the step + ramp trend fit over all onsets (FFT cross-correlations) against one least-squares
   fit per onset with numpy.linalg.lstsq (peer);
+- the refitted-noise onset gains of an actuator candidate (`_core.RefittedNoise`) against the
+  same sums in NumPy (per-row lag outer products, reduceat, batched solves; peer);
 - the C++ k-step predictor against scipy.signal.lfilter doing the same filtering (peer).
 """
 from __future__ import annotations
@@ -37,6 +39,7 @@ from mpmpp.diagnose.trend import trend_fit  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
 from diagnose_eval import model_of  # noqa: E402
+from refitted_noise_reference import numpy_onset_gains  # noqa: E402
 from timing import best_of  # noqa: E402
 from trend_reference import brute_trend  # noqa: E402
 
@@ -149,6 +152,14 @@ def kernel_ratios(n: int) -> None:
     assert brute_trend(e, ok, hinv, 0, 120, 120)[0] == trend_fit(e, ok, hinv, 0, 120, 120).onset
     print(f"trend fit over {len(range(120, n - 240, 120))} onsets, {n} samples: FFT {1e3 * t_fft:.1f} ms, "
           f"least squares per onset {1e3 * t_ls:.0f} ms -> {t_ls / t_fft:.0f}x faster")
+
+    onsets = np.r_[0, np.arange(720, n - 720 + 1, 12)]
+    kernel = _core.RefittedNoise(e, folds[0], folds[1], onsets.tolist(), 5)
+    t_rn = best_of(lambda: kernel.gains(psi), 20, time.process_time)[0]
+    t_rn_np = best_of(lambda: numpy_onset_gains(e, psi, folds, onsets, 5), 5, time.process_time)[0]
+    assert np.allclose(numpy_onset_gains(e, psi, folds, onsets, 5)[1], kernel.gains(psi).held_out, rtol=1e-6, atol=1e-6)
+    print(f"refitted-noise onset gains over {len(onsets)} onsets, {n} samples: C++ {1e3 * t_rn:.2f} ms, "
+          f"NumPy {1e3 * t_rn_np:.1f} ms -> C++ is {t_rn_np / t_rn:.0f}x faster")
 
     g = mpmpp.TransferFunction([0.0763], [1.0, -0.0723], 15)
     h = mpmpp.TransferFunction([1.0, -0.5], [1.0, 0.5])

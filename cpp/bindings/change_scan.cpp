@@ -52,8 +52,6 @@ void bind_change_scan(py::module_& m) {
   m.def("fit_ar", &fit_ar, py::arg("e"), py::arg("order"), py::arg("begin"), py::arg("end"));
   m.def("split_ar", &split_ar, py::arg("e"), py::arg("order"), py::arg("min_segment"),
         py::arg("step"), py::call_guard<py::gil_scoped_release>());
-  m.def("backlash", &backlash, py::arg("u"), py::arg("width"));
-  m.def("stick_slip", &stick_slip, py::arg("u"), py::arg("band"));
 }
 
 }  // namespace mpmpp::bindings

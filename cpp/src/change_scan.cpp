@@ -437,32 +437,4 @@ ArSplit split_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::I
   return out;
 }
 
-Eigen::VectorXd backlash(const Eigen::Ref<const Eigen::VectorXd>& u, double width) {
-  if (!(width >= 0.0) || !std::isfinite(width)) throw InputError("backlash width must be >= 0");
-  Eigen::VectorXd out(u.size());
-  if (u.size() == 0) return out;
-  const double half = 0.5 * width;
-  double pos = u[0];
-  for (Eigen::Index t = 0; t < u.size(); ++t) {
-    if (u[t] > pos + half)
-      pos = u[t] - half;
-    else if (u[t] < pos - half)
-      pos = u[t] + half;
-    out[t] = pos;
-  }
-  return out;
-}
-
-Eigen::VectorXd stick_slip(const Eigen::Ref<const Eigen::VectorXd>& u, double band) {
-  if (!(band >= 0.0) || !std::isfinite(band)) throw InputError("stick-slip band must be >= 0");
-  Eigen::VectorXd out(u.size());
-  if (u.size() == 0) return out;
-  double pos = u[0];
-  for (Eigen::Index t = 0; t < u.size(); ++t) {
-    if (std::abs(u[t] - pos) > band) pos = u[t];
-    out[t] = pos;
-  }
-  return out;
-}
-
 }  // namespace mpmpp

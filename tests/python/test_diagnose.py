@@ -60,22 +60,6 @@ def test_split_ar_and_fit_ar_match_numpy():
     np.testing.assert_allclose(_core.fit_ar(e, order, 1000, 1800), np.r_[1.0, -coef], atol=1e-10)
 
 
-def test_backlash_and_stick_slip_match_a_plain_loop():
-    u = np.array([0.0, 0.2, 0.6, 1.0, 0.8, 0.5, 0.3, 0.6, -0.2])
-    ref, pos = [], u[0]
-    for x in u:
-        pos = x - 0.25 if x > pos + 0.25 else (x + 0.25 if x < pos - 0.25 else pos)
-        ref.append(pos)
-    np.testing.assert_allclose(_core.backlash(u, 0.5), ref)
-    with pytest.raises(ValueError, match="width"):
-        _core.backlash(u, -1.0)
-    ref, pos = [], u[0]
-    for x in u:
-        pos = x if abs(x - pos) > 0.35 else pos
-        ref.append(pos)
-    np.testing.assert_allclose(_core.stick_slip(u, 0.35), ref)
-
-
 # ---- the example cases --------------------------------------------------------------------
 
 @pytest.mark.parametrize("case", CASES)

@@ -12,14 +12,7 @@ from mpmpp.diagnose import diagnose
 from mpmpp.diagnose.refitted_noise import RefittedNoise
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
-
-
-def lag_vectors(x, order):
-    """Rows z_t = (x_t, x_{t-1}, ..., x_{t-order}), zeros before the start."""
-    z = np.zeros((len(x), order + 1))
-    for k in range(order + 1):
-        z[k:, k] = x[: len(x) - k]
-    return z
+from refitted_noise_reference import lag_vectors
 
 
 def numpy_refitted(e, psi, onset, train, test, order):

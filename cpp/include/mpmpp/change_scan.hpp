@@ -110,12 +110,4 @@ struct ArSplit {
 ArSplit split_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index min_segment,
                  Eigen::Index step);
 
-// Actuator with backlash (play) of total width `width`: the output follows the input only
-// once the input has moved more than width/2 past it, as a valve with a loose linkage does.
-Eigen::VectorXd backlash(const Eigen::Ref<const Eigen::VectorXd>& u, double width);
-
-// Actuator with stick-slip (a deadband on the move): the position stays put until the
-// command differs from it by more than `band`, then jumps to the command.
-Eigen::VectorXd stick_slip(const Eigen::Ref<const Eigen::VectorXd>& u, double band);
-
 }  // namespace mpmpp

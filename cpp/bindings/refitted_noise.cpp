@@ -18,10 +18,12 @@ void bind_refitted_noise(py::module_& m) {
   py::class_<RefittedNoise>(m, "RefittedNoise",
                             "scores candidate terms in one output's one-step error with the AR "
                             "noise correction refitted for each, at every onset of a grid")
-      .def(py::init<const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
-                    const Eigen::Ref<const Eigen::VectorXd>&, const std::vector<Eigen::Index>&, int>(),
+      .def(py::init<
+               const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
+               const Eigen::Ref<const Eigen::VectorXd>&, const std::vector<Eigen::Index>&, int>(),
            py::arg("e"), py::arg("fold0"), py::arg("fold1"), py::arg("onsets"), py::arg("order"))
-      .def("gains", &RefittedNoise::gains, py::arg("psi"), py::call_guard<py::gil_scoped_release>());
+      .def("gains", &RefittedNoise::gains, py::arg("psi"),
+           py::call_guard<py::gil_scoped_release>());
 }
 
 }  // namespace mpmpp::bindings

@@ -19,7 +19,8 @@ void lags(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Index t, int order,
 // matrices' fixed size (order + 1) or Eigen::Dynamic.
 template <int P1>
 bool ar_errors(const Eigen::Matrix<double, P1, P1>& fit_gram,
-               const Eigen::Matrix<double, P1, P1>& score_gram, int order, double& fit, double& held) {
+               const Eigen::Matrix<double, P1, P1>& score_gram, int order, double& fit,
+               double& held) {
   constexpr int P = P1 == Eigen::Dynamic ? Eigen::Dynamic : P1 - 1;
   const Eigen::LDLT<Eigen::Matrix<double, P, P>> ldlt(fit_gram.bottomRightCorner(order, order));
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive() ||
@@ -112,8 +113,10 @@ OnsetGains RefittedNoise::gains(const Eigen::Ref<const Eigen::VectorXd>& psi) co
     throw InputError("candidate term must have the length of the error (" +
                      std::to_string(e_.size()) + ")");
   switch (order_ + 1) {  // fixed-size lag matrices for the order diagnose uses
-    case 6: return scores<6>(psi);
-    default: return scores<Eigen::Dynamic>(psi);
+    case 6:
+      return scores<6>(psi);
+    default:
+      return scores<Eigen::Dynamic>(psi);
   }
 }
 

@@ -30,7 +30,8 @@ std::pair<double, double> explicit_fit(const Eigen::VectorXd& e, const Eigen::Ve
     }
   const Eigen::VectorXd a = a_rows.colPivHouseholderQr().solve(b_rows);
   const Eigen::VectorXd resid = z.col(0) - z.rightCols(order) * a;
-  return {(resid.array().square() * train.array()).sum(), (resid.array().square() * test.array()).sum()};
+  return {(resid.array().square() * train.array()).sum(),
+          (resid.array().square() * test.array()).sum()};
 }
 
 TEST(RefittedNoise, MatchesExplicitLeastSquaresArFits) {
@@ -51,10 +52,12 @@ TEST(RefittedNoise, MatchesExplicitLeastSquaresArFits) {
     const Eigen::VectorXd* folds[2] = {&fold0, &fold1};
     for (std::size_t k = 0; k < onsets.size(); ++k)
       for (int f = 0; f < 2; ++f) {
-        const auto nominal = explicit_fit(e, Eigen::VectorXd::Zero(n), n, *folds[f], *folds[1 - f], order);
+        const auto nominal =
+            explicit_fit(e, Eigen::VectorXd::Zero(n), n, *folds[f], *folds[1 - f], order);
         const auto cand = explicit_fit(e, psi, onsets[k], *folds[f], *folds[1 - f], order);
         EXPECT_NEAR(g.in_fold(k, f), folds[f]->sum() * std::log(nominal.first / cand.first), 1e-6);
-        EXPECT_NEAR(g.held_out(k, f), folds[1 - f]->sum() * std::log(nominal.second / cand.second), 1e-6);
+        EXPECT_NEAR(g.held_out(k, f), folds[1 - f]->sum() * std::log(nominal.second / cand.second),
+                    1e-6);
       }
     // the term switched on at 1200 explains most there
     Eigen::Index best;

@@ -43,13 +43,13 @@ class RefittedNoise {
   OnsetGains scores(const Eigen::Ref<const Eigen::VectorXd>& psi) const;
 
   Eigen::VectorXd e_, weight_;
-  std::vector<int> fold_;              // per row: 0, 1, or -1 (in neither fold)
+  std::vector<int> fold_;  // per row: 0, 1, or -1 (in neither fold)
   std::vector<Eigen::Index> onsets_;
   int order_;
-  Eigen::MatrixXd gram_[2];            // M^e per fold
-  double rows_[2] = {0.0, 0.0};        // weight sums
+  Eigen::MatrixXd gram_[2];      // M^e per fold
+  double rows_[2] = {0.0, 0.0};  // weight sums
   double nominal_fit_[2] = {0.0, 0.0}, nominal_held_[2] = {0.0, 0.0};
-  bool degenerate_ = false;            // the nominal AR cannot be fitted on a fold
+  bool degenerate_ = false;  // the nominal AR cannot be fitted on a fold
 };
 
 }  // namespace mpmpp

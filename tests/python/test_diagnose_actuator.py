@@ -100,3 +100,22 @@ def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, 
         assert top.estimate["lower"] < actuator["max"] and top.estimate["upper"] > actuator["min"]
     control = diagnose(model, simulate(linear))
     assert not any(f.effect == "input_nonlinearity" for f in control.findings)
+
+
+def test_search_beyond_the_cost_budget_is_skipped_with_a_note_unless_asked(monkeypatch):
+    from mpmpp.cli import build_parser
+    from mpmpp.commands.diagnose import length_options
+    from mpmpp.diagnose import actuator
+
+    spec, _, event = _case("mpc_siso", 3)
+    model, data = nominal_model(spec), simulate(spec)
+    monkeypatch.setattr(actuator, "SEARCH_WORK", len(data) - 1)   # this record is one row over
+    skipped = diagnose(model, data)
+    assert not any(f.effect == "input_nonlinearity" for f in skipped.findings)
+    assert any("not searched" in note and "--actuator-search" in note for note in skipped.notes)
+    asked = diagnose(model, data, actuator_search=True)
+    assert asked.findings[0].effect == "input_nonlinearity" and asked.findings[0].input == event["input"]
+    args = build_parser().parse_args(["diagnose", "m.json", "d.csv", "--actuator-search"])
+    assert length_options(args)["actuator_search"] is True
+    args = build_parser().parse_args(["diagnose", "m.json", "d.csv"])
+    assert length_options(args)["actuator_search"] is None

@@ -154,6 +154,8 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
         rivals = [f for f in found if _actuator_rival(f, nl)]
         if nl.score > sum(rival_score(f, nl, outputs) for f in rivals):
             found = [f for f in found if all(f is not r for r in rivals)] + [nl]
+    found, withheld = _strongest_input_per_output(found)
+    notes += withheld
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:
         if out.name not in with_process:
@@ -195,6 +197,31 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
                           process_parts=parts,
                           notes=notes)
+
+
+CHANNEL_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input", "input_nonlinearity")
+
+
+def _strongest_input_per_output(found: list[Finding]) -> tuple[list[Finding], list[str]]:
+    """Per output, the channel findings of the input whose finding scores highest, and notes on
+    those of other inputs withheld. Every candidate is fitted to the output's residual under the
+    nominal model, which carries the effect of a change from another input: a missing coupling
+    from u2 into y1 makes y1's own controller move u1 differently, and a delay or an actuator
+    of u1 then fits part of it. The weaker one is named in a note: apply the stronger finding
+    and diagnose again to see whether it remains."""
+    top: dict[str, Finding] = {}
+    for f in found:
+        if f.effect in CHANNEL_EFFECTS and (f.output not in top or f.score > top[f.output].score):
+            top[f.output] = f
+    kept, notes = [], []
+    for f in found:
+        best = top.get(f.output)
+        if f.effect in CHANNEL_EFFECTS and best is not None and f.input != best.input:
+            notes.append(f"{f.effect} of {f.input} -> {f.output} (score {f.score:.0f}) withheld: the {best.effect} "
+                         f"of {best.input} -> {f.output} explains more (score {best.score:.0f}); apply it and diagnose again")
+        else:
+            kept.append(f)
+    return kept, notes
 
 
 def _actuator_rival(f: Finding, nl: Finding) -> bool:

@@ -1,5 +1,6 @@
 #include "mpmpp/refitted_noise.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -40,11 +41,12 @@ RefittedNoise::RefittedNoise(const Eigen::Ref<const Eigen::VectorXd>& e,
                              const Eigen::Ref<const Eigen::VectorXd>& fold0,
                              const Eigen::Ref<const Eigen::VectorXd>& fold1,
                              const std::vector<Eigen::Index>& onsets, int order)
-    : e_(e), weight_(fold0 + fold1), fold_(e.size(), -1), onsets_(onsets), order_(order) {
+    : e_(e), fold_(e.size(), -1), onsets_(onsets), order_(order) {
   const Eigen::Index n = e.size();
   if (order < 1) throw InputError("AR order must be >= 1");
   if (fold0.size() != n || fold1.size() != n)
     throw InputError("fold weights must have the length of the error (" + std::to_string(n) + ")");
+  weight_ = fold0 + fold1;
   if (!e.allFinite()) throw InputError("the one-step error must be finite (zero-fill gaps)");
   for (std::size_t k = 0; k < onsets.size(); ++k)
     if (onsets[k] < 0 || onsets[k] >= n || (k > 0 && onsets[k] <= onsets[k - 1]))

@@ -60,6 +60,8 @@ def test_refitted_noise_rejects_inconsistent_input():
     folds = [np.ones(500), np.zeros(500)]   # everything in one fold
     with pytest.raises(ValueError, match="both folds"):
         RefittedNoise(e, [np.ones(500), np.ones(500)], np.array([0, 100]))
+    with pytest.raises(ValueError, match="fold weights must have the length"):
+        RefittedNoise(e, [np.ones(10), np.zeros(10)], np.array([0]))
     with pytest.raises(ValueError, match="increasing"):
         RefittedNoise(e, folds, np.array([100, 50]))
     with pytest.raises(ValueError, match="length"):

@@ -10,7 +10,7 @@ import mpmpp
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.result import InsufficientData
-from mpmpp.diagnose.whitening import NOISE_ORDER, TREND_GRID, masked_ar
+from mpmpp.diagnose.whitening import BASIS_LEAD, INPUT_BASIS_FUNCTIONS, NOISE_ORDER, TREND_GRID, masked_ar
 from mpmpp.update import update
 
 import closed_loop_case as loop
@@ -81,9 +81,22 @@ def test_no_noise_model_real_noise_change_is_found_after_its_onset():
     assert abs(res.findings[0].onset_s - 4000 * loop.TS) <= 3600
 
 
+def laguerre_reference(u, pole, count):
+    """Laguerre functions of u (scipy.signal.lfilter): sqrt(1 - a^2) q^-1 / (1 - a q^-1), then
+    each through the all-pass (q^-1 - a) / (1 - a q^-1)."""
+    x = lfilter([0.0, np.sqrt(1 - pole * pole)], [1.0, -pole], u)
+    columns = [x]
+    for _ in range(count - 1):
+        x = lfilter([-pole, 1.0], [1.0, -pole], x)
+        columns.append(x)
+    return np.column_stack(columns)
+
+
 def test_estimated_noise_model_matches_least_squares_reference():
-    """H = 1/A from the output error: against a plain NumPy least-squares AR fit on the same
-    rows, and close to the true AR(2) disturbance (open loop, white input)."""
+    """H = 1/A from the output error: against a plain NumPy least-squares ARX fit on the same
+    rows (AR beside a Laguerre basis of the input from a few samples before its dead time, whose
+    coefficients are dropped), and close to
+    the true AR(2) disturbance (open loop, white input)."""
     rng = np.random.default_rng(5)
     n = 20000
     u = rng.standard_normal(n)
@@ -109,11 +122,13 @@ def test_estimated_noise_model_matches_least_squares_reference():
     vd = vd - vd[ok].mean()
     rows = np.arange(60, n)
     lagged = vd[rows[:, None] - np.arange(1, NOISE_ORDER + 1)]
-    a_ref = np.linalg.lstsq(lagged, vd[rows], rcond=None)[0]
+    # the basis: G's pole 0.9, the input delayed to BASIS_LEAD samples before G's delay
+    shift = d - BASIS_LEAD
+    inputs = laguerre_reference(np.r_[np.zeros(shift), (u - u.mean())[: n - shift]], 0.9, INPUT_BASIS_FUNCTIONS)
+    a_ref = np.linalg.lstsq(np.column_stack([lagged, inputs[rows]]), vd[rows], rcond=None)[0][:NOISE_ORDER]
     assert np.allclose(h.den[1:], -a_ref, atol=1e-6)
     assert h.den[1] == pytest.approx(-1.2, abs=0.05) and h.den[2] == pytest.approx(0.5, abs=0.05)
     assert np.all(np.abs(h.den[3:]) < 0.05)
-
 
 
 @pytest.mark.parametrize("rate", [2e-4, 1e-3])
@@ -139,6 +154,23 @@ def test_masked_ar_reports_too_little_data_not_a_singular_matrix():
         masked_ar(e, np.zeros(500, bool))
     with pytest.raises(InsufficientData):
         masked_ar(np.zeros(500), np.ones(500, bool))
+
+
+def test_masked_ar_beside_an_input_that_never_moves_is_the_plain_ar():
+    """An input column that is zero on the rows (a valve held at its limit) leaves the normal
+    equations singular: the minimum-norm solution is the AR fitted beside the other columns."""
+    rng = np.random.default_rng(1)
+    e = lfilter([1.0], [1.0, -0.6], rng.standard_normal(2000))
+    moving = rng.standard_normal((2000, 1))
+    inputs = np.column_stack([moving, np.zeros(2000)])
+    mask = np.arange(2000) >= 10
+    with_still = masked_ar(e, mask, 3, inputs)
+    assert np.allclose(with_still, masked_ar(e, mask, 3, moving), atol=1e-10)
+    rows = np.flatnonzero(mask)
+    lagged = e[rows[:, None] - np.arange(1, 4)]
+    ref = np.linalg.lstsq(np.column_stack([lagged, moving[rows]]), e[rows], rcond=None)[0]
+    assert np.allclose(with_still[1:], -ref[:3], atol=1e-10)
+    assert with_still[1] == pytest.approx(-0.6, abs=0.05)
 
 
 def test_change_in_the_last_block_leaves_a_note_not_an_error():

@@ -7,8 +7,8 @@ from scipy.signal import lfilter
 
 from mpmpp.diagnose import diagnose
 from mpmpp.diagnose.pipeline import diagnosis_signals
-from mpmpp.diagnose.process_error import (LAGUERRE_FUNCTIONS, explanatory_columns, laguerre_filters, laguerre_pole,
-                                          process_error)
+from mpmpp.diagnose.laguerre import LAGUERRE_FUNCTIONS, laguerre_filters, laguerre_pole
+from mpmpp.diagnose.process_error import explanatory_columns, process_error
 from mpmpp.diagnose.result import ModelChange
 from mpmpp.update import update
 

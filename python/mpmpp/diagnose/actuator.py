@@ -21,7 +21,7 @@ from ..signals import Signals, per_segment
 from ..stiction.valve import valve_position
 from .errors import held_out_error
 from .process import first_lag
-from .process_error import laguerre_filters, laguerre_pole
+from .laguerre import laguerre_filters, laguerre_pole
 from .refitted_noise import OnsetGains, RefittedNoise
 from .result import Finding, ModelChange
 from .scoring import confidence

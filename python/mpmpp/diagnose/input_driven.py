@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..signals import per_segment
-from .process_error import basis_responses, laguerre_filters, laguerre_pole
+from .laguerre import basis_responses, laguerre_filters, laguerre_pole
 from .whitening import NOISE_ORDER, OutputResidual
 
 

@@ -34,7 +34,7 @@ from .errors import held_out_error
 from .noise import drift_finding
 from .refine import refine
 from .result import Finding, InsufficientData, ModelChange
-from .scoring import ProfilePoint, ci_from_profile, confidence
+from .scoring import ProfilePoint, ci_from_profile, confidence, theta_ci_from_profile
 from .whitening import Nuisance, OutputResidual, disturbance_nuisance, disturbance_onsets
 
 TIME_CONSTANT_FACTORS = (0.33, 0.5, 0.67, 0.8, 1.25, 1.5, 2.0, 3.0)
@@ -360,7 +360,8 @@ def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
         params = top.shape.params + (1 if top.onset > 0 else 0)
         top.heldout = heldout
         top.score = heldout - 0.5 * params * logn
-        top.profile = [ProfilePoint(f.shape.label, f.statistic) for f in group]
+        top.profile = [ProfilePoint(f.shape.label, f.statistic, (f.theta - 1.96 * f.theta_se, f.theta + 1.96 * f.theta_se))
+                       for f in group]
         out.append(top)
     return out
 
@@ -539,7 +540,8 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
                 f"{first_lag(s.nominal) * sig.sample_time_s:.0f} s {when}")
     else:
         pole = 1.0 - float(s.shape.num[0])
-        estimate = {"gain": theta, "ci95": ci, "delay_samples": int(s.label),
+        estimate = {"gain": theta, "ci95": theta_ci_from_profile(fit.profile, fit.statistic) if fit.profile else ci,
+                    "delay_samples": int(s.label),
                     "time_constant_s": (-sig.sample_time_s / math.log(pole)) if pole > 0 else 0.0}
         what = "input" if s.kind == "input" else "data column"
         text = (f"{out.name} responds to {what} {s.column} (gain about {theta:.3g}, "

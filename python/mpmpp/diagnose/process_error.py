@@ -18,35 +18,15 @@ model error.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .._core import TransferFunction
 from ..signals import Signals, per_segment
 from .errors import one_step_errors
+from .laguerre import basis_responses, laguerre_filters, laguerre_pole
 from .result import ModelChange
 
-LAGUERRE_FUNCTIONS = 8
-DEFAULT_POLE = math.exp(-1.0 / 10.0)     # a 10-sample time constant when the output has no channel
 MIN_FIT_ROWS = 50
-
-
-def laguerre_pole(sig: Signals, i: int) -> float:
-    """The slowest real pole among output i's channels (0.5..0.99): the basis then spans the
-    output's own dynamics with few functions."""
-    poles = [abs(p) for g in sig.rows[i] if g is not None for p in np.asarray(g.poles()) if 0.0 < abs(p) < 1.0]
-    return float(np.clip(max(poles, default=DEFAULT_POLE), 0.5, 0.99))
-
-
-def laguerre_filters(pole: float, count: int = LAGUERRE_FUNCTIONS) -> list[TransferFunction]:
-    """L_k(q) = sqrt(1 - a^2) q^-1 / (1 - a q^-1) ((q^-1 - a) / (1 - a q^-1))^(k-1), k = 1..count."""
-    first = TransferFunction([math.sqrt(1.0 - pole * pole)], [1.0, -pole], 1)
-    all_pass = TransferFunction([-pole, 1.0], [1.0, -pole], 0)
-    filters = [first]
-    for _ in range(count - 1):
-        filters.append(filters[-1].series(all_pass))
-    return filters
 
 
 def explanatory_columns(sig: Signals, changes: list[ModelChange]) -> tuple[list[str], np.ndarray]:
@@ -58,13 +38,6 @@ def explanatory_columns(sig: Signals, changes: list[ModelChange]) -> tuple[list[
             names.append(c.input)
             cols.append(sig.z[:, sig.extras.index(c.input)])
     return names, np.column_stack(cols)
-
-
-def basis_responses(sig: Signals, columns: np.ndarray, filters: list[TransferFunction]) -> np.ndarray:
-    """Every column through every basis filter, per data segment (filters start at rest)."""
-    raw = np.nan_to_num(columns)
-    return per_segment(sig, lambda xs: np.column_stack(
-        [g.filter(xs[:, k]) for k in range(xs.shape[1]) for g in filters]), raw)
 
 
 class ProcessBasis:

@@ -1,0 +1,40 @@
+"""An orthonormal Laguerre basis of the inputs: a linear filter of the inputs expanded on few
+functions (pole from the output's slowest channel), every function delayed one sample (no lag
+0: in closed loop u(t) may already react to y(t)). It spans a channel change of any gain,
+time constant or dead time near the model's with far fewer parameters than a FIR long enough
+for slow channels."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._core import TransferFunction
+from ..signals import Signals, per_segment
+
+LAGUERRE_FUNCTIONS = 8
+DEFAULT_POLE = math.exp(-1.0 / 10.0)     # a 10-sample time constant when the output has no channel
+
+
+def laguerre_pole(sig: Signals, i: int) -> float:
+    """The slowest real pole among output i's channels (0.5..0.99): the basis then spans the
+    output's own dynamics with few functions."""
+    poles = [abs(p) for g in sig.rows[i] if g is not None for p in np.asarray(g.poles()) if 0.0 < abs(p) < 1.0]
+    return float(np.clip(max(poles, default=DEFAULT_POLE), 0.5, 0.99))
+
+
+def laguerre_filters(pole: float, count: int = LAGUERRE_FUNCTIONS) -> list[TransferFunction]:
+    """L_k(q) = sqrt(1 - a^2) q^-1 / (1 - a q^-1) ((q^-1 - a) / (1 - a q^-1))^(k-1), k = 1..count."""
+    first = TransferFunction([math.sqrt(1.0 - pole * pole)], [1.0, -pole], 1)
+    all_pass = TransferFunction([-pole, 1.0], [1.0, -pole], 0)
+    filters = [first]
+    for _ in range(count - 1):
+        filters.append(filters[-1].series(all_pass))
+    return filters
+
+
+def basis_responses(sig: Signals, columns: np.ndarray, filters: list[TransferFunction]) -> np.ndarray:
+    """Every column through every basis filter, per data segment (filters start at rest)."""
+    raw = np.nan_to_num(columns)
+    return per_segment(sig, lambda xs: np.column_stack(
+        [g.filter(xs[:, k]) for k in range(xs.shape[1]) for g in filters]), raw)

@@ -12,6 +12,7 @@ import pytest
 from mpmpp import TransferFunction, families
 from mpmpp.diagnose import diagnose
 from mpmpp.diagnose.pipeline import CHANNEL_EFFECTS, _without_unconfirmed_standing_changes, diagnosis_signals
+from mpmpp.diagnose.process_error import process_parts
 from mpmpp.diagnose.result import Finding, ModelChange
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
@@ -47,8 +48,11 @@ def test_a_change_throughout_stays_only_when_the_process_part_confirms_it(plant_
     model = loop.model()
     sig = diagnosis_signals(model, loop.simulate(n=8000, seed=3, onset=0, gain=plant_gain)).sig
     finding = standing_gain(model, found)
-    got, notes = _without_unconfirmed_standing_changes([finding], sig, 0, 720)
+    def parts_of(f):
+        return process_parts(sig, 0, f.model_changes(), sig.seconds_to_index(f.onset_s), 720)
+
+    got, notes = _without_unconfirmed_standing_changes([finding], sig, 0, 720, parts_of)
     assert (got == [finding]) == kept
     assert bool(notes) != kept and all("withheld" in n and "process part" in n for n in notes)
     later = standing_gain(model, found, onset_s=float(sig.time_s[4000]))
-    assert _without_unconfirmed_standing_changes([later], sig, 0, 720) == ([later], [])
+    assert _without_unconfirmed_standing_changes([later], sig, 0, 720, parts_of) == ([later], [])

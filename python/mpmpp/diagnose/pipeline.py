@@ -156,7 +156,17 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
             found = [f for f in found if all(f is not r for r in rivals)] + [nl]
     found, withheld = _strongest_input_per_output(found)
     notes += withheld
-    found, withheld = _without_unconfirmed_standing_changes(found, sig, first_onset, block)
+    # process parts per finding, computed once for the check below and the result; the finding
+    # is kept beside them, so a withheld one's id cannot be reused by a later finding
+    parts: dict = {}
+
+    def parts_of(f: Finding):
+        if id(f) not in parts:
+            parts[id(f)] = (f, process_parts(sig, sig.outputs.index(f.output), f.model_changes(),
+                                             sig.seconds_to_index(f.onset_s), block))
+        return parts[id(f)][1]
+
+    found, withheld = _without_unconfirmed_standing_changes(found, sig, first_onset, block, parts_of)
     notes += withheld
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:
@@ -185,19 +195,18 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
         f.id = f"F{k}"
     after = {f.id: one_step_errors(sig, sig.outputs.index(f.output), f.model_changes())
              for f in found if f.output is not None}
-    parts = {}
+    shown = {}
     for f in found:
         if f.output is not None:
-            parts[f.id] = process_parts(sig, sig.outputs.index(f.output), f.model_changes(),
-                                        sig.seconds_to_index(f.onset_s), block)
-            f.process_error_before, f.process_error_after = (held_out_rms(p, block) for p in parts[f.id])
+            shown[f.id] = parts_of(f)
+            f.process_error_before, f.process_error_after = (held_out_rms(p, block) for p in shown[f.id])
         f.evidence_confidence = f.confidence
         calibrated = None if f.calibrated else calibrated_confidence({**f.to_dict(), "score": f.score})
         if calibrated is not None:
             f.confidence = calibrated
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
-                          process_parts=parts,
+                          process_parts=shown,
                           notes=notes)
 
 
@@ -227,22 +236,22 @@ def _strongest_input_per_output(found: list[Finding]) -> tuple[list[Finding], li
     return kept, notes
 
 
-def _without_unconfirmed_standing_changes(found: list[Finding], sig, first_onset: int,
-                                          block: int) -> tuple[list[Finding], list[str]]:
+def _without_unconfirmed_standing_changes(found: list[Finding], sig, first_onset: int, block: int,
+                                          parts_of) -> tuple[list[Finding], list[str]]:
     """Linear channel findings present from the first row withheld, with a note, when their update
-    raises the held-out error of the output's process part (process_error.py). A change with an
-    onset is judged against the model's own fit before it; one present throughout has no such
-    reference, and in closed loop the controller's compensation of the disturbance can fit a
-    channel change throughout (a time constant 0.8x on an exact model at 2 s sampling, score 300,
-    on tuning runs). The process part, a simulation-domain fit of y - G u on the even blocks
-    scored on the odd ones, is the independent check such a change has to pass: on tuning seeds
-    0-19, every top finding from the first row whose process part rose was wrong (4 of 4)."""
+    raises the held-out error of the output's process part (``parts_of(f)``: before and after,
+    process_error.py). A change with an onset is judged against the model's own fit before it;
+    one present throughout has no such reference, and in closed loop the controller's
+    compensation of the disturbance can fit a channel change throughout (with the disturbance
+    AR fitted beside an input basis from lag 1, a first version of whitening.input_basis: a
+    time constant 0.8x on an exact model at 2 s sampling, score 310, and on tuning seeds 0-19
+    every top finding from the first row whose process part rose was wrong, 4 of 4). The
+    process part, a simulation-domain fit of y - G u on the even blocks scored on the odd ones,
+    is the independent check such a change has to pass."""
     kept, notes = [], []
     for f in found:
-        onset = sig.seconds_to_index(f.onset_s) if f.onset_s is not None else None
-        if f.effect in LINEAR_CHANNEL_EFFECTS and onset == first_onset:
-            before, after = (held_out_rms(p, block) for p in
-                             process_parts(sig, sig.outputs.index(f.output), f.model_changes(), onset, block))
+        if f.effect in LINEAR_CHANNEL_EFFECTS and sig.seconds_to_index(f.onset_s) == first_onset:
+            before, after = (held_out_rms(p, block) for p in parts_of(f))
             if after >= before:
                 notes.append(f"{f.explanation}: withheld, its update raises the held-out error of {f.output}'s "
                              f"process part ({before:.4g} -> {after:.4g}); the controller's compensation of the "

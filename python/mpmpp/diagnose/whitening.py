@@ -301,7 +301,7 @@ def masked_ar(e: np.ndarray, mask: np.ndarray, order: int = AR_ORDER, inputs: np
         a = np.linalg.solve(lagged.T @ lagged, lagged.T @ e[rows])
     except np.linalg.LinAlgError:
         raise InsufficientData(f"the error has no variation to fit an AR({order}) to") from None
-    return np.r_[1.0, -a[:order]]
+    return np.r_[1.0, -a]
 
 
 def stable(poly: np.ndarray) -> np.ndarray:

@@ -12,11 +12,22 @@ from ._core import TransferFunction
 def step_response_error(channel: TransferFunction | None, reference: TransferFunction) -> float:
     """RMS over the settling horizon of the step-response difference, relative to the
     reference channel's steady-state gain (a missing channel has a zero response)."""
+    return float(np.sqrt(np.mean(_step_difference(channel, reference) ** 2)))
+
+
+def step_response_deviation(channel: TransferFunction | None, reference: TransferFunction) -> float:
+    """Largest step-response difference over the settling horizon, relative to the reference
+    channel's steady-state gain: a gain ratio k gives |k - 1|; a new time constant or dead
+    time the peak of its transient difference (the RMS dilutes it by the settled tail)."""
+    return float(np.max(np.abs(_step_difference(channel, reference))))
+
+
+def _step_difference(channel: TransferFunction | None, reference: TransferFunction) -> np.ndarray:
     horizon = settling_samples(reference, channel)
     s_ref = np.asarray(reference.step(horizon))
     s = np.zeros(horizon) if channel is None else np.asarray(channel.step(horizon))
     scale = max(abs(float(reference.dc_gain())), 1e-12)
-    return float(np.sqrt(np.mean((s_ref - s) ** 2)) / scale)
+    return (s_ref - s) / scale
 
 
 def settling_samples(*channels) -> int:

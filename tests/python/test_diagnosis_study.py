@@ -54,6 +54,10 @@ def test_tables_count_what_the_runs_say():
     assert rel[(fam.HELD_OUT, "[0.99, 1]")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.99, 1]")]["right"] == 1
     assert rel[(fam.HELD_OUT, "[0.9, 0.99)")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.9, 0.99)")]["right"] == 0
     [held] = ds.reliability_by_effect(runs)   # the tuning run has no finding
+    runs[0]["evidence"], runs[1]["evidence"] = 250.0, 4.0
+    ev = {r["bin"]: r for r in ds.evidence_rows(runs)}
+    assert set(ev) == {"[0, 10)", "[100, inf)"}   # runs without an evidence are left out
+    assert (ev["[100, inf)"]["n"], ev["[100, inf)"]["right"], ev["[0, 10)"]["right"]) == (1, 1, 0)
     assert (held["split"], held["effect"]) == (fam.HELD_OUT, "gain")
     assert (held["n"], held["right"], held["n_high"], held["right_high"]) == (2, 1, 2, 1)
     assert "| held_out | gain | 1/2 (50%)" in ds.format_tables({"runs": runs, "seeds": [0], "where": "x",
@@ -64,3 +68,33 @@ def test_one_run_end_to_end():
     r = ds.run_diagnosis_seed("mpc_2x2", 1, "gain")
     assert r["top_right"] and r["update"]["true_after"] < 0.5 * r["update"]["true_before"]
     assert r["update"]["shown_after"] < r["update"]["shown_before"]
+
+
+def test_true_evidence_is_the_one_step_likelihood_ratio_of_the_true_change():
+    """Against the same statistic from a plain NumPy one-step error: y - G u filtered by H^-1,
+    with the model's own channels and noise model (this draw has one: H = 1 / (1 - 0.6 q^-1))."""
+    import numpy as np
+    from scipy.signal import lfilter
+
+    from mpmpp.simulate import simulate
+
+    spec, expect = fam.family("mpc_siso").draw(1, effect="gain")
+    model, data = nominal_model(spec), simulate(spec)
+    change = ds.true_change(spec, expect)
+    evidence = ds.true_evidence(model, data, change, expect["onset_s"])
+    g0 = model.process_dict()["y1"]["u1"]
+    h = model.noise_dict()["y1"]
+    ts = spec["sample_time_s"]
+    y = data["y1"].to_numpy() - data["y1"].mean()   # deviations from the record's means
+    u = data["u1"].to_numpy() - data["u1"].mean()
+
+    def one_step(g):
+        gu = lfilter(np.r_[np.zeros(g.delay), g.num], g.den, u)
+        return lfilter(h.den, h.num, y - gu)
+    e0, e1 = one_step(g0), one_step(change["channel"])
+    k = int(round(expect["onset_s"] / ts))
+    assert evidence > 30.0
+    want = np.sum(e0[k:] ** 2 - e1[k:] ** 2) / np.var(e0[:k])
+    assert evidence == pytest.approx(want, rel=1e-6)
+    # the true change written as the nominal channel carries no evidence
+    assert ds.true_evidence(model, data, {**change, "channel": g0}, expect["onset_s"]) == 0.0

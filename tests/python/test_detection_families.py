@@ -1,10 +1,15 @@
 """Guards on the recommended presets' behaviour on held-out scenario families
 (docs/families.md): small seeded Monte Carlos that fail when a change makes a noise change or
-normal operation raise MPM alarms. Runs are deterministic (family, seed); the bounds leave a
+normal operation raise MPM alarms, or when detection of held-out channel changes falls. Runs
+are deterministic (family, seed); the bounds leave a
 binomial margin over the measured counts, so they fail on a real regression, not on luck:
 for a detector with a 5 % false MPM alarm rate, P(3 or more of 12) = 2 %."""
 
 from mpmpp.family_study import run_family_seed
+
+
+def detected(runs, preset):
+    return sum(bool(r["presets"][preset]["detected"]) for r in runs)
 
 
 def false_mpm(runs, preset):
@@ -32,3 +37,28 @@ def test_mimo_few_mpm_alarms_in_held_out_noise_change_runs():
     assert all(r["presets"]["mimo"]["refused"] is None for r in runs)
     # Measured: 1 of 4 (seed 0: G[y1 <- u1] from 9.0 h, 2.5 h before the noise change).
     assert false_mpm(runs, "mimo") <= 1
+
+
+def test_siso_detects_held_out_gain_and_time_constant_changes():
+    """Detection is guarded at what the `siso` preset achieves, not at the issue's 95 %: 37 of
+    48 measured (mpc_siso_fast 24/24, pid_siso_slow 13/24; seeds 0-11, 2026-11-25). The bound
+    is the 1 % quantile of Binomial(48, 37/48); false MPM alarms (before the change) at most
+    what a 5 % false-alarm detector exceeds with probability 2 %."""
+    runs = [run_family_seed(name, seed, configs={"siso": "siso"}, effect=effect)
+            for name in ("mpc_siso_fast", "pid_siso_slow") for effect in ("gain", "time_constant")
+            for seed in range(12)]
+    assert all(r["presets"]["siso"]["refused"] is None for r in runs)
+    assert detected(runs, "siso") >= 30
+    assert false_mpm(runs, "siso") <= 6   # measured 0
+
+
+def test_mimo_detects_held_out_gain_changes():
+    """The `mimo` preset on gain changes of held-out families: 11 of 20 measured
+    (multi_pi_2x2 9/12, mpc_3x3_move_limits 2/8, binding move limits leave little excitation;
+    2026-11-25). Bound: the 1 % quantile of Binomial(20, 11/20); false MPM alarms as above."""
+    runs = [run_family_seed(name, seed, configs={"mimo": "mimo"}, effect="gain")
+            for name, seeds in (("multi_pi_2x2", range(12)), ("mpc_3x3_move_limits", range(8)))
+            for seed in seeds]
+    assert all(r["presets"]["mimo"]["refused"] is None for r in runs)
+    assert detected(runs, "mimo") >= 6
+    assert false_mpm(runs, "mimo") <= 3   # measured 0

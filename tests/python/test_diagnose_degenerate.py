@@ -10,7 +10,8 @@ import mpmpp
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.result import InsufficientData
-from mpmpp.diagnose.whitening import BASIS_LEAD, INPUT_BASIS_FUNCTIONS, NOISE_ORDER, TREND_GRID, masked_ar
+from mpmpp.diagnose.laguerre import BASIS_LEAD
+from mpmpp.diagnose.whitening import INPUT_BASIS_FUNCTIONS, NOISE_ORDER, TREND_GRID, masked_ar
 from mpmpp.update import update
 
 import closed_loop_case as loop

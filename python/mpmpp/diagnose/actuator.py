@@ -21,7 +21,7 @@ from ..signals import Signals, per_segment
 from ..stiction.valve import valve_position
 from .errors import held_out_error
 from .process import first_lag
-from .laguerre import laguerre_filters, laguerre_pole
+from .laguerre import delayed_before, laguerre_filters, laguerre_pole
 from .refitted_noise import OnsetGains, RefittedNoise
 from .result import Finding, ModelChange
 from .scoring import confidence
@@ -32,7 +32,6 @@ SLIP_RATIO = 0.5                           # stick-slip J / S
 # saturation limits at these quantiles of the input; each side alone, then the other side added
 LIMIT_QUANTILES = np.linspace(0.05, 0.95, 10)
 LIMIT_BISECTIONS = 5                        # halvings of the grid's widest gap
-LAGUERRE_LEAD = 3   # samples the linear stand-in's basis starts before the channel's first lag
 PARAMS = 2 + 1 + 1   # kind and size, onset, noise correction (nominal or refitted)
 # Rows x channels searched by default: a day of a 3x3 process at 5 s (~2.5 s CPU); longer
 # records skip the search unless asked (diagnose's cost stays linear and within its budget).
@@ -251,10 +250,8 @@ def linear_change_statistic(out: OutputResidual, j: int, onset: int, correction:
     output's slowest pole) of the input delayed to a few samples before the channel's first
     lag, its coefficients fitted on each fold and scored on the other (a gain, time-constant
     or dead-time change, or a mix, lies in its span)."""
-    u = np.nan_to_num(out.sig.u[:, j])
-    shift = max(first_lag(out.row[j]) - LAGUERRE_LEAD, 0)
-    delayed = np.r_[np.zeros(shift), u[: len(u) - shift]]
-    after = np.arange(len(u)) >= onset
+    delayed = delayed_before(np.nan_to_num(out.sig.u[:, j]), first_lag(out.row[j]))
+    after = np.arange(len(delayed)) >= onset
     basis = np.column_stack([np.where(after, out.channel_response(f, delayed), 0.0)
                              for f in laguerre_filters(laguerre_pole(out.sig, out.i))])
     at = np.array([onset])

@@ -14,6 +14,10 @@ from ..signals import Signals, per_segment
 
 LAGUERRE_FUNCTIONS = 8
 DEFAULT_POLE = math.exp(-1.0 / 10.0)     # a 10-sample time constant when the output has no channel
+# Samples an input basis starts before its channel's first lag: at shorter lags the input carries
+# the controller's reaction to the disturbance (feedback), not the process (whitening.input_basis,
+# actuator.linear_change_statistic).
+BASIS_LEAD = 3
 
 
 def laguerre_pole(sig: Signals, i: int) -> float:
@@ -31,6 +35,13 @@ def laguerre_filters(pole: float, count: int = LAGUERRE_FUNCTIONS) -> list[Trans
     for _ in range(count - 1):
         filters.append(filters[-1].series(all_pass))
     return filters
+
+
+def delayed_before(u: np.ndarray, lag: int) -> np.ndarray:
+    """Input u delayed to BASIS_LEAD samples before a channel whose first lag is ``lag``
+    (zeros shifted in; no delay for a channel that reacts within BASIS_LEAD samples)."""
+    shift = max(int(lag) - BASIS_LEAD, 0)
+    return np.r_[np.zeros(shift), u[: len(u) - shift]]
 
 
 def basis_responses(sig: Signals, columns: np.ndarray, filters: list[TransferFunction]) -> np.ndarray:

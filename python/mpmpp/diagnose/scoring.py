@@ -26,9 +26,14 @@ def confidence(score_plus_penalty: float, params: int) -> float:
     return 0.5 * (1.0 + math.erf(z / math.sqrt(2.0)))
 
 
+def _near_best(profile: list[ProfilePoint], statistic: float) -> list[ProfilePoint]:
+    """The grid points whose statistic is within the chi-square(1) 95 % quantile of the best."""
+    return [p for p in profile if p.statistic >= statistic - 3.84]
+
+
 def ci_from_profile(profile: list[ProfilePoint], statistic: float) -> list:
     """Grid values whose statistic is within the chi-square(1) 95 % quantile of the best."""
-    inside = [p.label for p in profile if p.statistic >= statistic - 3.84]
+    inside = [p.label for p in _near_best(profile, statistic)]
     return [float(min(inside)), float(max(inside))] if inside else [None, None]
 
 
@@ -38,5 +43,5 @@ def theta_ci_from_profile(profile: list[ProfilePoint], statistic: float) -> list
     data tell a pole and its gain apart poorly (examples/mimo_missing_coupling: pole 0.9 with
     gain 0.35 and pole 0.95 with gain 0.51 within 2 of each other), and the best shape's own
     interval then misses the truth."""
-    inside = [p.theta_ci for p in profile if p.statistic >= statistic - 3.84 and math.isfinite(p.theta_ci[0])]
+    inside = [p.theta_ci for p in _near_best(profile, statistic) if math.isfinite(p.theta_ci[0])]
     return [float(min(c[0] for c in inside)), float(max(c[1] for c in inside))] if inside else [None, None]

@@ -27,7 +27,7 @@ import numpy as np
 from .. import _core
 from .._core import TransferFunction
 from ..signals import Signals, per_segment
-from .laguerre import basis_responses, laguerre_filters, laguerre_pole
+from .laguerre import basis_responses, delayed_before, laguerre_filters, laguerre_pole
 from .result import InsufficientData
 from .trend import TrendScan, trend_fit
 
@@ -36,7 +36,6 @@ SETTLE = 60                  # samples left out after the start of each filtered
 NOISE_ORDER = 10             # AR order of a disturbance model estimated from the data
 MIN_AR_ROWS_PER_COEFFICIENT = 10
 INPUT_BASIS_FUNCTIONS = 4    # Laguerre functions per input beside every disturbance AR fit
-BASIS_LEAD = 3               # samples the basis starts before a channel's dead time
 TREND_GRID = 60              # onset grid (samples) of the step + ramp removed before that fit
 # Unmeasured step / ramp disturbances on an output: up to this many breakpoints are fitted
 # before a disturbance model or its corrections are estimated (each kept while it beats BIC).
@@ -162,9 +161,10 @@ def _corrections(free: np.ndarray, pieces: list[tuple[int, int]], inputs: np.nda
 
 def input_basis(sig: Signals, i: int, prefilter: TransferFunction | None = None) -> np.ndarray:
     """The inputs of output i's channels through INPUT_BASIS_FUNCTIONS Laguerre functions on its
-    slowest pole, each delayed to BASIS_LEAD samples before the channel's delay, per data
-    segment, through ``prefilter`` (the noise model's inverse for a one-step error). An
-    input reaches the output through its channel only after the dead time; at shorter lags
+    slowest pole, each delayed to BASIS_LEAD samples before the channel's delay
+    (laguerre.delayed_before), per data segment, through ``prefilter`` (the noise model's
+    inverse for a one-step error). An input reaches the output through its channel only after
+    the dead time; at shorter lags
     it carries the controller's reaction to the disturbance (feedback), and a basis starting
     at lag 1 took that part of the disturbance from the AR: on the hidden-effect suite's
     dead-time change 12 -> 19 samples, a channel delayed 2 samples at 1.67x then fitted the
@@ -174,9 +174,7 @@ def input_basis(sig: Signals, i: int, prefilter: TransferFunction | None = None)
     for j, g in enumerate(sig.rows[i]):
         if g is None:
             continue
-        shift = max(int(g.delay) - BASIS_LEAD, 0)
-        u = np.nan_to_num(sig.u[:, j])
-        columns.append(basis_responses(sig, np.r_[np.zeros(shift), u[: len(u) - shift]][:, None], filters))
+        columns.append(basis_responses(sig, delayed_before(np.nan_to_num(sig.u[:, j]), g.delay)[:, None], filters))
     if not columns:
         return np.zeros((len(sig.time_s), 0))
     x = np.nan_to_num(np.column_stack(columns))

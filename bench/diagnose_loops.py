@@ -1,9 +1,10 @@
 """``mpmpp identify`` then ``mpmpp diagnose`` on the stiction study's PI loops (2 h at 10 s):
 how often diagnose names ``input_nonlinearity`` on sticking valves and on the confounders.
 
-Records from studies/stiction_benchmark.py (TUNING: flow and level loops, Choudhury's valve;
-HELD-OUT: pressure-like and slow-flow loops, He's valve; confounders: linear, aggressive
-tuning, an external oscillation, a noisy linear valve). Per record the model comes from
+Records from studies/stiction_benchmark.py (TUNING: flow, level, level with a load and
+temperature-like loops, Choudhury's valve; HELD-OUT: pressure-like, slow-flow, analyser-like
+and surge-tank loops, He's valve; confounders: linear, aggressive tuning, an external
+oscillation, a noisy linear valve). Per record the model comes from
 ``model_from_data`` (records it refuses as not identified are counted apart), then
 ``diagnose``; a stiction record is a hit when the top finding is ``input_nonlinearity``.
 A sign flip is a ``gain`` or ``delay`` finding whose gain ratio is negative. The error

@@ -1,7 +1,7 @@
 """diagnose's valve gate (diagnose/valve.py): a sticking valve on an integrating (level) loop
 is named after `identify`, the confounders of the stiction study are not, and a disturbance
-that changed within the record is no valve. The gate's per-half held-out likelihood gain is
-checked against a plain NumPy re-implementation."""
+that changed within the record is no valve. The gate's held-out likelihood gains (one ARX for
+the record, two regimes split within it) are checked against a plain NumPy re-implementation."""
 import sys
 from pathlib import Path
 
@@ -67,28 +67,24 @@ def test_a_disturbance_change_off_the_middle_is_no_valve(onset):
     assert not any(f.effect == "input_nonlinearity" for f in res.findings)
 
 
-def _reference_half_gains(y, rows, regressors, folds=5):
-    """Per half of ``rows``: an ARX (regressors plus a constant) fitted by plain least squares on
-    all but one of ``folds`` contiguous blocks (edges at floor(k n / folds)), the squared errors of the left-out block summed;
-    the gain is 1/2 log of the linear over the valve sum."""
-    gains = []
-    for half in np.array_split(np.arange(len(rows)), 2):
-        sse = []
-        for phi in regressors:
-            x = np.hstack([phi[half], np.ones((len(half), 1))])
-            t = y[rows[half]]
-            total = 0.0
-            edges = (np.arange(folds + 1) * len(half)) // folds
-            for block in (np.arange(a, b) for a, b in zip(edges[:-1], edges[1:])):
-                train = np.setdiff1d(np.arange(len(half)), block)
-                beta = np.linalg.solve(x[train].T @ x[train], x[train].T @ t[train])
-                total += np.sum((t[block] - x[block] @ beta) ** 2)
-            sse.append(total)
-        gains.append(0.5 * np.log(sse[0] / sse[1]))
-    return gains
+def _reference_sse(y, rows, part, phi, folds=5):
+    """Held-out SSE on ``part`` (indices into ``rows``): an ARX (phi's columns plus a constant)
+    fitted by plain least squares on all but one of ``folds`` contiguous blocks of the part
+    (edges at floor(k n / folds)), the squared errors of the left-out block summed."""
+    x = np.hstack([phi[part], np.ones((len(part), 1))])
+    t = y[rows[part]]
+    total = 0.0
+    edges = (np.arange(folds + 1) * len(part)) // folds
+    for block in (np.arange(a, b) for a, b in zip(edges[:-1], edges[1:])):
+        train = np.setdiff1d(np.arange(len(part)), block)
+        beta = np.linalg.solve(x[train].T @ x[train], x[train].T @ t[train])
+        total += np.sum((t[block] - x[block] @ beta) ** 2)
+    return total
 
 
-def test_half_gains_match_a_plain_numpy_reference():
+def test_valve_gate_matches_a_plain_numpy_reference():
+    """The gate's valve gain against the linear valve, with one ARX for the record and with the
+    record split in two regimes (at a quarter, half, three quarters), from plain NumPy fits."""
     data = level_record("stiction", 7002)
     model = model_from_data(data, ["OP"], ["PV"]).model
     sig = diagnosis_signals(model, data).sig
@@ -97,9 +93,16 @@ def test_half_gains_match_a_plain_numpy_reference():
     lp = single_loops(sig, data)[0]
     arx = gate._ValveArx(out, sig, lp)
     u = np.nan_to_num(sig.u[:, 0])
-    position = np.nan_to_num(valve_input(sig, 0, {"kind": "stick_slip", "S": 3.0, "J": 1.5}))
-    halves = np.array_split(np.arange(len(arx.rows)), 2)
-    ours = [0.5 * np.log(arx.held_out_sse(u, h) / arx.held_out_sse(position, h)) for h in halves]
-    ref = _reference_half_gains(arx.y, arx.rows, [arx.regressors(u), arx.regressors(position)])
-    np.testing.assert_allclose(ours, ref, rtol=1e-8)
-    assert gate._helps_throughout(arx, u, position) == (min(ref) > gate.CAL_GAIN_AT_HALF)
+    rows = np.arange(len(arx.rows))
+    for s in (3.0, 0.5):
+        position = np.nan_to_num(valve_input(sig, 0, {"kind": "stick_slip", "S": s, "J": 0.5 * s}))
+        phi_u, phi_v = arx.regressors(u), arx.regressors(position)
+        for part in (rows, rows[:100], rows[300:]):
+            assert arx.held_out_sse(u, part) == pytest.approx(_reference_sse(arx.y, arx.rows, part, phi_u), rel=1e-8)
+        linear = [_reference_sse(arx.y, arx.rows, rows, phi_u)]
+        for f in gate.SPLITS:
+            c = int(f * len(rows))
+            linear.append(_reference_sse(arx.y, arx.rows, rows[:c], phi_u)
+                          + _reference_sse(arx.y, arx.rows, rows[c:], phi_u))
+        gain = 0.5 * np.log(min(linear) / _reference_sse(arx.y, arx.rows, rows, phi_v))
+        assert gate._beats_linear_explanations(arx, u, position) == (gain > gate.CAL_GAIN_AT_HALF)

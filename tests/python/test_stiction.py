@@ -319,3 +319,39 @@ def test_a_valve_without_effect_is_scored_against_the_linear_reference_without_t
         called += res.verdict
     assert left_out >= 4
     assert called <= 2
+
+
+def _benchmark():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+    import stiction_benchmark
+
+    return stiction_benchmark
+
+
+def test_every_benchmark_family_simulates_each_case_stably():
+    sb = _benchmark()
+    for family, dynamics in (("tuning", sb.TUNING), ("held-out", sb.HELD_OUT)):
+        for dyn in dynamics:
+            for case in ("stiction",) + sb.CONFOUNDERS:
+                rec = sb.make_record(family, dyn, case, 2.0, 1.0, 11)
+                assert np.all(np.isfinite(rec["pv"])) and np.max(np.abs(rec["pv"])) < 1e3, (dyn.name, case)
+                assert np.std(rec["op"]) > 0
+
+
+def test_a_load_disturbance_enters_through_the_level():
+    """level_load: the level integrates its inflow, so the load part of the disturbance has
+    first differences 0.05 load(t - 1) (gain 0.05, dead time 1), the load an AR(1) with pole
+    0.9 and unit standard deviation; the disturbance drawn before it is unchanged."""
+    import dataclasses
+
+    sb = _benchmark()
+    level = next(d for d in sb.TUNING if d.name == "level_load")
+    d = sb.disturbance("tuning", level, np.random.default_rng(3), 5000)
+    d0 = sb.disturbance("tuning", dataclasses.replace(level, load=0.0), np.random.default_rng(3), 5000)
+    assert d[0] == d0[0]
+    load = np.diff(d - d0) / 0.05
+    assert np.std(load) == pytest.approx(1.0, abs=0.03)
+    assert np.corrcoef(load[1:], load[:-1])[0, 1] == pytest.approx(0.9, abs=0.02)

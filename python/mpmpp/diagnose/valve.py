@@ -57,13 +57,13 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
             continue
         finding = _finding(out, sig, lp, fit, logn)
         # as every finding: the model update must predict the held-out blocks better (and the
-        # valve must be evidenced in both halves of the record)
+        # valve must beat a disturbance that changed within the record)
         if finding is not None and finding.error_after < finding.error_before:
             found.append(finding)
         else:
             notes.append(f"{out.name} <- {name}: the valve fit suggests {fit.kind} (confidence "
                          f"{fit.confidence:.2f}), but a model with it does not predict held-out data "
-                         f"better throughout the record")
+                         f"better than a linear valve (with the disturbance changing within the record)")
     return found, notes
 
 
@@ -98,22 +98,31 @@ class _ValveArx:
         return float(held_out_losses(phi, self.y[self.rows[part]]).sum())
 
 
-def _helps_throughout(arx: _ValveArx, u: np.ndarray, position: np.ndarray) -> bool:
-    """Valve present throughout the record: in the first and in the second half, each with its
-    own ARX, the valve's held-out log-likelihood gain per sample over the linear valve,
-    1/2 log(SSE_linear / SSE_valve), is above the fit's calibrated threshold (P(stiction) > 1/2,
-    ``mpmpp.stiction.hammerstein``). The threshold is evidence, not a share of the error: a
-    sticking valve on an integrating (level) loop removes a few per cent of the one-step error,
-    since the PV's own past already predicts most of its limit cycle, on a flow loop tens of per
-    cent. Each half carries its own disturbance correction, so a disturbance that changed within
-    the record gives no gain in the half where it is stationary; a record-wide ARX averages the
-    two regimes, and the valve's memory (under integral action the OP's direction is a function
-    of past PVs) then stands in for the misfit noise model in both halves."""
-    halves = np.array_split(np.arange(len(arx.rows)), 2)
-    if len(halves[-1]) < 10 * (N_Y + len(arx.lags) + 1):
+SPLITS = (0.25, 0.5, 0.75)   # where a disturbance may have changed within the record
+
+
+def _beats_linear_explanations(arx: _ValveArx, u: np.ndarray, position: np.ndarray) -> bool:
+    """The valve, with one ARX for the record, predicts held-out PV better than every linear
+    explanation by more than the fit's calibrated threshold (its held-out log-likelihood gain
+    per sample, 1/2 log(SSE_linear / SSE_valve), above the gain at P(stiction) = 1/2 of
+    ``mpmpp.stiction.hammerstein``): the linear valve with one ARX for the record, and the
+    linear valve with the record split into two regimes at a quarter, half or three quarters,
+    each with its own ARX (a disturbance that changed within the record). Under integral action
+    the OP's direction is a function of past PVs, so the valve's memory can stand in for a noise
+    model that changed; the split linear ARX fits such a change directly (a noise model changing
+    a quarter into an 8000-row record: -0.05 to -0.07 per sample for the valve against it, +0.02
+    against the single ARX). On a stationary record the split only adds estimation error, so the
+    valve loses almost nothing by the comparison, where requiring the threshold in each half of a
+    2 h record lost half of the sticking valves (each half's gain is too noisy)."""
+    rows = np.arange(len(arx.rows))
+    least = 10 * (N_Y + len(arx.lags) + 1)   # rows a part needs for its own 5-fold ARX
+    cuts = [int(f * len(rows)) for f in SPLITS]
+    cuts = [c for c in cuts if min(c, len(rows) - c) >= least]
+    if not cuts:
         return False
-    return all(0.5 * math.log(arx.held_out_sse(u, h) / arx.held_out_sse(position, h)) > CAL_GAIN_AT_HALF
-               for h in halves)
+    linear = min([arx.held_out_sse(u, rows)]
+                 + [arx.held_out_sse(u, rows[:c]) + arx.held_out_sse(u, rows[c:]) for c in cuts])
+    return 0.5 * math.log(linear / arx.held_out_sse(position, rows)) > CAL_GAIN_AT_HALF
 
 
 def _valve_model(arx: _ValveArx, out: OutputResidual, sig: Signals, lp: Loop, actuator: dict,
@@ -147,7 +156,7 @@ def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> F
     actuator = {**actuator_from_fit(fit.kind, fit.params), "confidence": fit.confidence}
     arx = _ValveArx(out, sig, lp)
     position = np.nan_to_num(valve_input(sig, lp.input, actuator))
-    if not _helps_throughout(arx, np.nan_to_num(sig.u[:, lp.input]), position):
+    if not _beats_linear_explanations(arx, np.nan_to_num(sig.u[:, lp.input]), position):
         return None
     change = _valve_model(arx, out, sig, lp, actuator, position)
     if change is None:

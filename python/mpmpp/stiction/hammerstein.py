@@ -48,8 +48,8 @@ N_FOLDS = 5
 # fitted on the TUNING families of studies/stiction_benchmark.py (which prints the fit). A
 # negative gain (the linear explanation predicts better) is no evidence either way: how much
 # better a sinusoid explains an external oscillation says nothing about the valve.
-CAL_SLOPE = 570.0
-CAL_GAIN_AT_HALF = 0.0027
+CAL_SLOPE = 380.0
+CAL_GAIN_AT_HALF = 0.0034
 
 HYSTERESIS_KINDS = ("stick_slip", "he", "backlash", "deadband")
 

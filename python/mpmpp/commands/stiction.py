@@ -39,7 +39,7 @@ def run(args) -> int:
     pv = _column(df, args.pv, args.data)
     sp = _column(df, args.sp, args.data) if args.sp else None
     try:
-        report = analyse_loop(op, pv, sp)
+        report = analyse_loop(op, pv, sp, names=(f"OP '{args.op}'", f"PV '{args.pv}'"))
     except ValueError as exc:
         raise ValueError(f"{args.data}: {exc}") from None
     h = report.mpmpp
@@ -52,6 +52,7 @@ def run(args) -> int:
                       "oscillating_disturbance_period_samples": h.disturbance_period},
             "baselines": {name: {"stiction": verdict, **{k: _plain(v) for k, v in details.items()}}
                           for name, (verdict, details) in report.baselines.items()},
+            "notes": report.notes,
         }, indent=2))
         return 0
     print(f"{args.data}: {len(op)} samples, OP '{args.op}', PV '{args.pv}'"
@@ -68,6 +69,8 @@ def run(args) -> int:
     if h.disturbance_period is not None:
         print(f"  the loop oscillates regularly with a period of {h.disturbance_period:.1f} samples, which a linear "
               f"valve with an oscillating disturbance predicts better than without it")
+    for note in report.notes:
+        print(f"note: {note}")
     print("baselines:")
     for name, (verdict, details) in report.baselines.items():
         text = ", ".join(f"{k} {v:.3g}" for k, v in details.items())

@@ -14,6 +14,7 @@ from .curve_fit import curve_fit_test
 from .hammerstein import HammersteinResult, fit_valve
 from .horch import horch_test
 from .kano import kano_test
+from .record_quality import record_notes
 
 BASELINES = {
     "horch": lambda op, pv, sp: horch_test(op, pv),
@@ -27,9 +28,11 @@ BASELINES = {
 class LoopReport:
     mpmpp: HammersteinResult
     baselines: dict   # name -> (verdict, details)
+    notes: list       # what the record's storage hides (record_quality)
 
 
-def analyse_loop(op, pv, sp=None) -> LoopReport:
+def analyse_loop(op, pv, sp=None, names: tuple[str, str] = ("OP", "PV")) -> LoopReport:
+    """mpmpp's fit, the baselines and the record's notes (``names``: OP's and PV's in them)."""
     op = np.asarray(op, float)
     pv = np.asarray(pv, float)
     sp = None if sp is None else np.asarray(sp, float)
@@ -38,7 +41,7 @@ def analyse_loop(op, pv, sp=None) -> LoopReport:
     for name, test in BASELINES.items():
         verdict, details = test(op, pv, sp)
         baselines[name] = (bool(verdict), details if isinstance(details, dict) else {"index": details})
-    return LoopReport(result, baselines)
+    return LoopReport(result, baselines, record_notes(dict(zip(names, (op, pv)))))
 
 
 __all__ = ["BASELINES", "HammersteinResult", "LoopReport", "analyse_loop", "fit_valve"]

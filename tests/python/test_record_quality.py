@@ -1,0 +1,60 @@
+"""Compressed and quantized loop records are named (mpmpp.stiction.record_quality): shares of
+held and linearly interpolated samples against records built by hand."""
+import json
+
+import numpy as np
+import pytest
+
+from mpmpp.cli import main
+from mpmpp.stiction.record_quality import interpolated_share, record_notes, repeated_share
+
+
+def noisy(n=751, seed=0):
+    return np.cumsum(np.random.default_rng(seed).standard_normal(n)) * 0.1 + 50.0
+
+
+def test_a_record_as_sampled_has_neither():
+    x = noisy()
+    assert repeated_share(x) == 0.0 and interpolated_share(x) == 0.0
+    assert record_notes({"PV": x}) == []
+
+
+def test_linear_interpolation_between_every_fifth_sample():
+    x = noisy()
+    kept = np.arange(0, 751, 5)                 # 0, 5, ..., 750: 150 gaps of 4 interpolated samples
+    y = np.interp(np.arange(751), kept, x[kept])
+    assert interpolated_share(y) == pytest.approx(600 / 749, abs=1e-12)
+    assert repeated_share(y) == 0.0
+    (note,) = record_notes({"PV 'FIC101.PV'": y})
+    assert note.startswith("PV 'FIC101.PV' lies on straight lines") and "80 %" in note
+
+
+def test_holding_every_fourth_sample_and_a_saturated_op():
+    x = noisy()
+    held = np.repeat(x[::4], 4)[:751]            # three of every four moves are zero
+    assert repeated_share(held) == pytest.approx(np.mean(np.diff(held) == 0.0), abs=0.01)
+    assert repeated_share(held) > 0.7 and interpolated_share(held) == 0.0
+    assert "repeats its previous value" in record_notes({"PV": held})[0]
+    op = noisy(seed=1)
+    op[200:500] = op.max()                       # at its limit (the record's largest value) for long
+    assert np.mean(np.diff(op) == 0.0) > 0.2
+    assert repeated_share(op) == 0.0 and record_notes({"OP": op}) == []
+
+
+def test_stiction_command_notes_a_compressed_pv(tmp_path, capsys):
+    from test_stiction_cli import write_loop
+    import pandas as pd
+
+    data = tmp_path / "loop.csv"
+    write_loop(data)
+    main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
+    assert json.loads(capsys.readouterr().out)["notes"] == []
+    df = pd.read_csv(data)
+    kept = np.arange(0, len(df), 3)
+    df["FIC101.PV"] = np.interp(np.arange(len(df)), kept, df["FIC101.PV"].to_numpy()[kept])
+    df.to_csv(data, index=False)
+    main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
+    (note,) = json.loads(capsys.readouterr().out)["notes"]
+    assert note.startswith("PV 'FIC101.PV' lies on straight lines")
+    assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV"]) == 0
+    assert "note: PV 'FIC101.PV' lies on straight lines" in capsys.readouterr().out

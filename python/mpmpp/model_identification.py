@@ -128,6 +128,7 @@ class ChannelSummary:
     significant: bool                   # |gain| / gain_sd >= significance_z(dead times searched)
     integrating: bool = False           # gain is then the rate gain (output units per s per input unit)
     effect: bool = False                # the numerator is not 0 at the search-corrected level (``_has_effect``)
+    unexcited: bool = False             # the input is the output's controller law and nothing else moves it
 
     @property
     def kept(self) -> bool:
@@ -137,8 +138,9 @@ class ChannelSummary:
 
     @property
     def uncertain(self) -> bool:
-        """Usable but loosely determined: sd(K) above 25 % of |K| or sd(tau) above 50 % of tau."""
-        return bool(self.gain_sd > 0.25 * abs(self.gain)
+        """Usable but loosely determined: sd(K) above 25 % of |K|, sd(tau) above 50 % of tau, or
+        an input that only the controller moved (``unexcited``: then sd(K) is no guide)."""
+        return bool(self.gain_sd > 0.25 * abs(self.gain) or self.unexcited
                     or (self.time_constant_s > 0 and not self.time_constant_sd <= 0.5 * self.time_constant_s))
 
     @property
@@ -159,7 +161,10 @@ class ChannelSummary:
                 f"{self.dead_time_ci95[1]:.4g} s)"
                 + ("" if self.kept else ", NOT significant: left out")
                 + (", UNCERTAIN: excite the loop (e.g. setpoint steps) for a firmer model"
-                   if self.kept and self.uncertain else ""))
+                   if self.kept and self.uncertain else "")
+                + (f" ({self.input} follows the controller exactly and nothing else moves it: such a "
+                   "record does not determine the process, and the gain may be far off)"
+                   if self.kept and self.unexcited else ""))
 
 
 @dataclass
@@ -291,6 +296,8 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
             if not fitted:
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
             cls, best, chans = _choose_class(fitted, n * ts, ts)
+            for j, c in enumerate(chans):
+                c.unexcited = _controller_law_exact(U[:, j], raw[:, len(inputs) + i], sp[out])
             try:
                 _check_verdict(out, chans, action)
             except NotIdentified as refusal:
@@ -726,6 +733,28 @@ def _controller_action(u, pv, sp) -> int:
     z = [coef[i] / np.sqrt(cov[i, i]) if cov[i, i] > 0 else 0.0 for i in (0, 1)]
     total = (z[0] + z[1]) / np.sqrt(2.0)
     return int(np.sign(total)) if abs(total) > 3.29 else 0
+
+
+def _controller_law_exact(u, pv, sp) -> bool:
+    """Whether u is exactly a PID law of pv with nothing else moving it: the setpoint constant
+    (or not given) and du(t) a linear function of e(t), e(t-1), e(t-2) (e = sp - pv) to rounding.
+    A controller run at the sample rate on a record without setpoint moves: its OP carries no
+    information the PV lags do not, the ARX regressors of the short dead times are collinear with
+    the law, and the direct method's estimate is not determined by the data (the stiction study's
+    flow loop, gain 1: gains of 0.24-0.30 came out, each as +- 15 %). A real controller scans
+    faster than the historian samples, so its law is not exact at 10 s and this stays False."""
+    if sp is not None and np.ptp(sp[np.isfinite(sp)]) > 0:
+        return False
+    e = -np.asarray(pv, dtype=float)
+    u = np.asarray(u, dtype=float)
+    if not (np.all(np.isfinite(e)) and np.all(np.isfinite(u))) or len(u) < 10:
+        return False
+    du = np.diff(u)[1:]
+    if not np.any(du):
+        return False
+    X = np.column_stack([e[2:], e[1:-1], e[:-2], np.ones(len(du))])
+    coef, *_ = np.linalg.lstsq(X, du, rcond=None)
+    return bool(np.sqrt(np.mean((du - X @ coef) ** 2)) <= 1e-6 * np.sqrt(np.mean(du**2)))
 
 
 def _stable_monic(den: np.ndarray) -> np.ndarray:

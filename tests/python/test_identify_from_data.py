@@ -10,6 +10,7 @@ import json
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import identification_reference as ref
@@ -467,3 +468,37 @@ def test_integrating_disturbance_is_an_inflow_unless_the_output_form_wins_clearl
     # no identified inflow form: the output form stands on its own
     alone = [first, fit(INTEGRATING, -5.0, significant=False), fit(INTEGRATING_OUTPUT_NOISE, -6.0)]
     assert _choose_class(alone, 7500.0, 10.0)[0] is INTEGRATING_OUTPUT_NOISE
+
+
+def test_an_input_only_its_controller_moves_is_flagged():
+    """A PI run at the sample rate on a record without setpoint moves: the OP is an exact law of
+    the PV, the record does not determine the process (the stiction study's flow loop, gain 1,
+    comes out at about 0.26 +- 0.04), and every channel says so; a setpoint step, or an OP that
+    something besides the controller moves, clears the flag."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+    import stiction_benchmark as sb
+    from mpmpp.model_identification import _controller_law_exact
+    from mpmpp.stiction.loop import simulate_pi_loop
+
+    flow = next(d for d in sb.TUNING if d.name == "flow")
+    rec = sb.make_record("tuning", flow, "linear", 0.0, 0.0, 8800)
+    frame = pd.DataFrame({"time": 10.0 * np.arange(751), "OP": rec["op"], "PV": rec["pv"] + 20.0})
+    (c,) = model_from_data(frame, ["OP"], ["PV"]).channels
+    assert c.unexcited and c.uncertain and "follows the controller exactly" in c.describe()
+    assert abs(c.gain - 1.0) > 4 * c.gain_sd        # why: the reported spread is no guide here
+    assert _controller_law_exact(rec["op"], rec["pv"], None)
+    rng = np.random.default_rng(1)
+    assert not _controller_law_exact(rec["op"] + 1e-3 * rng.standard_normal(751), rec["pv"], None)
+    sp = np.where(np.arange(751) < 375, 0.0, 0.5)
+    stepped = simulate_pi_loop(flow.process, flow.kc, flow.ti, 751, setpoint=sp,
+                               disturbance=0.3 * rng.standard_normal(751))
+    # the law of the control error is exact, but the setpoint moves the OP from outside
+    assert _controller_law_exact(stepped["op"], stepped["pv"] - stepped["sp"], None)
+    assert not _controller_law_exact(stepped["op"], stepped["pv"], stepped["sp"])
+    frame = pd.DataFrame({"time": 10.0 * np.arange(751), "OP": stepped["op"], "PV": stepped["pv"] + 20.0,
+                          "SP": stepped["sp"] + 20.0})
+    (c,) = model_from_data(frame, ["OP"], ["PV"], setpoints=["SP"]).channels
+    assert not c.unexcited

@@ -745,7 +745,7 @@ def _controller_law_exact(u, pv, sp) -> bool:
     faster than the historian samples, so its law is not exact at 10 s and this stays False."""
     if sp is not None and np.ptp(sp[np.isfinite(sp)]) > 0:
         return False
-    e = -np.asarray(pv, dtype=float)
+    e = -np.asarray(pv, dtype=float)   # sp - pv up to the constant setpoint, which the constant absorbs
     u = np.asarray(u, dtype=float)
     if not (np.all(np.isfinite(e)) and np.all(np.isfinite(u))) or len(u) < 10:
         return False

@@ -13,19 +13,15 @@ coupling gain 0.35 with pole 0.87 within 23 % (the pole snaps to 0.8 or 0.9 and 
 absorbs part of the difference).
 """
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+import mpmpp
+from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
+from mpmpp.diagnose.process import COUPLING_POLES, TIME_CONSTANT_FACTORS
 
-import mpmpp  # noqa: E402
-from mpmpp.diagnose import PROCESS_EFFECTS, diagnose  # noqa: E402
-from mpmpp.diagnose.process import COUPLING_POLES, TIME_CONSTANT_FACTORS  # noqa: E402
-
-import diagnose_eval as suite  # noqa: E402
-from example_cases import MISSING_COUPLING, load_case  # noqa: E402
+import diagnose_eval as suite
+from example_cases import MISSING_COUPLING, load_case
 
 SEEDS = (0, 1, 2, 3)
 

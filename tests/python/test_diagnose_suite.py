@@ -1,16 +1,12 @@
 """A fast subset of the hidden-effect suite (studies/diagnose_eval.py): MPC closed-loop data from
 mpmpp.simulate with an effect the model does not know."""
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
+import mpmpp
+from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 
-import mpmpp  # noqa: E402
-from mpmpp.diagnose import PROCESS_EFFECTS, diagnose  # noqa: E402
-
-import diagnose_eval as suite  # noqa: E402
+import diagnose_eval as suite
 
 
 def _run(effect, seed):

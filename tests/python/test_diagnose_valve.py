@@ -2,8 +2,6 @@
 is named after `identify`, the confounders of the stiction study are not, and a disturbance
 that changed within the record is no valve. The gate's held-out likelihood gains (one ARX for
 the record, two regimes split within it) are checked against a plain NumPy re-implementation."""
-import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -19,9 +17,7 @@ from mpmpp.signals import valve_input
 from mpmpp.update import update
 
 import closed_loop_case as loop
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-import stiction_benchmark as sb  # noqa: E402
+import stiction_benchmark as sb
 
 LEVEL = next(d for d in sb.TUNING if d.name == "level")
 
@@ -98,7 +94,7 @@ def test_valve_gate_matches_a_plain_numpy_reference():
         position = np.nan_to_num(valve_input(sig, 0, {"kind": "stick_slip", "S": s, "J": 0.5 * s}))
         phi_u, phi_v = arx.regressors(u), arx.regressors(position)
         for part in (rows, rows[:100], rows[300:]):
-            assert arx.held_out_sse(u, part) == pytest.approx(_reference_sse(arx.y, arx.rows, part, phi_u), rel=1e-8)
+            assert arx.held_out_sse(phi_u, part) == pytest.approx(_reference_sse(arx.y, arx.rows, part, phi_u), rel=1e-8)
         linear = [_reference_sse(arx.y, arx.rows, rows, phi_u)]
         for f in gate.SPLITS:
             c = int(f * len(rows))

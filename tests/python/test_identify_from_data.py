@@ -475,10 +475,6 @@ def test_an_input_only_its_controller_moves_is_flagged():
     the PV, the record does not determine the process (the stiction study's flow loop, gain 1,
     comes out at about 0.26 +- 0.04), and every channel says so; a setpoint step, or an OP that
     something besides the controller moves, clears the flag."""
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
     import stiction_benchmark as sb
     from mpmpp.model_identification import _controller_law_exact
     from mpmpp.stiction.loop import simulate_pi_loop

@@ -4,8 +4,6 @@ i.e. no dead time after the hold; 751 rows at 10 s): a sticking valve's limit cy
 excitation, so the loop is identified; a record whose output ignores the input is still refused.
 The numerator's Wald test is checked against SciPy's chi-square distribution and a plain NumPy
 form, the class choice against the controller's action on constructed fits."""
-import sys
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -17,8 +15,7 @@ from mpmpp.identify import model_from_data
 from mpmpp.model_identification import (INTEGRATING_LAG, SELF_REGULATING, ChannelSummary, NotIdentified,
                                         _ClassFit, _chi2_sf, _choose_class, _has_effect, significance_z)
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-import stiction_benchmark as sb  # noqa: E402
+import stiction_benchmark as sb
 
 FLOW = next(d for d in sb.TUNING if d.name == "flow")
 

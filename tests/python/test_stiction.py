@@ -13,6 +13,8 @@ from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop
 from scipy.signal import lfilter
 from valve_reference import choudhury_reference, he_reference
 
+import stiction_benchmark as sb
+
 
 def valve(x, **fields):
     """Positions of a valve at rest at the first OP (as the Hammerstein fit takes it)."""
@@ -321,18 +323,7 @@ def test_a_valve_without_effect_is_scored_against_the_linear_reference_without_t
     assert called <= 2
 
 
-def _benchmark():
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
-    import stiction_benchmark
-
-    return stiction_benchmark
-
-
 def test_every_benchmark_family_simulates_each_case_stably():
-    sb = _benchmark()
     for family, dynamics in (("tuning", sb.TUNING), ("held-out", sb.HELD_OUT)):
         for dyn in dynamics:
             for case in ("stiction",) + sb.CONFOUNDERS:
@@ -347,7 +338,6 @@ def test_a_load_disturbance_enters_through_the_level():
     0.9 and unit standard deviation; the disturbance drawn before it is unchanged."""
     import dataclasses
 
-    sb = _benchmark()
     level = next(d for d in sb.TUNING if d.name == "level_load")
     d = sb.disturbance("tuning", level, np.random.default_rng(3), 5000)
     d0 = sb.disturbance("tuning", dataclasses.replace(level, load=0.0), np.random.default_rng(3), 5000)

@@ -91,11 +91,12 @@ class _ValveArx:
             return None
         return np.linalg.lstsq(phi[keep], self.y[self.rows][keep], rcond=None)[0]
 
-    def held_out_sse(self, v: np.ndarray, part: np.ndarray) -> float:
+    def held_out_sse(self, phi: np.ndarray, part: np.ndarray) -> float:
         """Held-out one-step error energy on the rows ``part`` (indices into ``rows``) of the
-        ARX with a constant fitted on that part alone (blocked K-fold within it)."""
-        phi = np.column_stack([self.regressors(v)[part], np.ones(len(part))])
-        return float(held_out_losses(phi, self.y[self.rows[part]]).sum())
+        ARX on ``phi`` (``regressors`` of the input) with a constant, fitted on that part alone
+        (blocked K-fold within it)."""
+        x = np.column_stack([phi[part], np.ones(len(part))])
+        return float(held_out_losses(x, self.y[self.rows[part]]).sum())
 
 
 SPLITS = (0.25, 0.5, 0.75)   # where a disturbance may have changed within the record
@@ -120,9 +121,10 @@ def _beats_linear_explanations(arx: _ValveArx, u: np.ndarray, position: np.ndarr
     cuts = [c for c in cuts if min(c, len(rows) - c) >= least]
     if not cuts:
         return False
-    linear = min([arx.held_out_sse(u, rows)]
-                 + [arx.held_out_sse(u, rows[:c]) + arx.held_out_sse(u, rows[c:]) for c in cuts])
-    return 0.5 * math.log(linear / arx.held_out_sse(position, rows)) > CAL_GAIN_AT_HALF
+    phi = arx.regressors(u)
+    linear = min([arx.held_out_sse(phi, rows)]
+                 + [arx.held_out_sse(phi, rows[:c]) + arx.held_out_sse(phi, rows[c:]) for c in cuts])
+    return 0.5 * math.log(linear / arx.held_out_sse(arx.regressors(position), rows)) > CAL_GAIN_AT_HALF
 
 
 def _valve_model(arx: _ValveArx, out: OutputResidual, sig: Signals, lp: Loop, actuator: dict,

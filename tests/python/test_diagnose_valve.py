@@ -102,3 +102,23 @@ def test_valve_gate_matches_a_plain_numpy_reference():
                           + _reference_sse(arx.y, arx.rows, rows[c:], phi_u))
         gain = 0.5 * np.log(min(linear) / _reference_sse(arx.y, arx.rows, rows, phi_v))
         assert gate._beats_linear_explanations(arx, u, position) == (gain > gate.CAL_GAIN_AT_HALF)
+
+
+def test_update_check_is_like_for_like_against_a_plain_numpy_reference():
+    """The valve finding's error before is the linear valve's ARX (the same regressors from the
+    OP) fitted on the even blocks by plain least squares, its one-step RMS on the odd blocks."""
+    data = level_record("stiction", 7002)
+    model = model_from_data(data, ["OP"], ["PV"]).model
+    sig = diagnosis_signals(model, data).sig
+    lengths = record_lengths(len(data), model.sample_time_s)
+    out = output_residual(sig, 0, lengths.min_segment, 0, lengths.block, True)
+    arx = gate._ValveArx(out, sig, single_loops(sig, data)[0])
+    phi = arx.regressors(np.nan_to_num(sig.u[:, 0]))
+    even, odd = out.fold[0][arx.rows] > 0, out.fold[1][arx.rows] > 0
+    t = arx.y[arx.rows]
+    beta = np.linalg.solve(phi[even].T @ phi[even], phi[even].T @ t[even])
+    assert arx.held_out_rms(phi) == pytest.approx(np.sqrt(np.mean((t[odd] - phi[odd] @ beta) ** 2)), rel=1e-8)
+    top = diagnose(model, data).findings[0]
+    assert top.effect == "input_nonlinearity"
+    assert top.error_before == pytest.approx(arx.held_out_rms(phi), rel=1e-6)
+    assert top.error_after < top.error_before

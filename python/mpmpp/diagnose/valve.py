@@ -56,14 +56,15 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
                              f"with an oscillating disturbance explains (not the valve)")
             continue
         finding = _finding(out, sig, lp, fit, logn)
-        # as every finding: the model update must predict the held-out blocks better (and the
-        # valve must beat a disturbance that changed within the record)
+        # the update must predict the held-out blocks better than the linear valve refitted the
+        # same way (_finding; and the valve must beat a disturbance that changed within the record)
         if finding is not None and finding.error_after < finding.error_before:
             found.append(finding)
         else:
             notes.append(f"{out.name} <- {name}: the valve fit suggests {fit.kind} (confidence "
                          f"{fit.confidence:.2f}), but a model with it does not predict held-out data "
-                         f"better than a linear valve (with the disturbance changing within the record)")
+                         f"better than a linear valve (with one ARX or with the disturbance changing within "
+                             f"the record)")
     return found, notes
 
 
@@ -90,6 +91,14 @@ class _ValveArx:
         if keep.sum() < 10 * phi.shape[1]:
             return None
         return np.linalg.lstsq(phi[keep], self.y[self.rows][keep], rcond=None)[0]
+
+    def held_out_rms(self, phi: np.ndarray) -> float:
+        """One-step RMS on the odd blocks of the ARX on ``phi`` fitted on the even blocks (nan when
+        too few rows)."""
+        coef, test = self.fit(phi, 0), self.fold[1]
+        if coef is None or not test.any():
+            return float("nan")
+        return float(np.sqrt(np.mean((self.y[self.rows][test] - phi[test] @ coef) ** 2)))
 
     def held_out_sse(self, phi: np.ndarray, part: np.ndarray) -> float:
         """Held-out one-step error energy on the rows ``part`` (indices into ``rows``) of the
@@ -164,8 +173,16 @@ def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> F
     if change is None:
         return None
     err = held_out_error(out, 0, change)
-    # the held-out one-step log-likelihood gain of the model update writes (as for every finding)
-    heldout = out.fold[1].sum() * math.log(err.before / err.after) if err.after > 0 else 0.0
+    # The valve is present throughout the record, so the model on file was fitted to (or, from
+    # identify, on) data with the valve's effect in them: against it the update pays for its 10-16
+    # coefficients fitted on half the rows while the file's fewer ones may have seen the odd
+    # blocks. identify + diagnose on the stiction study's level, pressure and tank loops
+    # (2 h at 10 s): the update 0.8-3.6 % above the identified model's one-step RMS and 1-3 %
+    # below the linear valve refitted the same way. So the update is checked like for like:
+    # the same ARX from the OP, fitted on the even blocks, predicting the odd ones.
+    before = arx.held_out_rms(arx.regressors(np.nan_to_num(sig.u[:, lp.input])))
+    # the held-out one-step log-likelihood gain of the update over that linear valve
+    heldout = out.fold[1].sum() * math.log(before / err.after) if err.after > 0 else 0.0
     # the refitted channel's steady-state gain over the model's (none for an integrating channel)
     nominal_gain = g.dc_gain()
     ratio = change.channel.dc_gain() / nominal_gain if math.isfinite(nominal_gain) else None
@@ -177,7 +194,8 @@ def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> F
         estimate={"kind": fit.kind, "S": s, "J": j, "units": "input", "actuator": actuator,
                   "gain_ratio": ratio,
                   "likelihood_gain_per_sample": fit.gain_per_sample},
-        error_before=err.before, error_after=err.after,
+        error_before=before, error_after=err.after,
         explanation=(f"valve {name} sticks: {kind} with S = {s:.3g} and J = {j:.3g} (OP units), "
-                     f"throughout the record"),
+                     f"throughout the record (held-out one-step error against the linear valve "
+                     f"refitted the same way; the model on file: {err.before:.4g})"),
         score=heldout - 0.5 * PARAMS * logn, change=change, outputs_driven=(out.name,))

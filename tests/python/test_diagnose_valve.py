@@ -22,15 +22,15 @@ import stiction_benchmark as sb
 LEVEL = next(d for d in sb.TUNING if d.name == "level")
 
 
-def level_record(case, seed, s=3.0):
-    rec = sb.make_record("tuning", LEVEL, case, s, 0.5 * s, seed)
+def loop_record(case, seed, s=3.0, split="tuning", dyn=LEVEL):
+    rec = sb.make_record(split, dyn, case, s, 0.5 * s, seed)
     return pd.DataFrame({"time": 10.0 * np.arange(len(rec["op"])), "OP": rec["op"], "PV": rec["pv"] + 20.0,
                          "PV_sp": rec["sp"] + 20.0})
 
 
 @pytest.mark.parametrize("seed, s", [(7002, 3.0), (7004, 3.0), (7002, 1.5)])
 def test_sticking_valve_on_a_level_loop_is_named_and_its_update_lowers_the_error(seed, s):
-    data = level_record("stiction", seed, s)
+    data = loop_record("stiction", seed, s)
     model = model_from_data(data, ["OP"], ["PV"]).model
     res = diagnose(model, data)
     assert [f.effect for f in res.findings] == ["input_nonlinearity"]   # no gain/delay beside it
@@ -47,7 +47,7 @@ def test_sticking_valve_on_a_level_loop_is_named_and_its_update_lowers_the_error
 @pytest.mark.parametrize("case", ["aggressive", "external_oscillation", "noisy_valve", "linear"])
 @pytest.mark.parametrize("seed", [7001, 7002])
 def test_level_loop_confounders_are_not_stiction(case, seed):
-    data = level_record(case, seed)
+    data = loop_record(case, seed)
     res = diagnose(model_from_data(data, ["OP"], ["PV"]).model, data)
     assert not any(f.effect == "input_nonlinearity" for f in res.findings)
 
@@ -80,8 +80,10 @@ def _reference_sse(y, rows, part, phi, folds=5):
 
 def test_valve_gate_matches_a_plain_numpy_reference():
     """The gate's valve gain against the linear valve, with one ARX for the record and with the
-    record split in two regimes (at a quarter, half, three quarters), from plain NumPy fits."""
-    data = level_record("stiction", 7002)
+    record split in two regimes (at a quarter, half, three quarters), in each of the two lag
+    structures, from plain NumPy fits: a pressure loop whose identified dead time lies beyond
+    the fit's six valve lags."""
+    data = loop_record("stiction", 7003, split="held_out", dyn=next(d for d in sb.HELD_OUT if d.name == "pressure"))
     model = model_from_data(data, ["OP"], ["PV"]).model
     sig = diagnosis_signals(model, data).sig
     lengths = record_lengths(len(data), model.sample_time_s)
@@ -90,35 +92,43 @@ def test_valve_gate_matches_a_plain_numpy_reference():
     arx = gate._ValveArx(out, sig, lp)
     u = np.nan_to_num(sig.u[:, 0])
     rows = np.arange(len(arx.rows))
+    assert len(arx.lag_sets) == 2   # the dead time identified under stiction lies beyond lag 6
     for s in (3.0, 0.5):
         position = np.nan_to_num(valve_input(sig, 0, {"kind": "stick_slip", "S": s, "J": 0.5 * s}))
-        phi_u, phi_v = arx.regressors(u), arx.regressors(position)
-        for part in (rows, rows[:100], rows[300:]):
-            assert arx.held_out_sse(phi_u, part) == pytest.approx(_reference_sse(arx.y, arx.rows, part, phi_u), rel=1e-8)
-        linear = [_reference_sse(arx.y, arx.rows, rows, phi_u)]
-        for f in gate.SPLITS:
-            c = int(f * len(rows))
-            linear.append(_reference_sse(arx.y, arx.rows, rows[:c], phi_u)
-                          + _reference_sse(arx.y, arx.rows, rows[c:], phi_u))
-        gain = 0.5 * np.log(min(linear) / _reference_sse(arx.y, arx.rows, rows, phi_v))
-        assert gate._beats_linear_explanations(arx, u, position) == (gain > gate.CAL_GAIN_AT_HALF)
+        linear, valve = [], []
+        for lags in arx.lag_sets:
+            phi_u, phi_v = arx.regressors(u, lags), arx.regressors(position, lags)
+            for part in (rows, rows[:100], rows[300:]):
+                assert arx.held_out_sse(phi_u, part) == pytest.approx(_reference_sse(arx.y, arx.rows, part, phi_u), rel=1e-8)
+            linear.append(_reference_sse(arx.y, arx.rows, rows, phi_u))
+            for f in gate.SPLITS:
+                c = int(f * len(rows))
+                linear.append(_reference_sse(arx.y, arx.rows, rows[:c], phi_u)
+                              + _reference_sse(arx.y, arx.rows, rows[c:], phi_u))
+            valve.append(_reference_sse(arx.y, arx.rows, rows, phi_v))
+        gain = 0.5 * np.log(min(linear) / min(valve))
+        best = arx.lag_sets[int(np.argmin(valve))] if gain > gate.CAL_GAIN_AT_HALF else None
+        assert gate._beats_linear_explanations(arx, u, position) == best
 
 
 def test_update_check_is_like_for_like_against_a_plain_numpy_reference():
     """The valve finding's error before is the linear valve's ARX (the same regressors from the
     OP) fitted on the even blocks by plain least squares, its one-step RMS on the odd blocks."""
-    data = level_record("stiction", 7002)
+    data = loop_record("stiction", 7002)
     model = model_from_data(data, ["OP"], ["PV"]).model
     sig = diagnosis_signals(model, data).sig
     lengths = record_lengths(len(data), model.sample_time_s)
     out = output_residual(sig, 0, lengths.min_segment, 0, lengths.block, True)
     arx = gate._ValveArx(out, sig, single_loops(sig, data)[0])
-    phi = arx.regressors(np.nan_to_num(sig.u[:, 0]))
+    phi = arx.regressors(np.nan_to_num(sig.u[:, 0]), arx.lag_sets[0])
     even, odd = out.fold[0][arx.rows] > 0, out.fold[1][arx.rows] > 0
     t = arx.y[arx.rows]
     beta = np.linalg.solve(phi[even].T @ phi[even], phi[even].T @ t[even])
     assert arx.held_out_rms(phi) == pytest.approx(np.sqrt(np.mean((t[odd] - phi[odd] @ beta) ** 2)), rel=1e-8)
     top = diagnose(model, data).findings[0]
     assert top.effect == "input_nonlinearity"
-    assert top.error_before == pytest.approx(arx.held_out_rms(phi), rel=1e-6)
+    position = np.nan_to_num(valve_input(sig, 0, top.estimate["actuator"]))
+    lags = gate._beats_linear_explanations(arx, np.nan_to_num(sig.u[:, 0]), position)
+    assert top.error_before == pytest.approx(arx.held_out_rms(arx.regressors(np.nan_to_num(sig.u[:, 0]), lags)),
+                                             rel=1e-6)
     assert top.error_after < top.error_before

@@ -16,6 +16,8 @@ import re
 from dataclasses import dataclass
 from datetime import datetime, timedelta, timezone
 
+from .timeaxis import seconds_of
+
 _UNITS = {"ms": 1e-3, "s": 1.0, "sec": 1.0, "min": 60.0, "m": 60.0, "h": 3600.0, "hr": 3600.0,
           "d": 86400.0, "day": 86400.0, "days": 86400.0}
 _DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]*)\s*$")
@@ -49,7 +51,7 @@ class Clock:
     @classmethod
     def of(cls, data, sample_time_s: float) -> "Clock":
         """The clock of a DataFrame from ``load_data`` (its ``attrs``)."""
-        time = data["time"].to_numpy(dtype=float)
+        time = seconds_of(data)
         if len(time) == 0:
             raise ValueError(f"{data.attrs.get('source', 'data')}: no samples")
         attrs = data.attrs

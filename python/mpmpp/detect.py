@@ -26,6 +26,7 @@ from ._core import DetectorConfig
 from .disturbance import describe, disturbance_orders
 from .preset_timing import TIMING_FIELDS, resolve_timing, span_text
 from .signals import through_actuators
+from .timeaxis import seconds_of
 
 __all__ = ["DetectorConfig", "Detector", "DetectionResult", "detect", "make_config"]
 
@@ -94,7 +95,7 @@ def _arrays(model, data: pd.DataFrame):
         raise ValueError(f"data: column '{missing[0]}' of the model is missing")
     as_float = lambda cols: np.ascontiguousarray(data[cols].to_numpy(dtype=float))  # noqa: E731
     u = np.ascontiguousarray(through_actuators(model, as_float(list(model.inputs))))
-    return np.ascontiguousarray(data["time"].to_numpy(dtype=float)), u, as_float(list(model.outputs))
+    return np.ascontiguousarray(seconds_of(data)), u, as_float(list(model.outputs))
 
 
 def _channel_dicts(model, core_channels):

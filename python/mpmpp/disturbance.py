@@ -26,6 +26,7 @@ import numpy as np
 
 from . import _core
 from .diagnose.whitening import has_noise_model
+from .signals import longest_run
 
 MAX_ORDER = 30
 WINDOW_ROWS_PER_COEFFICIENT = 24
@@ -77,15 +78,6 @@ def _settling_samples(row, length: int) -> int:
     return settle
 
 
-def _longest_complete_run(ok: np.ndarray) -> tuple[int, int]:
-    edges = np.diff(np.r_[0, ok.astype(np.int8), 0])
-    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    if starts.size == 0:
-        return 0, 0
-    k = int(np.argmax(stops - starts))
-    return int(starts[k]), int(stops[k])
-
-
 def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, train_end_s: float,
                        window_samples: int) -> list[DisturbanceOrder]:
     """Per output, the AR order of its disturbance model: from the model file's H, or estimated
@@ -102,7 +94,7 @@ def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, 
         row = [model.process(name, j) for j in model.inputs]
         used = [j for j, g in enumerate(row) if g is not None]
         ok = train & np.isfinite(y[:, i]) & np.isfinite(u[:, used]).all(axis=1)
-        a, b = _longest_complete_run(ok)
+        a, b = longest_run(ok)
         begin = a + _settling_samples(row, b - a) + cap
         if b - begin < 10 * cap:  # too short to estimate: the preset's order stands, and the note says why
             out.append(DisturbanceOrder(name, 0, estimated=True, rows=max(b - begin, 0)))

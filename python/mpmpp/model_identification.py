@@ -59,6 +59,8 @@ from .compare import _finite
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import require_rows
+from .signals import longest_run
+from .timeaxis import sample_grid, seconds_of
 
 NA_ORDERS = (1, 2, 3, 5, 8)      # ARX / noise orders searched
 NUMERATOR_LENGTHS = (1, 2)       # 2: dead time between samples
@@ -198,7 +200,8 @@ class IdentificationResult:
 
     def summary(self) -> str:
         lines = [f"identify: {self.rows_used} rows at {self.sample_time_s:g} s"
-                 + (f" ({self.skipped_rows} rows skipped: missing values)" if self.skipped_rows else "")
+                 + (f" ({self.skipped_rows} rows skipped: outside the longest stretch without missing values "
+                    f"or time gaps)" if self.skipped_rows else "")
                  + f"; orders and dead times by {self.selection}"]
         for o in self.outputs:
             lines.append(f"  {o.output} ({o.process_class}): fit 1-step {o.fit_one_step:.1f} %,"
@@ -251,9 +254,9 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     for col in ["time", *inputs, *outputs, *[c for c in setpoints if c]]:
         if col not in data.columns:
             raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
-    ts = _sample_time(data["time"].to_numpy(dtype=float))
+    ts, starts = sample_grid(seconds_of(data))
     raw = data[inputs + outputs].to_numpy(dtype=float)
-    a, b = _longest_complete_run(raw)
+    a, b = longest_run(np.all(np.isfinite(raw), axis=1), starts)
     require_rows(len(raw), ts)
     if b - a < len(raw):
         require_rows(b - a, ts)  # the complete stretch is what is fitted
@@ -766,30 +769,6 @@ def _stable_monic(den: np.ndarray) -> np.ndarray:
     roots = np.where(np.abs(roots) > 1.0, 1.0 / np.conj(roots), roots)
     roots = np.where(np.abs(roots) > 0.999, roots * 0.999 / np.abs(roots), roots)
     return np.real(np.poly(roots))
-
-
-def _sample_time(time_s: np.ndarray) -> float:
-    """The time column's constant spacing (historian exports round timestamps: 0.1 % slack)."""
-    if len(time_s) < 2 or not np.all(np.isfinite(time_s)):
-        raise ValueError("data: the 'time' column needs at least 2 finite values")
-    steps = np.diff(time_s)
-    ts = float(np.median(steps))
-    bad = np.flatnonzero(np.abs(steps - ts) > 1e-3 * ts)
-    if ts <= 0 or len(bad):
-        row = int(bad[0]) + 1 if len(bad) else 1
-        raise ValueError(f"data: 'time' is not evenly spaced (step {steps[row - 1]:g} s at row {row}, "
-                         f"typical {ts:g} s)")
-    return ts
-
-
-def _longest_complete_run(x: np.ndarray) -> tuple[int, int]:
-    ok = np.all(np.isfinite(x), axis=1)
-    edges = np.flatnonzero(np.diff(np.r_[0, ok.astype(np.int8), 0]))
-    if len(edges) == 0:
-        return 0, 0
-    starts, stops = edges[::2], edges[1::2]
-    k = int(np.argmax(stops - starts))
-    return int(starts[k]), int(stops[k])
 
 
 def _names(names, what) -> list[str]:

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .timeaxis import seconds_of
+
 
 @dataclass
 class Signals:
@@ -54,14 +56,17 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
             raise ValueError(f"data: missing column '{col}' required by the model")
     setpoints = {f"{o}_sp" for o in outputs}
     extras = [c for c in data.columns if c not in {"time", *inputs, *outputs} and c not in setpoints]
-    time_s = data["time"].to_numpy(dtype=float)
+    time_s = seconds_of(data)
     raw_u = data[inputs].to_numpy(dtype=float)
     raw_y = data[outputs].to_numpy(dtype=float)
     raw_z = data[extras].to_numpy(dtype=float) if extras else np.zeros((len(data), 0))
     ref = np.ones(len(data), bool) if reference is None else np.asarray(reference, bool)
     nu, ny = len(inputs), len(outputs)
     valid = np.all(np.isfinite(np.column_stack([raw_u, raw_y])), axis=1)
-    segments, skipped = _segments(valid, min_segment)
+    # rows a data frame leaves out (a historian gap: a step of two samples or more) end a
+    # segment as a missing row would; load_data puts a file on the grid with missing rows
+    gaps = np.flatnonzero(np.diff(time_s) > 1.5 * float(model.sample_time_s)) + 1
+    segments, skipped = _segments(valid, min_segment, gaps)
     raw_u = through_actuators(model, raw_u, segments)
     both = np.column_stack([raw_u, raw_y, raw_z])
     means = np.nanmean(both[ref], axis=0) if ref.any() else np.nanmean(both, axis=0)
@@ -98,10 +103,25 @@ def through_actuators(model, raw_u: np.ndarray, segments=None, inputs=None) -> n
     return out
 
 
-def _segments(valid: np.ndarray, min_segment: int) -> tuple[list[tuple[int, int]], int]:
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], valid.astype(np.int8), [0]])))
-    runs = [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]
-    kept = [r for r in runs if r[1] - r[0] >= min_segment]
+def complete_runs(valid: np.ndarray, starts=()) -> list[tuple[int, int]]:
+    """The stretches [a, b) of rows where ``valid`` holds, each also cut before every row of
+    ``starts`` (rows that follow a time gap)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], np.asarray(valid).astype(np.int8), [0]])))
+    cuts = np.asarray(starts, dtype=int)
+    runs = []
+    for a, b in zip(edges[::2], edges[1::2]):
+        bounds = [int(a), *(int(c) for c in cuts[(cuts > a) & (cuts < b)]), int(b)]
+        runs += list(zip(bounds[:-1], bounds[1:]))
+    return runs
+
+
+def longest_run(valid: np.ndarray, starts=()) -> tuple[int, int]:
+    """The longest of ``complete_runs`` ((0, 0) when there is none)."""
+    return max(complete_runs(valid, starts), key=lambda r: r[1] - r[0], default=(0, 0))
+
+
+def _segments(valid: np.ndarray, min_segment: int, starts=()) -> tuple[list[tuple[int, int]], int]:
+    kept = [r for r in complete_runs(valid, starts) if r[1] - r[0] >= min_segment]
     if not kept:
         raise ValueError(f"data: no stretch of at least {min_segment} rows without missing values")
     return kept, int(len(valid) - sum(b - a for a, b in kept))

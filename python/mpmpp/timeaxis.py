@@ -12,8 +12,40 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-__all__ = ["origin_of", "absolute_seconds", "format_duration", "format_moment", "plot_axis", "shade_training",
+__all__ = ["sample_grid", "seconds_of", "origin_of", "absolute_seconds", "format_duration", "format_moment", "plot_axis", "shade_training",
            "mark_alarms"]
+
+
+def seconds_of(data) -> np.ndarray:
+    """The ``time`` column of a DataFrame as float seconds. A column of timestamps (datetime64)
+    or text is a one-line ValueError naming it: read as floats, timestamps would count
+    nanoseconds and every duration would be off by 1e9."""
+    column = data["time"]
+    if getattr(column.dtype, "kind", "") == "M":
+        raise ValueError("data: column 'time' holds timestamps; analyses count seconds (mpmpp.load_data "
+                         "reads a timestamped file into seconds, or set data['time'] = "
+                         "(t - t.iloc[0]).dt.total_seconds())")
+    try:
+        return column.to_numpy(dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"data: column 'time' must be numbers of seconds, got {column.iloc[0]!r}") from None
+
+
+def sample_grid(time_s: np.ndarray) -> tuple[float, np.ndarray]:
+    """(ts, starts): the time column's typical step, and the rows that follow a gap (a whole
+    number of samples missing: a historian export leaves such rows out). Historian exports round
+    timestamps: 0.1 % slack. A step that is no whole number of samples is an error naming it."""
+    if len(time_s) < 2 or not np.all(np.isfinite(time_s)):
+        raise ValueError("data: the 'time' column needs at least 2 finite values")
+    steps = np.diff(time_s)
+    ts = float(np.median(steps))
+    whole = np.round(steps / ts) if ts > 0 else steps
+    bad = np.flatnonzero((whole < 1) | (np.abs(steps - whole * ts) > 1e-3 * ts))
+    if ts <= 0 or len(bad):
+        row = int(bad[0]) + 1 if len(bad) else 1
+        raise ValueError(f"data: 'time' is not evenly spaced (step {steps[row - 1]:g} s at row {row}, "
+                         f"typical {ts:g} s, and not a whole number of samples)")
+    return ts, np.flatnonzero(whole > 1) + 1
 
 
 def origin_of(data_or_origin) -> Optional["np.datetime64"]:

@@ -1,6 +1,7 @@
 """Historian exports as they come: calendar time (zones, daylight saving, epoch seconds),
 jitter, gaps, repeats, status and text columns, faster sampling. Each repair is checked
 against the clean grid the test started from (the expected result by construction)."""
+import json
 from datetime import datetime, timedelta, timezone
 
 import numpy as np
@@ -185,3 +186,26 @@ def test_past_the_data_names_its_span(tmp_path):
     plain = Clock.of(mpmpp.load_data(write(tmp_path / "s.csv", df), model()), TS)
     with pytest.raises(ValueError, match="has no timestamps"):
         plain.when("2026-03-29T00:00:00Z")
+
+
+def test_complete_runs_cut_at_missing_values_and_time_gaps():
+    from mpmpp.signals import complete_runs, longest_run
+
+    valid = np.array([1, 1, 1, 0, 1, 1, 1, 1, 1, 1], bool)
+    assert complete_runs(valid) == [(0, 3), (4, 10)]
+    assert complete_runs(valid, starts=[2, 3, 6]) == [(0, 2), (2, 3), (4, 6), (6, 10)]
+    assert longest_run(valid, starts=[6]) == (6, 10) and longest_run(np.zeros(4, bool)) == (0, 0)
+
+
+def test_a_data_frame_with_rows_left_out_gets_a_segment_break_there():
+    """diagnose / compare through the Python API: the rows a historian left out are not taken
+    as the next sample (the file path puts them on the grid as missing rows)."""
+    from mpmpp.signals import extract
+
+    model = mpmpp.Model.from_json(json.dumps({"name": "m", "sample_time_s": 10.0, "inputs": ["u"], "outputs": ["y"],
+                                              "process": {"y": {"u": {"num": [0.5], "den": [1.0, -0.5], "delay": 1}}}}),
+                                  "test")
+    t = 10.0 * np.r_[np.arange(300), np.arange(305, 605)]
+    rng = np.random.default_rng(0)
+    data = pd.DataFrame({"time": t, "u": rng.normal(size=600), "y": rng.normal(size=600)})
+    assert extract(model, data, min_segment=50).segments == [(0, 300), (300, 600)]

@@ -175,7 +175,41 @@ def test_missing_values_fit_the_longest_complete_stretch_and_say_so():
     df.loc[100:104, "PV"] = np.nan
     r = model_from_data(df, ["OP"], ["PV"])
     assert r.rows_used == 751 - 105 and r.skipped_rows == 105
-    assert "105 rows skipped: missing values" in r.summary()
+    assert "105 rows skipped: outside the longest stretch without missing values" in r.summary()
+
+
+def test_rows_a_historian_left_out_split_the_record_like_missing_values():
+    """A time gap (rows absent, a whole number of samples) cuts the record as missing rows do;
+    the fit is the same as with those rows present but missing."""
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=8, setpoint_steps=True)
+    gapped = df.drop(index=range(100, 105)).reset_index(drop=True)
+    missing = df.copy()
+    missing.loc[100:104, ["OP", "PV"]] = np.nan
+    r, m = model_from_data(gapped, ["OP"], ["PV"]), model_from_data(missing, ["OP"], ["PV"])
+    assert r.rows_used == m.rows_used == 751 - 105 and r.skipped_rows == 100
+    assert r.channels[0].gain == m.channels[0].gain and r.channels[0].dead_time_s == m.channels[0].dead_time_s
+
+
+def test_a_step_that_is_no_whole_number_of_samples_is_an_error_naming_the_row():
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=8)
+    df.loc[200:, "time"] += 4.0
+    with pytest.raises(ValueError, match=r"not evenly spaced \(step 14 s at row 200, typical 10 s"):
+        model_from_data(df, ["OP"], ["PV"])
+
+
+def test_timestamps_in_the_time_column_are_a_one_line_error_not_nanoseconds():
+    """A data frame's time column of datetime64 would read as nanoseconds (a 10 s sample time
+    of 1e10): every entry point says which column and what it needs."""
+    from mpmpp.detect import detect
+    from mpmpp.diagnose import diagnose
+
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=8, setpoint_steps=True)
+    model = model_from_data(df, ["OP"], ["PV"]).model
+    df["time"] = pd.Timestamp("2024-03-01 06:00") + pd.to_timedelta(df["time"], unit="s")
+    for call in (lambda: model_from_data(df, ["OP"], ["PV"]), lambda: diagnose(model, df),
+                 lambda: detect(model, df)):
+        with pytest.raises(ValueError, match="column 'time' holds timestamps"):
+            call()
 
 
 def test_joint_covariance_is_the_finite_difference_one():

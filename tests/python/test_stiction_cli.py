@@ -54,3 +54,32 @@ def test_stiction_command_errors(tmp_path, capsys, args, n, message):
     assert main(["stiction", str(data), *args]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and str(data) in err and len(err.splitlines()) == 1
+
+
+def test_a_historian_gap_or_missing_values_leave_the_longest_stretch_and_say_so(tmp_path, capsys):
+    """Rows left out (a step of 3 samples) and a missing PV: the fit runs on the longest stretch
+    of consecutive complete rows, the same fit as on that stretch alone."""
+    data, alone = tmp_path / "loop.csv", tmp_path / "alone.csv"
+    write_loop(data, n=900, valve=ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
+    df = pd.read_csv(data).drop(index=[100, 101])
+    df.loc[df.index[50], "FIC101.PV"] = np.nan
+    df.to_csv(data, index=False)
+    df.iloc[100:].to_csv(alone, index=False)
+    main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    main(["stiction", str(alone), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
+    ref = json.loads(capsys.readouterr().out)
+    assert doc["samples"] == ref["samples"] == 798
+    assert doc["notes"][0] == "100 rows skipped: analysed rows 100-897, the longest stretch without missing values or time gaps"
+    assert doc["mpmpp"] == ref["mpmpp"] and ref["notes"] == doc["notes"][1:]
+
+
+def test_a_step_that_is_no_whole_number_of_samples_is_an_error(tmp_path, capsys):
+    data = tmp_path / "loop.csv"
+    write_loop(data)
+    df = pd.read_csv(data)
+    df.loc[400:, "time"] += 3.0
+    df.to_csv(data, index=False)
+    assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not evenly spaced (step 13 s at row 400" in err and str(data) in err and len(err.splitlines()) == 1

@@ -6,6 +6,9 @@ import json
 
 import numpy as np
 
+from ..signals import longest_run
+from ..timeaxis import sample_grid, seconds_of
+
 
 def add_arguments(parser) -> None:
     parser.add_argument("data", metavar="DATA", help="data file (CSV with a time column)")
@@ -20,10 +23,23 @@ def _column(df, name: str, path: str) -> np.ndarray:
         columns = ", ".join(c for c in df.columns if c != "time")
         raise ValueError(f"{path}: no column '{name}' (columns: {columns})")
     values = df[name].to_numpy(dtype=float)
-    missing = int(np.sum(~np.isfinite(values)))
-    if missing:
-        raise ValueError(f"{path}: column '{name}' has {missing} missing values")
+    if not np.isfinite(values).any():
+        raise ValueError(f"{path}: column '{name}' has no values")
     return values
+
+
+def _stretch(df, columns: list[np.ndarray], path: str) -> tuple[slice, str | None]:
+    """The longest stretch of rows with every column present and no time gap inside (the fit
+    runs the valve through consecutive samples), and a note when rows were left out."""
+    try:
+        _, starts = sample_grid(seconds_of(df))
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
+    a, b = longest_run(np.all(np.isfinite(np.column_stack(columns)), axis=1), starts)
+    if (a, b) == (0, len(df)):
+        return slice(0, len(df)), None
+    return slice(a, b), (f"{len(df) - (b - a)} rows skipped: analysed rows {a}-{b - 1}, the longest stretch "
+                         f"without missing values or time gaps")
 
 
 def _plain(value):
@@ -35,13 +51,16 @@ def run(args) -> int:
     from ..stiction import analyse_loop
 
     df = load_data(args.data)
-    op = _column(df, args.op, args.data)
-    pv = _column(df, args.pv, args.data)
-    sp = _column(df, args.sp, args.data) if args.sp else None
+    columns = [_column(df, c, args.data) for c in (args.op, args.pv, args.sp) if c]
+    rows, skipped = _stretch(df, columns, args.data)
+    op, pv, *sp = (c[rows] for c in columns)
+    sp = sp[0] if sp else None
     try:
         report = analyse_loop(op, pv, sp, names=(f"OP '{args.op}'", f"PV '{args.pv}'"))
     except ValueError as exc:
         raise ValueError(f"{args.data}: {exc}") from None
+    if skipped:
+        report.notes.insert(0, skipped)
     h = report.mpmpp
     if args.json:
         print(json.dumps({

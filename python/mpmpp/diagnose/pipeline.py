@@ -9,6 +9,7 @@ import numpy as np
 
 from ..record_length import minimum_rows, require_rows, scaled_rows
 from ..signals import Signals, extract
+from ..timeaxis import seconds_of
 from .actuator import actuator_findings, rival_score
 from .confidence import calibrated_confidence
 from .errors import one_step_errors
@@ -72,7 +73,7 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
     reported errors use a realistic H, and its absence is never taken for a noise change."""
     if train_end_s is not None and train_end_s < 0:
         raise ValueError(f"--train-end must be >= 0 seconds, got {train_end_s}")
-    time_s = data["time"].to_numpy(dtype=float)
+    time_s = seconds_of(data)
     reference = None if train_end_s is None else time_s < train_end_s
     if reference is not None and reference.sum() < 10:
         raise ValueError(f"--train-end {train_end_s} leaves fewer than 10 rows of training data")

@@ -132,3 +132,14 @@ def test_update_check_is_like_for_like_against_a_plain_numpy_reference():
     assert top.error_before == pytest.approx(arx.held_out_rms(arx.regressors(np.nan_to_num(sig.u[:, 0]), lags)),
                                              rel=1e-6)
     assert top.error_after < top.error_before
+
+
+def test_a_quantized_loop_record_gets_the_same_note_as_in_stiction():
+    """diagnose says what `mpmpp stiction` says of a record whose storage hides small moves."""
+    data = loop_record("stiction", 7002)
+    data["PV"] = np.round(data["PV"] * 2) / 2
+    res = diagnose(model_from_data(data, ["OP"], ["PV"]).model, data)
+    assert any(n.startswith("PV repeats its previous value in") for n in res.notes)
+    clean = loop_record("stiction", 7002)
+    assert not any("repeats its previous value" in n for n in diagnose(model_from_data(clean, ["OP"], ["PV"]).model,
+                                                                         clean).notes)

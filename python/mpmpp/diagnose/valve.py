@@ -18,6 +18,7 @@ from .._core import TransferFunction
 from ..signals import Signals, valve_input
 from ..stiction import fit_valve
 from ..stiction.hammerstein import CAL_GAIN_AT_HALF, N_U, N_Y, held_out_losses
+from ..stiction.record_quality import record_notes
 from ..stiction.valve import actuator_from_fit
 from .errors import held_out_error
 from .loops import Loop
@@ -44,6 +45,8 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
             continue
         op = sig.u[a:b, lp.input] + sig.operating_point[name]
         pv = sig.y[a:b, lp.output] + sig.operating_point[out.name]
+        # a compressed or quantized record can hide or invent a valve fault: said as `stiction` says it
+        notes += record_notes({name: op, out.name: pv})
         try:
             fit = fit_valve(op, pv)
         except ValueError as exc:
@@ -64,7 +67,7 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
             notes.append(f"{out.name} <- {name}: the valve fit suggests {fit.kind} (confidence "
                          f"{fit.confidence:.2f}), but a model with it does not predict held-out data "
                          f"better than a linear valve (with one ARX or with the disturbance changing within "
-                             f"the record)")
+                         f"the record)")
     return found, notes
 
 

@@ -59,8 +59,8 @@ from .compare import _finite
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import require_rows
-from .signals import longest_run
-from .timeaxis import sample_grid, seconds_of
+from .signals import longest_complete_stretch
+from .timeaxis import seconds_of
 
 NA_ORDERS = (1, 2, 3, 5, 8)      # ARX / noise orders searched
 NUMERATOR_LENGTHS = (1, 2)       # 2: dead time between samples
@@ -254,9 +254,9 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     for col in ["time", *inputs, *outputs, *[c for c in setpoints if c]]:
         if col not in data.columns:
             raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
-    ts, starts = sample_grid(seconds_of(data))
+    time_s = seconds_of(data)
     raw = data[inputs + outputs].to_numpy(dtype=float)
-    a, b = longest_run(np.all(np.isfinite(raw), axis=1), starts)
+    ts, a, b = longest_complete_stretch(time_s, raw)
     require_rows(len(raw), ts)
     if b - a < len(raw):
         require_rows(b - a, ts)  # the complete stretch is what is fitted

@@ -12,8 +12,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-__all__ = ["sample_grid", "seconds_of", "origin_of", "absolute_seconds", "format_duration", "format_moment", "plot_axis", "shade_training",
-           "mark_alarms"]
+__all__ = ["sample_grid", "seconds_of", "origin_of", "absolute_seconds", "format_duration", "format_moment",
+           "plot_axis", "shade_training", "mark_alarms"]
 
 
 def seconds_of(data) -> np.ndarray:

@@ -6,8 +6,8 @@ import json
 
 import numpy as np
 
-from ..signals import longest_run
-from ..timeaxis import sample_grid, seconds_of
+from ..signals import longest_complete_stretch
+from ..timeaxis import seconds_of
 
 
 def add_arguments(parser) -> None:
@@ -32,10 +32,9 @@ def _stretch(df, columns: list[np.ndarray], path: str) -> tuple[slice, str | Non
     """The longest stretch of rows with every column present and no time gap inside (the fit
     runs the valve through consecutive samples), and a note when rows were left out."""
     try:
-        _, starts = sample_grid(seconds_of(df))
+        _, a, b = longest_complete_stretch(seconds_of(df), np.column_stack(columns))
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
-    a, b = longest_run(np.all(np.isfinite(np.column_stack(columns)), axis=1), starts)
     if (a, b) == (0, len(df)):
         return slice(0, len(df)), None
     return slice(a, b), (f"{len(df) - (b - a)} rows skipped: analysed rows {a}-{b - 1}, the longest stretch "

@@ -24,7 +24,7 @@ import pandas as pd
 from . import _core
 from ._core import DetectorConfig
 from .disturbance import describe, disturbance_orders
-from .preset_timing import TIMING_FIELDS, resolve_timing, span_text
+from .preset_timing import TIMING_FIELDS, fit_to_record, resolve_timing, span_text
 from .signals import through_actuators
 from .timeaxis import seconds_of
 
@@ -33,22 +33,26 @@ __all__ = ["DetectorConfig", "Detector", "DetectionResult", "detect", "make_conf
 ConfigLike = Union[None, str, dict, "os.PathLike[str]", DetectorConfig]
 
 
-def make_config(config: ConfigLike = None, model=None) -> DetectorConfig:
+def make_config(config: ConfigLike = None, model=None, record_s: Optional[float] = None,
+                train_end_s: Optional[float] = None) -> DetectorConfig:
     """A DetectorConfig from: None (the recommended preset for the model's size: ``siso``
     for one output, ``mimo`` otherwise), a preset name (``siso``, ``mimo``, or the paper's
     Tables 1/3 verbatim: ``paper_siso``, ``paper_mimo``), a dict or a JSON file path
     (``{"preset": ..., field: value, ...}``; unknown keys are an error), or a DetectorConfig.
-    A preset's durations the user did not set are resolved at the model's sample time
-    (mpmpp.preset_timing); explicit values and a DetectorConfig are taken as they are."""
-    return _configure(config, model)[0]
+    A preset's durations the user did not set are resolved at the model's sample time and,
+    given the span of the monitored record (``record_s``) and the user's end of training if any,
+    fitted to that record (mpmpp.preset_timing); explicit values and a DetectorConfig are taken
+    as they are."""
+    return _configure(config, model, record_s, train_end_s)[0]
 
 
-def _configure(config: ConfigLike, model) -> tuple:
-    """(config, note): make_config's config and the note saying how a preset was resolved at
-    the model's sample time (None when nothing was)."""
+def _configure(config: ConfigLike, model, record_s: Optional[float] = None,
+               train_end_s: Optional[float] = None) -> tuple:
+    """(config, notes): make_config's config and the notes saying how a preset was resolved at
+    the model's sample time and fitted to the record."""
     if isinstance(config, DetectorConfig):
         config.validate()
-        return config, None
+        return config, []
     where = None
     if config is None:
         n_outputs = len(model.outputs) if model is not None else 1
@@ -66,8 +70,14 @@ def _configure(config: ConfigLike, model) -> tuple:
         resolved = DetectorConfig.from_json(json.dumps(given))
         preset = given.get("preset")
         if preset is None or model is None:
-            return resolved, None
-        return resolve_timing(resolved, preset, model.sample_time_s, explicit=set(given) & set(TIMING_FIELDS))
+            return resolved, []
+        explicit = set(given) & set(TIMING_FIELDS)
+        resolved, timing = resolve_timing(resolved, preset, model.sample_time_s, explicit=explicit)
+        notes = [timing] if timing else []
+        if record_s is not None:
+            resolved, fitted = fit_to_record(resolved, model.sample_time_s, record_s, set(given), train_end_s)
+            notes += [fitted] if fitted else []
+        return resolved, notes
     except ValueError as exc:
         raise ValueError(f"{where}: {exc}" if where else str(exc)) from None
 
@@ -190,15 +200,16 @@ class Detector:
     def _train(cls, model, data, train_end_s, config, monitored: bool = False):
         """monitored: the same data is monitored after training, so it must hold one window
         after the training period."""
-        config, timing = _configure(config, model)
+        time_s, u, y = _arrays(model, data)
+        record_s = record_span(time_s, model.sample_time_s) if monitored and len(time_s) else None
+        config, timing = _configure(config, model, record_s, train_end_s)
         if train_end_s is None:
             train_end_s = config.train_duration_s
-        time_s, u, y = _arrays(model, data)
         if monitored:
             _check_record(config, model.sample_time_s, time_s, float(train_end_s))
         config, notes = _cover_disturbance(config, model, time_s, u, y, float(train_end_s))
         series = _core.WindowFeatures(model, config).extract_series(time_s, u, y)
-        notes = ([timing] if timing else []) + notes
+        notes = timing + notes
         return cls(_core.train_detector(model, config, series, float(train_end_s)), notes), series
 
     def monitor(self, data: pd.DataFrame) -> DetectionResult:
@@ -232,13 +243,18 @@ def _check_record(config: DetectorConfig, sample_time_s: float, time_s, train_en
     """A one-line error when the record does not reach the training end plus one window."""
     if len(time_s) == 0:
         return  # left to the window extraction's own message
-    span = float(time_s[-1] - time_s[0]) + sample_time_s
+    span = record_span(time_s, sample_time_s)
     window = config.window_samples(sample_time_s) * sample_time_s
     needed = train_end_s + window
     if span < needed - 1e-6 * sample_time_s:
         raise ValueError(f"data: the record spans {span_text(span)}; detection needs at least "
                          f"{span_text(needed)} at {sample_time_s:g} s sampling (training "
                          f"{span_text(train_end_s)} plus one {span_text(window)} window)")
+
+
+def record_span(time_s, sample_time_s: float) -> float:
+    """Seconds a record covers: first to last sample plus the last sample's period."""
+    return float(time_s[-1] - time_s[0]) + sample_time_s
 
 
 def _cover_disturbance(config: DetectorConfig, model, time_s, u, y, train_end_s: float):

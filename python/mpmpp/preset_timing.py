@@ -17,22 +17,38 @@ holds enough data for the ARX-OE / residual regression:
 * each duration is a whole number of samples (window and step to the nearest, at least one
   step; training rounded up), and the inspection period a whole number of steps.
 
+``fit_to_record`` then fits them to the record ``detect`` monitors (a historian export of a few
+hours is normal input): the default training is never more than ``TRAINING_SHARE`` of the record,
+so at least half of it is monitored; when that shortens the training, or the monitored part
+holds fewer than ``MONITORED_WINDOWS`` windows (one after a training the user set), the window
+shrinks (never below
+``MIN_WINDOW_SAMPLES``; step and inspection period with it, so n_T stays) so that the training
+still holds ``MIN_TRAINING_WINDOWS`` windows; and a fitted record is judged window by window
+(pooled windows would reach back into the training part). A record the preset fits as it is
+(12 h or more for ``siso``, 16 h for ``mimo`` at 5 s; the paper's scenarios) is left alone.
+
 At the paper's 5 s nothing changes (its windows hold 1440 samples). Fields a user sets explicitly
 (``{"preset": "siso", "window_s": 14400}``) are kept verbatim: a user value that is not a whole
 number of samples stays an error naming the field.
 """
 from __future__ import annotations
 
+import json
 import math
 
 from ._core import DetectorConfig
 
-__all__ = ["MAX_WINDOW_SAMPLES", "MIN_TRAINING_WINDOWS", "MIN_WINDOW_SAMPLES", "TIMING_FIELDS", "resolve_timing", "span_text"]
+__all__ = ["MAX_WINDOW_SAMPLES", "MIN_TRAINING_WINDOWS", "MIN_WINDOW_SAMPLES", "MONITORED_WINDOWS",
+           "SINGLE_WINDOW_SIGNIFICANCE", "TIMING_FIELDS", "TRAINING_SHARE", "fit_to_record", "resolve_timing", "span_text"]
 
 # Chosen on the tuning families (docs/detection.md "Presets at other sample times").
 MIN_WINDOW_SAMPLES = 600
 MAX_WINDOW_SAMPLES = 2700
 MIN_TRAINING_WINDOWS = 1.5
+# Chosen on short draws of the tuning families (docs/families.md "Short records").
+TRAINING_SHARE = 0.5
+MONITORED_WINDOWS = 2
+SINGLE_WINDOW_SIGNIFICANCE = 0.001  # the level of `mimo` and of `siso` before pooled windows
 TIMING_FIELDS = ("window_s", "step_s", "inspection_s", "train_duration_s")
 
 
@@ -83,3 +99,50 @@ def resolve_timing(config: DetectorConfig, preset: str, sample_time_s: float,
                  f"{round(out.window_s / ts)} samples, step {span_text(out.step_s)} = {round(out.step_s / ts)} "
                  f"samples, inspection {span_text(out.inspection_s)}, training {span_text(out.train_duration_s)} "
                  f"({why})")
+
+
+def fit_to_record(config: DetectorConfig, sample_time_s: float, record_s: float, explicit=(),
+                  train_end_s: float | None = None) -> tuple[DetectorConfig, str | None]:
+    """(config, note): `config` (already resolved at `sample_time_s`) with its training and
+    window fitted to a record of `record_s` seconds (module docstring), and a one-line note
+    saying what changed, or None. `train_end_s`: the user's end of training (kept as it is, as
+    is every field in `explicit`); without it the training is the config's, capped at
+    TRAINING_SHARE of the record. A record that still cannot hold training plus one window is
+    left for the caller to refuse with the lengths it needs."""
+    ts = float(sample_time_s)
+    user_training = train_end_s is not None or "train_duration_s" in explicit
+    given_training = float(train_end_s) if train_end_s is not None else config.train_duration_s
+    training = given_training if user_training else min(given_training, ts * math.floor(TRAINING_SHARE * record_s / ts))
+    fields = {}
+    window = config.window_s
+    if "window_s" not in explicit:
+        # the monitored part holds MONITORED_WINDOWS windows, or after the user's training one
+        fitted = min(window, (record_s - training) / (1 if user_training else MONITORED_WINDOWS))
+        if training < given_training:
+            fitted = min(fitted, training / MIN_TRAINING_WINDOWS)
+        fitted = ts * max(round(fitted / ts), min(MIN_WINDOW_SAMPLES, round(window / ts)))
+        if fitted < window:
+            window = fields["window_s"] = fitted
+            step = config.step_s
+            if "step_s" not in explicit:
+                step = fields["step_s"] = ts * max(1, round(fitted / config.window_s * step / ts))
+            if "inspection_s" not in explicit:  # the same number of inspected windows (n_T, eq. 23)
+                fields["inspection_s"] = max(1, round(config.inspection_s / config.step_s)) * step
+    if not user_training:
+        training = ts * math.ceil(max(training, MIN_TRAINING_WINDOWS * window) / ts - 1e-9)
+        if training != config.train_duration_s:
+            fields["train_duration_s"] = training
+    if not fields:
+        return config, None
+    # Pooled windows would reach back into the training part (docs/detection.md "Pooled windows"):
+    # a fitted record is judged window by window, at the single-window level.
+    if config.pooled_windows > 1 and not {"pooled_windows", "window_significance"} & set(explicit):
+        fields.update(pooled_windows=1, window_significance=SINGLE_WINDOW_SIGNIFICANCE)
+    out = DetectorConfig.from_json(json.dumps({**json.loads(config.to_json()), **fields}))
+    return out, (f"record of {span_text(record_s)}: training {span_text(training)}"
+                 f"{'' if user_training else f' (at most {TRAINING_SHARE:.0%} of the record)'}, window "
+                 f"{span_text(window)} = {round(window / ts)} samples, step {span_text(out.step_s)}, inspection "
+                 f"{span_text(out.inspection_s)}"
+                 f"{', single windows (not pooled)' if out.pooled_windows < config.pooled_windows else ''} "
+                 f"(fitted so that the record holds the training and {MONITORED_WINDOWS} monitored windows)")
+

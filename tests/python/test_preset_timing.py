@@ -10,10 +10,10 @@ import math
 import pytest
 
 import mpmpp
-from mpmpp import DetectorConfig
+from mpmpp import DetectorConfig, families
 from mpmpp.detect import detect, make_config
 from mpmpp.evaluate import nominal_model
-from mpmpp.preset_timing import MAX_WINDOW_SAMPLES, MIN_TRAINING_WINDOWS, MIN_WINDOW_SAMPLES
+from mpmpp.preset_timing import MAX_WINDOW_SAMPLES, MIN_TRAINING_WINDOWS, MIN_WINDOW_SAMPLES, SINGLE_WINDOW_SIGNIFICANCE
 
 PRESETS = ("siso", "mimo", "paper_siso", "paper_mimo")
 
@@ -137,3 +137,84 @@ def test_cli_detect_at_40_s_reports_the_resolved_windows(tmp_path):
     lines = err.getvalue().strip().splitlines()
     assert len(lines) == 1 and "step_s = 300" in lines[0] and "whole number of samples" in lines[0]
 
+
+
+# --- fitting the durations to the record (preset_timing.fit_to_record) -------------------------
+
+@pytest.mark.parametrize("family", [f.name for f in families.FAMILIES if f.name != "pi_siso_short"])
+def test_records_the_presets_fit_are_left_alone(family):
+    """Every family but the short one records 14 h or more: the presets' durations stand as they
+    are (so every earlier family and paper-scenario result is unchanged)."""
+    for seed in range(3):
+        spec, _ = families.family(family).draw(seed)
+        model = nominal_model(spec)
+        preset = "siso" if len(model.outputs) == 1 else "mimo"
+        assert make_config(preset, model, spec["duration_s"]).to_json() == make_config(preset, model).to_json()
+    for scen, presets in ((mpmpp.scenarios.paper_siso(), ("siso", "paper_siso")),
+                          (mpmpp.scenarios.paper_mimo(), ("mimo", "paper_mimo"))):
+        model = nominal_model(scen)
+        for preset in presets:
+            assert make_config(preset, model, scen["duration_s"]).to_json() == make_config(preset, model).to_json()
+
+
+def test_a_short_record_trains_on_its_first_half_with_windows_that_fit():
+    # siso at 5 s: 2 h windows (1440 samples) every 5 min, inspection 2 h, 6 h training, 3 pooled
+    c = make_config("siso", _Model(5.0), record_s=4 * 3600)
+    assert c.train_duration_s == 2 * 3600  # half the record
+    assert c.window_s == 3600  # the 2 h monitored part holds MONITORED_WINDOWS = 2 windows
+    assert c.step_s == 150 and c.inspection_s == 3600  # step scaled with the window, n_T kept
+    assert c.inspection_windows() == DetectorConfig.preset("siso").inspection_windows()
+    assert c.pooled_windows == 1 and c.window_significance == SINGLE_WINDOW_SIGNIFICANCE
+    # 3 h at 1 s: half the record is 1.5 h, 1.5 windows of training: 1 h windows (3600 samples
+    # would exceed the 2700-sample cap, the preset's 45 min window stands), so 1.5 h training
+    c = make_config("siso", _Model(1.0), record_s=3 * 3600)
+    assert c.window_s == 2700 and c.train_duration_s == 5400
+    # the window never falls below MIN_WINDOW_SAMPLES: the training grows to 1.5 of them instead
+    c = make_config("siso", _Model(5.0), record_s=2.2 * 3600)
+    assert c.window_samples(5.0) == MIN_WINDOW_SAMPLES
+    assert c.train_duration_s == MIN_TRAINING_WINDOWS * MIN_WINDOW_SAMPLES * 5.0
+
+
+def test_what_the_user_set_is_kept_when_fitting():
+    at_5 = _Model(5.0)
+    c = make_config({"preset": "siso", "window_s": 7200}, at_5, record_s=4 * 3600)
+    assert c.window_s == 7200 and c.step_s == 300  # the user's window: not shrunk
+    c = make_config({"preset": "siso", "pooled_windows": 3}, at_5, record_s=4 * 3600)
+    assert c.pooled_windows == 3 and c.window_significance == DetectorConfig.preset("siso").window_significance
+    # the user's end of training stays (the config's training is not rewritten); the window
+    # shrinks only when the rest of the record cannot hold one
+    c = make_config("siso", at_5, record_s=3 * 3600, train_end_s=3600 * 1.5)
+    assert c.train_duration_s == DetectorConfig.preset("siso").train_duration_s
+    assert c.window_s == 1.5 * 3600
+    c = make_config("siso", at_5, record_s=4 * 3600, train_end_s=3600)
+    assert c.to_json() == make_config("siso", at_5).to_json()  # 3 h monitored: a 2 h window fits
+
+
+def test_detect_on_a_short_record_runs_and_says_how_it_was_fitted():
+    model, data = _record(5.0, 4.0)
+    result = detect(model, data, config="siso")
+    assert result.train_end_s == 7200
+    assert (~result.windows["training"]).sum() >= 1
+    note = [n for n in result.notes if n.startswith("record of 4 h")]
+    assert len(note) == 1 and "training 2 h (at most 50% of the record)" in note[0]
+    assert "window 1 h = 720 samples" in note[0] and "single windows" in note[0]
+    # below 2.5 windows of MIN_WINDOW_SAMPLES (training 1.5, monitored 1): the one-line refusal
+    model, data = _record(5.0, 2.0)
+    with pytest.raises(ValueError, match=r"^data: the record spans 2 h; detection needs at least 2\.083 h at 5 s "
+                                         r"sampling \(training 1\.25 h plus one 50 min window\)$"):
+        detect(model, data, config="siso")
+
+
+def test_cli_detect_without_train_end_trains_on_the_fitted_period(tmp_path):
+    from mpmpp.cli import main
+
+    model, data = _record(5.0, 4.0)
+    mpmpp.save_model(model, tmp_path / "m.json")
+    mpmpp.save_data(tmp_path / "d.csv", data)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv")])
+    assert code == 0
+    text = out.getvalue()
+    assert text.startswith("trained on 0.00 h .. 2.00 h (2 h)") and "windows of 1 h every 2.5 min" in text
+    assert "note: record of 4 h: training 2 h" in text

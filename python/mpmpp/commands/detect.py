@@ -9,9 +9,10 @@ from ._pair import add_pair_arguments, add_train_end_argument, load_pair, result
 
 def add_arguments(parser) -> None:
     add_pair_arguments(parser, outputs=False)
-    add_train_end_argument(parser, required=True,
+    add_train_end_argument(parser,
                            help_text="end of the training period: windows ending by then train the detector "
-                                     "(the data must be free of mismatch there)")
+                                     "(the data must be free of mismatch there); default: the preset's training, "
+                                     "at most half the record")
     parser.add_argument("--config", metavar="FILE",
                         help="detector config JSON ({\"preset\": \"paper_siso\", \"alpha\": 2, ...}); "
                              "or a preset name (siso, mimo, paper_siso, paper_mimo); default: the recommended preset (siso or mimo) for the model's size. "
@@ -29,11 +30,13 @@ def run(args) -> int:
     from ..preset_timing import span_text
 
     model, data, clock = load_pair(args)
-    config = make_config(args.config, model)
-    window_s = config.window_samples(model.sample_time_s) * model.sample_time_s
-    end = train_end(args, clock, window_s, "monitoring (one detection window)")
+    record_s = clock.end_s + clock.sample_time_s - clock.start_s
     # The detector counts its training period from the first sample.
-    result, detector = detect(model, data, end - clock.start_s, args.config, return_detector=True)
+    trained_s = None if args.train_end is None else clock.when(args.train_end) - clock.start_s
+    config = make_config(args.config, model, record_s, trained_s)
+    window_s = config.window_samples(model.sample_time_s) * model.sample_time_s
+    train_end(args, clock, window_s, "monitoring (one detection window)")  # refuses one that leaves no window
+    result, detector = detect(model, data, trained_s, args.config, return_detector=True)
     if args.save_detector:
         detector.save(args.save_detector)
     doc = result_document(result, clock)
@@ -48,6 +51,7 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(doc))
     else:
+        end = clock.start_s + result.train_end_s
         print(f"trained on {clock.span_between(clock.start_s, end)}, {len(result.windows)} windows of "
               f"{span_text(window_s)} every {span_text(detector.config.step_s)}, threshold s_T = {result.threshold:g}")
         print(result.alarm_table(clock.stamp))

@@ -249,7 +249,8 @@ def _check_record(config: DetectorConfig, sample_time_s: float, time_s, train_en
     if span < needed - 1e-6 * sample_time_s:
         raise ValueError(f"data: the record spans {span_text(span)}; detection needs at least "
                          f"{span_text(needed)} at {sample_time_s:g} s sampling (training "
-                         f"{span_text(train_end_s)} plus one {span_text(window)} window)")
+                         f"{span_text(train_end_s)} plus one {span_text(window)} window); `compare` and "
+                         f"`diagnose` judge a shorter record without a training period")
 
 
 def record_span(time_s, sample_time_s: float) -> float:

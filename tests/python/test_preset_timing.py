@@ -111,7 +111,8 @@ def test_a_too_short_record_is_one_line_saying_how_long_it_must_be():
     assert "\n" not in text
     # siso at 40 s: a 600-sample (6.667 h) window, 10 h of training (1.5 windows)
     assert text == ("data: the record spans 12 h; detection needs at least 16.67 h at 40 s sampling "
-                    "(training 10 h plus one 6.667 h window)")
+                    "(training 10 h plus one 6.667 h window); `compare` and `diagnose` judge a shorter record "
+                    "without a training period")
 
 
 def test_cli_detect_at_40_s_reports_the_resolved_windows(tmp_path):
@@ -201,7 +202,7 @@ def test_detect_on_a_short_record_runs_and_says_how_it_was_fitted():
     # below 2.5 windows of MIN_WINDOW_SAMPLES (training 1.5, monitored 1): the one-line refusal
     model, data = _record(5.0, 2.0)
     with pytest.raises(ValueError, match=r"^data: the record spans 2 h; detection needs at least 2\.083 h at 5 s "
-                                         r"sampling \(training 1\.25 h plus one 50 min window\)$"):
+                                         r"sampling \(training 1\.25 h plus one 50 min window\); `compare` and `diagnose`"):
         detect(model, data, config="siso")
 
 

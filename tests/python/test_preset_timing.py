@@ -115,17 +115,24 @@ def test_a_too_short_record_is_one_line_saying_how_long_it_must_be():
                     "without a training period")
 
 
-def test_cli_detect_at_40_s_reports_the_resolved_windows(tmp_path):
+def _cli_detect(tmp_path, ts: float, hours: float, *options) -> tuple[int, str]:
+    """(exit code, stdout) of ``mpmpp detect`` on the paper SISO loop recorded every ts seconds."""
     from mpmpp.cli import main
 
-    model, data = _record(40.0, 17.0)
+    model, data = _record(ts, hours)
     mpmpp.save_model(model, tmp_path / "m.json")
     mpmpp.save_data(tmp_path / "d.csv", data)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--train-end", "10h"])
+        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), *options])
+    return code, out.getvalue()
+
+
+def test_cli_detect_at_40_s_reports_the_resolved_windows(tmp_path):
+    from mpmpp.cli import main
+
+    code, text = _cli_detect(tmp_path, 40.0, 17.0, "--train-end", "10h")
     assert code == 0
-    text = out.getvalue()
     assert "windows of 6.667 h every 16.67 min" in text
     assert "note: preset siso at 40 s sampling: window 6.667 h = 600 samples" in text
     err = io.StringIO()
@@ -207,15 +214,7 @@ def test_detect_on_a_short_record_runs_and_says_how_it_was_fitted():
 
 
 def test_cli_detect_without_train_end_trains_on_the_fitted_period(tmp_path):
-    from mpmpp.cli import main
-
-    model, data = _record(5.0, 4.0)
-    mpmpp.save_model(model, tmp_path / "m.json")
-    mpmpp.save_data(tmp_path / "d.csv", data)
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        code = main(["detect", str(tmp_path / "m.json"), str(tmp_path / "d.csv")])
+    code, text = _cli_detect(tmp_path, 5.0, 4.0)
     assert code == 0
-    text = out.getvalue()
     assert text.startswith("trained on 0.00 h .. 2.00 h (2 h)") and "windows of 1 h every 2.5 min" in text
     assert "note: record of 4 h: training 2 h" in text

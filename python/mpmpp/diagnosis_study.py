@@ -98,6 +98,7 @@ def _finding_record(f, effect: str, change: dict | None, drifting: set = frozens
     d = f.to_dict()
     d["score"] = float(f.score)
     d["evidence_confidence"] = float(f.evidence_confidence)
+    d["actuator_score"] = f.actuator_score
     d["calibrated"] = f.calibrated   # scored by its own calibration, not the family map
     d["process"] = f.effect in PROCESS_EFFECTS
     d["right"] = finding_right(d, effect, change) or (f.effect == "output_drift" and f.output in drifting)

@@ -10,23 +10,39 @@ from mpmpp import families as fam
 from mpmpp.diagnose import confidence as conf
 
 
-def finding(score, before, after, pb, pa, effect="gain"):
+def finding(score, before, after, pb, pa, effect="gain", actuator=None):
     return {"effect": effect, "score": score, "error_before": before, "error_after": after,
-            "process_error_before": pb, "process_error_after": pa}
+            "process_error_before": pb, "process_error_after": pa, "actuator_score": actuator}
 
 
 def test_features():
-    def kind(name):
-        return [1.0 if f == f"effect_{name}" else 0.0 for f in conf.FEATURES[4:]]
+    kinds = conf.FEATURES[5:]
 
-    x = conf.features(finding(99.0, 1.0, 0.9, 0.5, 0.1))
-    assert x == pytest.approx([math.log(100.0), 0.1, 0.8, math.log(0.5), *kind("gain")])
-    # unknown process errors: no fall, the smallest share; a disturbance effect
-    y = conf.features(finding(-3.0, 1.0, 0.5, None, None, effect="noise_change"))
-    assert y == pytest.approx([0.0, 0.5, 0.0, math.log(1e-3), *kind("noise_change")])
+    def kind(name):
+        return [1.0 if f == f"effect_{name}" else 0.0 for f in kinds]
+
+    x = conf.features(finding(99.0, 1.0, 0.9, 0.5, 0.1, actuator=9.0))
+    assert x == pytest.approx([math.log(100.0), 0.1, 0.8, math.log(0.5), math.log(10.0 / 100.0), *kind("gain")])
+    # unknown process errors: no fall, the smallest share; a disturbance effect: no actuator rival
+    y = conf.features(finding(-3.0, 1.0, 0.5, None, None, effect="noise_change", actuator=50.0))
+    assert y == pytest.approx([0.0, 0.5, 0.0, math.log(1e-3), 0.0, *kind("noise_change")])
     # an unmodelled measured input is the same search as a missing coupling
     z = conf.features(finding(9.0, 1.0, 0.9, 0.5, 0.4, effect="unmodeled_input"))
-    assert z[4:] == pytest.approx(kind("missing_coupling"))
+    assert z[5:] == pytest.approx(kind("missing_coupling"))
+
+
+def test_actuator_rival():
+    """log(1 + actuator score) - log(1 + the finding's score), scores floored at 0, for gain,
+    time-constant and dead-time findings; 0 when the search did not run on the input."""
+    rival = conf.FEATURES.index("actuator_rival")
+    for effect in ("gain", "time_constant", "delay"):
+        assert conf.features(finding(63.0, 1.0, 0.9, 0.5, 0.1, effect, actuator=-4.0))[rival] == pytest.approx(-math.log(64.0))
+        assert conf.features(finding(3.0, 1.0, 0.9, 0.5, 0.1, effect, actuator=15.0))[rival] == pytest.approx(math.log(4.0))
+        assert conf.features(finding(3.0, 1.0, 0.9, 0.5, 0.1, effect))[rival] == 0.0
+    # the shipped map: a gain the actuator explains as well is less confident than one it does not
+    contested = conf.calibrated_confidence(finding(200.0, 1.0, 0.9, 0.5, 0.1, actuator=200.0))
+    clear = conf.calibrated_confidence(finding(200.0, 1.0, 0.9, 0.5, 0.1, actuator=-5.0))
+    assert contested < clear
 
 
 def test_fitted_map_reproduces_sklearn_probabilities():

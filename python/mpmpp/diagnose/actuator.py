@@ -173,9 +173,10 @@ class ActuatorSearch:
 
 def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: int, min_segment: int,
                       step: int, logn: float, min_effect: float, skip=frozenset(),
-                      judged_throughout=frozenset(), enabled: bool | None = None) -> tuple[list[Finding], list[str]]:
+                      judged_throughout=frozenset(), enabled: bool | None = None) -> tuple[list[Finding], list[str], dict]:
     """Per input (except those in ``skip``), the best actuator candidate when it passes the
-    held-out tests, and notes. For inputs in ``judged_throughout`` (single loops, whose valve
+    held-out tests, notes, and the penalised held-out score of each searched input's best
+    candidate whether it passed or not (the rival a linear finding's confidence weighs). For inputs in ``judged_throughout`` (single loops, whose valve
     the Hammerstein fit judged over the whole record) only a nonlinearity that set in during
     the record is reported. ``enabled``: None searches when the record's rows times the
     channels searched stay within SEARCH_WORK (the cost of the ~80 candidates grows with both),
@@ -184,14 +185,14 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
     inputs = [j for j, name in enumerate(sig.inputs) if name not in skip]
     channels = sum(out.row[j] is not None for out in outputs for j in inputs)
     if enabled is False or not channels:
-        return [], []
+        return [], [], {}
     if enabled is None and n * channels > SEARCH_WORK:
         return [], [f"actuator nonlinearities that set in during the record not searched: {n} rows x {channels} "
-                    f"channels exceed {SEARCH_WORK} (cost); pass actuator_search=True (--actuator-search) to search"]
+                    f"channels exceed {SEARCH_WORK} (cost); pass actuator_search=True (--actuator-search) to search"], {}
     # the process candidates' onset grid: a coarser one cost the saturation its fit on tuning
     # runs (mpc_siso seed 13 read as a gain of 0.01 at 6 min, kept at 2 min and finer)
     onsets = np.unique(np.r_[first_onset, np.arange(first_onset + min_segment, n - min_segment + 1, step)])
-    found = []
+    found, scores = [], {}
     for j in inputs:
         name = sig.inputs[j]
         search = ActuatorSearch(outputs, sig, j, onsets, min_segment)
@@ -200,7 +201,7 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
         # per output: the held-out statistic of the candidates chosen on fold 0 and on fold 1
         heldout_per_output = search.best(0).held[0] + search.best(1).held[1]
         heldout = float(heldout_per_output.sum())
-        score = heldout - 0.5 * PARAMS * logn
+        score = scores[name] = heldout - 0.5 * PARAMS * logn
         best = search.best(None)
         if score <= 0.0 or (name in judged_throughout and best.onset <= first_onset):
             continue
@@ -229,7 +230,7 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
             score=score, change=changes[k_top],
             extra_changes=[c for k, c in enumerate(changes) if k != k_top],
             outputs_driven=tuple(out.name for out in search.driven)))
-    return found, []
+    return found, [], scores
 
 
 def model_correction_gains(out: OutputResidual, response: np.ndarray, onsets: np.ndarray) -> OnsetGains:

@@ -4,9 +4,10 @@ The held-out likelihood gain alone (its chi-square CDF, ``scoring.confidence``) 
 finding on long closed-loop records, right or wrong. What tells a right finding from a wrong
 one is how much evidence it has relative to the record, whether its update lowers the held-out
 errors (a finding whose update barely lowers them is not a confident one), and how large the
-input-explained part of the error is against the disturbance, and which effect it names (the
-effects differ in how often the search confuses them: a gain is what an unmodelled valve
-nonlinearity looks like to a linear fit, an output drift is rarely anything else). A logistic
+input-explained part of the error is against the disturbance, how nearly the actuator search
+explains the same record (for a gain, time-constant or dead-time finding: a gain is what an
+unmodelled valve nonlinearity looks like to a linear fit), and which effect it names (an output
+drift is rarely anything else). A logistic
 map of these features is fitted on the TUNING scenario families only (studies/calibrate_confidence.py writes
 confidence_map.json); its reliability is reported on the held-out families
 (studies/diagnosis_families.py, docs/diagnose.md).
@@ -26,7 +27,9 @@ MAP_FILE = Path(__file__).with_name("confidence_map.json")
 # A missing coupling and an unmodelled measured input are the same search (a new input channel).
 _EFFECT_KIND = {"unmodeled_input": "missing_coupling"}
 _KINDS = tuple(e for e in EFFECTS if e not in _EFFECT_KIND)
-FEATURES = ("log_score", "one_step_fall", "process_fall", "process_share") + tuple(f"effect_{k}" for k in _KINDS)
+_LINEAR = ("gain", "time_constant", "delay")
+FEATURES = ("log_score", "one_step_fall", "process_fall", "process_share", "actuator_rival") + tuple(
+    f"effect_{k}" for k in _KINDS)
 
 
 def _ratio_fall(before, after) -> float:
@@ -36,8 +39,23 @@ def _ratio_fall(before, after) -> float:
     return float(np.clip(1.0 - after / before, -1.0, 1.0))
 
 
+def _actuator_rival(finding: dict) -> float:
+    """For a gain, time-constant or dead-time finding: log(1 + the actuator search's score on
+    its input) - log(1 + its own score), scores floored at 0. Near 0 or above, an actuator
+    nonlinearity explains the record about as well (a sticking or dead-band valve looks like a
+    lower gain to a linear fit); 0 too when the search did not run on that input (nothing rules
+    the actuator out). 0 for other effects (their effect indicator absorbs the constant)."""
+    if finding["effect"] not in _LINEAR:
+        return 0.0
+    rival = finding.get("actuator_score")
+    if rival is None:
+        return 0.0
+    return math.log1p(max(float(rival), 0.0)) - math.log1p(max(float(finding.get("score", 0.0)), 0.0))
+
+
 def features(finding: dict) -> np.ndarray:
-    """The evidence of one finding (``Finding.to_dict()`` plus its ``score``)."""
+    """The evidence of one finding (``Finding.to_dict()`` plus its ``score`` and
+    ``actuator_score``)."""
     pb, eb = finding.get("process_error_before"), finding.get("error_before")
     share = math.log(pb / eb) if pb and eb and pb > 0 and eb > 0 else math.log(1e-3)
     return np.array([
@@ -45,6 +63,7 @@ def features(finding: dict) -> np.ndarray:
         _ratio_fall(eb, finding.get("error_after")),
         _ratio_fall(pb, finding.get("process_error_after")),
         max(share, math.log(1e-3)),
+        _actuator_rival(finding),
         *(1.0 if _EFFECT_KIND.get(finding["effect"], finding["effect"]) == k else 0.0 for k in _KINDS),
     ])
 

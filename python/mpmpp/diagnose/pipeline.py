@@ -147,7 +147,7 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     for nl in valves:
         found = [f for f in found if not _actuator_rival(f, nl)] + [nl]
     judged = actuated | {nl.input for nl in valves}
-    actuators, actuator_notes = actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect,
+    actuators, actuator_notes, actuator_scores = actuator_findings(outputs, sig, first_onset, min_segment, step, logn, min_effect,
                                                   skip=judged, judged_throughout={sig.inputs[lp.input] for lp in loops},
                                                   enabled=actuator_search)
     notes += actuator_notes
@@ -202,7 +202,9 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
             shown[f.id] = parts_of(f)
             f.process_error_before, f.process_error_after = (held_out_rms(p, block) for p in shown[f.id])
         f.evidence_confidence = f.confidence
-        calibrated = None if f.calibrated else calibrated_confidence({**f.to_dict(), "score": f.score})
+        f.actuator_score = actuator_scores.get(f.input)
+        calibrated = None if f.calibrated else calibrated_confidence(
+            {**f.to_dict(), "score": f.score, "actuator_score": f.actuator_score})
         if calibrated is not None:
             f.confidence = calibrated
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,

@@ -79,6 +79,10 @@ class Finding:
     # to (the valve fit's, on single PI loops with and without stiction): the scenario-family
     # map (diagnose/confidence.py) leaves it as it is.
     calibrated: bool = field(repr=False, default=False)
+    # the actuator search's score on ``input`` (its best candidate, penalised, passed or not);
+    # None when the search did not run there. A gain that an actuator nonlinearity explains
+    # nearly as well is a less confident gain (diagnose/confidence.py).
+    actuator_score: float | None = field(repr=False, default=None)
     # An actuator drives several outputs: the channel changes of the outputs other than
     # ``output`` (the one the finding is reported on), and every output it drives.
     extra_changes: list[ModelChange] = field(repr=False, default_factory=list)

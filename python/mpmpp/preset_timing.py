@@ -21,9 +21,8 @@ holds enough data for the ARX-OE / residual regression:
 hours is normal input): the default training is never more than ``TRAINING_SHARE`` of the record,
 so at least half of it is monitored; when that shortens the training, or the monitored part
 holds fewer than ``MONITORED_WINDOWS`` windows (one after a training the user set), the window
-shrinks (never below
-``MIN_WINDOW_SAMPLES``; step and inspection period with it, so n_T stays) so that the training
-still holds ``MIN_TRAINING_WINDOWS`` windows; and a fitted record is judged window by window
+shrinks (never below ``MIN_WINDOW_SAMPLES``; step and inspection period with it, so n_T stays)
+so that the training still holds ``MIN_TRAINING_WINDOWS`` windows; and a fitted record is judged window by window
 (pooled windows would reach back into the training part). A record the preset fits as it is
 (12 h or more for ``siso``, 16 h for ``mimo`` at 5 s; the paper's scenarios) is left alone.
 
@@ -113,11 +112,11 @@ def fit_to_record(config: DetectorConfig, sample_time_s: float, record_s: float,
     user_training = train_end_s is not None or "train_duration_s" in explicit
     given_training = float(train_end_s) if train_end_s is not None else config.train_duration_s
     training = given_training if user_training else min(given_training, ts * math.floor(TRAINING_SHARE * record_s / ts))
+    monitored = 1 if user_training else MONITORED_WINDOWS  # windows the monitored part holds
     fields = {}
     window = config.window_s
     if "window_s" not in explicit:
-        # the monitored part holds MONITORED_WINDOWS windows, or after the user's training one
-        fitted = min(window, (record_s - training) / (1 if user_training else MONITORED_WINDOWS))
+        fitted = min(window, (record_s - training) / monitored)
         if training < given_training:
             fitted = min(fitted, training / MIN_TRAINING_WINDOWS)
         fitted = ts * max(round(fitted / ts), min(MIN_WINDOW_SAMPLES, round(window / ts)))
@@ -144,5 +143,6 @@ def fit_to_record(config: DetectorConfig, sample_time_s: float, record_s: float,
                  f"{span_text(window)} = {round(window / ts)} samples, step {span_text(out.step_s)}, inspection "
                  f"{span_text(out.inspection_s)}"
                  f"{', single windows (not pooled)' if out.pooled_windows < config.pooled_windows else ''} "
-                 f"(fitted so that the record holds the training and {MONITORED_WINDOWS} monitored windows)")
+                 f"(fitted so that the record holds the training and {monitored} monitored "
+                 f"window{'s' if monitored > 1 else ''})")
 

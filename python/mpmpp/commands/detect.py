@@ -30,10 +30,9 @@ def run(args) -> int:
     from ..preset_timing import span_text
 
     model, data, clock = load_pair(args)
-    record_s = clock.end_s + clock.sample_time_s - clock.start_s
     # The detector counts its training period from the first sample.
     trained_s = None if args.train_end is None else clock.when(args.train_end) - clock.start_s
-    config = make_config(args.config, model, record_s, trained_s)
+    config = make_config(args.config, model, clock.duration_s, trained_s)
     window_s = config.window_samples(model.sample_time_s) * model.sample_time_s
     train_end(args, clock, window_s, "monitoring (one detection window)")  # refuses one that leaves no window
     result, detector = detect(model, data, trained_s, args.config, return_detector=True)

@@ -176,9 +176,9 @@ def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: 
                       judged_throughout=frozenset(), enabled: bool | None = None) -> tuple[list[Finding], list[str], dict]:
     """Per input (except those in ``skip``), the best actuator candidate when it passes the
     held-out tests, notes, and the penalised held-out score of each searched input's best
-    candidate whether it passed or not (the rival a linear finding's confidence weighs). For inputs in ``judged_throughout`` (single loops, whose valve
-    the Hammerstein fit judged over the whole record) only a nonlinearity that set in during
-    the record is reported. ``enabled``: None searches when the record's rows times the
+    candidate whether it passed or not (the rival a linear finding's confidence weighs). For
+    inputs in ``judged_throughout`` (single loops, whose valve the Hammerstein fit judged over
+    the whole record) only a nonlinearity that set in during the record is reported. ``enabled``: None searches when the record's rows times the
     channels searched stay within SEARCH_WORK (the cost of the ~80 candidates grows with both),
     True always, False never."""
     n = len(sig.time_s)

@@ -21,13 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .process import SCALED_CHANNEL_EFFECTS
 from .result import EFFECTS
 
 MAP_FILE = Path(__file__).with_name("confidence_map.json")
 # A missing coupling and an unmodelled measured input are the same search (a new input channel).
 _EFFECT_KIND = {"unmodeled_input": "missing_coupling"}
 _KINDS = tuple(e for e in EFFECTS if e not in _EFFECT_KIND)
-_LINEAR = ("gain", "time_constant", "delay")
 FEATURES = ("log_score", "one_step_fall", "process_fall", "process_share", "actuator_rival") + tuple(
     f"effect_{k}" for k in _KINDS)
 
@@ -45,7 +45,7 @@ def _actuator_rival(finding: dict) -> float:
     nonlinearity explains the record about as well (a sticking or dead-band valve looks like a
     lower gain to a linear fit); 0 too when the search did not run on that input (nothing rules
     the actuator out). 0 for other effects (their effect indicator absorbs the constant)."""
-    if finding["effect"] not in _LINEAR:
+    if finding["effect"] not in SCALED_CHANNEL_EFFECTS:
         return 0.0
     rival = finding.get("actuator_score")
     if rival is None:

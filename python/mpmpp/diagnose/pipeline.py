@@ -15,7 +15,7 @@ from .confidence import calibrated_confidence
 from .errors import one_step_errors
 from .loops import single_loops
 from .noise import noise_finding
-from .process import process_findings
+from .process import SCALED_CHANNEL_EFFECTS, process_findings
 from .process_error import held_out_rms, process_parts
 from .result import DiagnoseResult, Finding, InsufficientData
 from .valve import valve_findings
@@ -268,4 +268,4 @@ def _actuator_rival(f: Finding, nl: Finding) -> bool:
     """A linear stand-in for the actuator finding ``nl``: a gain / dynamics change of the
     actuator's channels or a drift on an output it drives."""
     return f.output in nl.outputs_driven and (
-        (f.input == nl.input and f.effect in ("gain", "time_constant", "delay")) or f.effect == "output_drift")
+        (f.input == nl.input and f.effect in SCALED_CHANNEL_EFFECTS) or f.effect == "output_drift")

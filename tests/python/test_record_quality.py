@@ -23,7 +23,8 @@ def test_linear_interpolation_between_every_fifth_sample():
     x = noisy()
     kept = np.arange(0, 751, 5)                 # 0, 5, ..., 750: 150 gaps of 4 interpolated samples
     y = np.interp(np.arange(751), kept, x[kept])
-    assert interpolated_share(y) == pytest.approx(600 / 749, abs=1e-12)
+    # the 4 samples of the steepest gap are the record's largest move (a rate limit's ramp looks so)
+    assert interpolated_share(y) == pytest.approx(596 / 749, abs=1e-12)
     assert repeated_share(y) == 0.0
     (note,) = record_notes({"PV 'FIC101.PV'": y})
     assert note.startswith("PV 'FIC101.PV' lies on straight lines") and "80 %" in note
@@ -39,6 +40,24 @@ def test_holding_every_fourth_sample_and_a_saturated_op():
     op[200:500] = op.max()                       # at its limit (the record's largest value) for long
     assert np.mean(np.diff(op) == 0.0) > 0.2
     assert repeated_share(op) == 0.0 and record_notes({"OP": op}) == []
+
+
+def test_an_op_ramping_at_its_rate_limit_is_not_compression():
+    """An MPC's move limit: the OP moves by at most 0.4 per sample and often by exactly that,
+    so it lies on straight lines as sampled; interpolating it between every fifth sample is
+    still compression."""
+    rng = np.random.default_rng(3)
+    wanted = np.cumsum(rng.standard_normal(751)) * 1.5
+    op = np.empty(751)
+    op[0] = 50.0
+    for t in range(1, 751):
+        op[t] = op[t - 1] + np.clip(wanted[t] - op[t - 1] + 50.0, -0.4, 0.4)
+    assert np.mean(np.abs(np.abs(np.diff(op)) - 0.4) < 1e-12) > 0.5   # the limit binds mostly
+    assert interpolated_share(op) < 0.05 and record_notes({"OP": op}) == []
+    kept = np.arange(0, 751, 5)
+    compressed = np.interp(np.arange(751), kept, op[kept])
+    # the gaps over which the OP ramped at its limit anyway are the record as sampled
+    assert interpolated_share(compressed) > 0.3 and "straight lines" in record_notes({"OP": compressed})[0]
 
 
 def test_stiction_command_notes_a_compressed_pv(tmp_path, capsys):

@@ -58,7 +58,7 @@ from . import _core
 from .compare import _finite
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
-from .record_length import require_rows
+from .record_length import MIN_ROWS, require_rows
 from .signals import longest_complete_stretch
 from .timeaxis import seconds_of
 
@@ -258,8 +258,12 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     raw = data[inputs + outputs].to_numpy(dtype=float)
     ts, a, b = longest_complete_stretch(time_s, raw)
     require_rows(len(raw), ts)
-    if b - a < len(raw):
-        require_rows(b - a, ts)  # the complete stretch is what is fitted
+    if b - a < MIN_ROWS <= len(raw):
+        # the complete stretch is what is fitted: a long record with scattered missing values is
+        # not "too short", it has no stretch long enough
+        missing = ", ".join(f"{col} {n}" for col, n in zip(inputs + outputs, np.sum(~np.isfinite(raw), axis=0)) if n)
+        raise ValueError(f"data: no stretch of at least {MIN_ROWS} rows without missing values or time gaps "
+                         f"(the longest has {b - a} of {len(raw)} rows; missing values: {missing or 'none'})")
     raw = raw[a:b]
     dev = raw - raw.mean(axis=0)
     U, Y = dev[:, :len(inputs)], dev[:, len(inputs):]

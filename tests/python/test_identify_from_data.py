@@ -178,6 +178,22 @@ def test_missing_values_fit_the_longest_complete_stretch_and_say_so():
     assert "105 rows skipped: outside the longest stretch without missing values" in r.summary()
 
 
+def test_scattered_missing_values_are_named_not_called_a_short_record(tmp_path, capsys):
+    """A PV missing in every seventh row leaves no stretch long enough: the message says so and
+    counts the missing values per column; it used to read "too short: 6 rows (0.017 h)" for a
+    751-row file."""
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=8)
+    df.loc[::7, "PV"] = np.nan
+    data = tmp_path / "sparse.csv"
+    io.save_data(data, df)
+    assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "-o", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert ("data: no stretch of at least 150 rows without missing values or time gaps (the longest has "
+            "6 of 751 rows; missing values: PV 108)") in err
+    assert err.count("\n") == 1 and "too short" not in err
+    assert not (tmp_path / "m.json").exists()
+
+
 def test_rows_a_historian_left_out_split_the_record_like_missing_values():
     """A time gap (rows absent, a whole number of samples) cuts the record as missing rows do;
     the fit is the same as with those rows present but missing."""

@@ -298,8 +298,6 @@ def _present_in_both_halves(out: OutputResidual, r: np.ndarray, fit: Fit, respon
     error in the first and in the second half of the data after its onset. The interleaved
     1 h folds cannot see a fit that only works in part of the record (in closed loop, a drift
     that starts later can pose as a channel change present throughout)."""
-    if fit.score <= 0.0:
-        return True   # rejected later anyway; no need to compute
     w = responses.whitened(fit.shape)
     drop = responses.weight(fit.shape) * (r**2 - (_without_channel(r, w) - fit.theta * w.psi) ** 2)
     mid = (fit.onset + len(r)) // 2
@@ -343,13 +341,14 @@ def _gain_sign(g: TransferFunction) -> float:
 
 
 def _preferred(fits: list[Fit]) -> Fit:
-    """The best-scoring fit, except that a new time constant or delay whose channel scale theta
-    is far from 1 is a change of gain *and* dynamics: when the gain-only fit of the same channel
-    already gets half of its held-out gain, the gain change is the main effect and is reported."""
+    """The best-scoring of ``fits`` (each with a positive score and material), except that a new
+    time constant or delay whose channel scale theta is far from 1 is a change of gain *and*
+    dynamics: when the gain-only fit of the same channel already gets half of its held-out gain,
+    the gain change is the main effect and is reported."""
     top = max(fits, key=lambda f: f.score)
     if top.shape.effect in ("time_constant", "delay") and abs(top.theta - 1.0) > max(0.2, 3 * top.theta_se):
         gain = [f for f in fits if f.shape.effect == "gain" and f.shape.column == top.shape.column]
-        if gain and gain[0].score > 0 and gain[0].heldout >= 0.5 * top.heldout:
+        if gain and gain[0].heldout >= 0.5 * top.heldout:
             return gain[0]
     return top
 
@@ -445,13 +444,13 @@ class _Search:
         scan = self.scan(r, responses)
         fits = [_fit_shape(scan, s, responses) for s in self.shapes if s.column not in self.taken]
         fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]
-        fits = _best_per_channel(fits, self.logn)
+        fits = [f for f in _best_per_channel(fits, self.logn) if f.score > 0.0]
         fits = [f for f in fits if _present_in_both_halves(self.out, r, f, responses)]
         # Materiality is judged per candidate, before the best is picked: a best fit that moves
         # the model too little to matter must not hide a material one (mpc_siso seed 22: a time
         # constant scoring 24 that barely moved the step response ended the search, and the dead
         # time 3 -> 6 samples behind it, 235 chi-square units of evidence, was never named).
-        fits = [f for f in fits if f.score > 0.0 and _material(self.out, f, self.min_effect, self.first_onset)]
+        fits = [f for f in fits if _material(self.out, f, self.min_effect, self.first_onset)]
         return _preferred(fits) if fits else None
 
     def scan(self, r: np.ndarray, responses: ShapeResponses) -> _core.ProjectedOnsetScan:
@@ -470,7 +469,7 @@ class _Search:
         out = self.out
         level = self._first_round([])
         options = [out.disturbance_onsets]
-        if level.top is not None and level.top.score > 0.0:
+        if level.top is not None:
             options.append(disturbance_onsets(out, out.e - _one_step_change(out, level.top), self.first_onset,
                                               self.step))
         rounds = [self._first_round(list(o)) if o else level for o in dict.fromkeys(map(tuple, options))]
@@ -484,7 +483,7 @@ class _Search:
     def _cost(self, first: FirstRound) -> float:
         r = first.nuisance.project(self.out.r)
         fit = first.top
-        explained = 0.0 if fit is None or fit.score <= 0.0 else fit.statistic - fit.shape.params * self.logn
+        explained = 0.0 if fit is None else fit.statistic - fit.shape.params * self.logn
         return float(np.sum(self.out.weight * r * r)) - max(explained, 0.0) + 3 * len(first.nuisance.onsets) * self.logn
 
 

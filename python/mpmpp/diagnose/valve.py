@@ -24,7 +24,7 @@ from .errors import held_out_error
 from .loops import Loop
 from .result import Finding, ModelChange
 from .process import first_lag
-from .whitening import OutputResidual, stable
+from .whitening import MIN_AR_ROWS_PER_COEFFICIENT, OutputResidual, stable
 
 MIN_LOOP_ROWS = 100   # fit_valve's minimum
 PARAMS = 3            # kind, S, J
@@ -96,7 +96,7 @@ class _ValveArx:
     def fit(self, phi: np.ndarray, k: int) -> np.ndarray | None:
         """Coefficients fitted on fold k's rows (None when too few)."""
         keep = self.fold[k]
-        if keep.sum() < 10 * phi.shape[1]:
+        if keep.sum() < MIN_AR_ROWS_PER_COEFFICIENT * phi.shape[1]:
             return None
         return np.linalg.lstsq(phi[keep], self.y[self.rows][keep], rcond=None)[0]
 
@@ -104,7 +104,7 @@ class _ValveArx:
         """A(q) and B's coefficients fitted on the even blocks with A's roots inside the unit
         circle (``stable_arx``; None when too few rows)."""
         keep = self.fold[0]
-        if keep.sum() < 10 * (N_Y + len(lags)):
+        if keep.sum() < MIN_AR_ROWS_PER_COEFFICIENT * (N_Y + len(lags)):
             return None
         return stable_arx(self.y, v, self.rows[keep], lags)
 
@@ -178,7 +178,7 @@ def _beats_linear_explanations(arx: _ValveArx, u: np.ndarray, position: np.ndarr
     valve loses almost nothing by the comparison, where requiring the threshold in each half of a
     2 h record lost half of the sticking valves (each half's gain is too noisy)."""
     rows = np.arange(len(arx.rows))
-    least = 10 * (N_Y + len(arx.lag_sets[-1]) + 1)   # rows a part needs for its own 5-fold ARX
+    least = MIN_AR_ROWS_PER_COEFFICIENT * (N_Y + len(arx.lag_sets[-1]) + 1)   # rows a part needs for its own 5-fold ARX
     cuts = [int(f * len(rows)) for f in SPLITS]
     cuts = [c for c in cuts if min(c, len(rows) - c) >= least]
     if not cuts:

@@ -145,7 +145,11 @@ def true_evidence(model, data, change: dict, onset_s: float) -> float:
     true change's structure, size and onset known; the disturbance model is diagnose's, the
     file's or the estimated one). A change that a record shows by less than a few units of it
     cannot be named by any search, whatever its size in the plant."""
-    sig = diagnosis_signals(model, data).sig
+    return change_evidence(diagnosis_signals(model, data).sig, change, onset_s)
+
+
+def change_evidence(sig, change: dict, onset_s: float) -> float:
+    """``true_evidence`` on deviation signals ``sig``, whose noise models whiten the error."""
     i = sig.outputs.index(change["output"])
     truth = ModelChange(output=change["output"], input=change["input"], channel=change["channel"],
                         new_input=change["input"] not in sig.inputs)

@@ -196,6 +196,7 @@ def _update_section(page: _Page, updated) -> None:
 def _detect_section(page: _Page, model, data, clock, origin, train_end_s, config) -> None:
     from .detect import channel_label, detect
     from .detect_plots import plot_detection
+    from .noise_alarm_check import unexplained_noise_alarms
     from .report_plots import plot_alarm_timeline
 
     result = detect(model, data, train_end_s, config)
@@ -208,6 +209,10 @@ def _detect_section(page: _Page, model, data, clock, origin, train_end_s, config
         page.table(["channel", "alarm", "starts"], rows)
     else:
         page.para("No alarm.", "ok")
+    for output in unexplained_noise_alarms(result):
+        page.para(f"{output}'s disturbance-change alarm has no model-plant mismatch alarm beside it. In closed "
+                  "loop a process change can read as a disturbance change; the Diagnose section above says "
+                  "whether the whole record shows one.", "note")
     page.figure(plot_alarm_timeline(result, origin), "alarm timeline")
     with tempfile.TemporaryDirectory() as tmp:
         for kind in ("process", "noise"):

@@ -94,14 +94,20 @@ def test_delay_convention_matches_the_contract(name):
 def test_score():
     expect = {"kind": "mpm", "onset_s": 100.0, "channels": [["y1", "u1"]]}
     assert score({"G[y1 <- u1]": [150.0], "H[y1]": []}, expect) == {
-        "false_mpm": False, "false_noise": False, "detected": True, "delay_s": 50.0, "mislocated": False}
+        "false_mpm": False, "false_noise": False, "detected": True, "delay_s": 50.0, "mislocated": False,
+        "read_as_noise": False}
+    # missed, with the changed output's noise alarm after the change: read as a noise change
+    assert score({"G[y1 <- u1]": [], "H[y1]": [150.0]}, expect)["read_as_noise"]
+    assert not score({"G[y1 <- u1]": [], "H[y1]": [60.0], "H[y2]": [150.0]}, expect)["read_as_noise"]
+    assert not score({"G[y1 <- u1]": [150.0], "H[y1]": [150.0]}, expect)["read_as_noise"]
     assert score({"H[y1]": [60.0, 150.0]}, expect)["false_noise"]
     assert not score({"H[y1]": [150.0]}, expect)["false_noise"]
     assert score({"G[y1 <- u1]": [50.0]}, expect)["false_mpm"]
     assert score({"G[y1 <- u2]": [120.0], "G[y1 <- u1]": []}, expect)["mislocated"]
     control = {"kind": "none", "onset_s": 100.0, "channels": []}
     assert score({"G[y1 <- u1]": [150.0]}, control) == {
-        "false_mpm": True, "false_noise": False, "detected": None, "delay_s": None, "mislocated": None}
+        "false_mpm": True, "false_noise": False, "detected": None, "delay_s": None, "mislocated": None,
+        "read_as_noise": None}
     # a noise change at 100 s: a noise alarm after it is right; with no change at all, none is
     assert not score({"H[y1]": [150.0]}, {**control, "effect": "noise_change"})["false_noise"]
     assert score({"H[y1]": [150.0]}, {**control, "effect": "none", "onset_s": None})["false_noise"]
@@ -145,3 +151,46 @@ def test_by_effect_pools_runs_per_split_preset_kind_and_effect():
                         "false_mpm": 0}
     assert {"split": "held_out", "presets": "paper", "effect": "none", "runs": 1, "detected": 0,
             "false_mpm": 1} in cells
+
+
+def test_evidence_uses_the_true_disturbance_model():
+    """The detection study's evidence for a change is the one-step likelihood ratio of the true
+    change whitened by the scenario's true H (here a file without a noise model: the file's H = 1
+    would whiten nothing), against a plain SciPy one-step error; none for a control."""
+    from scipy.signal import lfilter
+
+    from mpmpp.diagnosis_study import true_change
+    from mpmpp.family_study import evidence
+    from mpmpp.simulate import simulate
+
+    spec, expect = families.family("pi_siso").draw(2, SHORT_S, effect="gain")
+    assert "noise" not in spec
+    data = simulate(spec)
+    model = nominal_model({**spec, "noise": spec["truth"]["noise"]})
+    g0, h = model.process_dict()["y1"]["u1"], model.noise_dict()["y1"]
+    g1 = true_change(spec, expect)["channel"]
+    y = data["y1"].to_numpy() - data["y1"].mean()
+    u = data["u1"].to_numpy() - data["u1"].mean()
+
+    def one_step(g):
+        return lfilter(h.den, h.num, y - lfilter(np.r_[np.zeros(g.delay), g.num], g.den, u))
+    e0, e1 = one_step(g0), one_step(g1)
+    k = int(round(expect["onset_s"] / spec["sample_time_s"]))
+    want = np.sum(e0[k:] ** 2 - e1[k:] ** 2) / np.var(e0[:k])
+    assert want > 30.0
+    assert evidence(spec, expect, data) == pytest.approx(want, rel=1e-6)
+    spec, expect = families.family("pi_siso").draw(2, SHORT_S, effect="none")
+    assert evidence(spec, expect, simulate(spec)) is None
+
+
+def test_evidence_rows_bin_the_recommended_presets_runs():
+    from mpmpp.family_study import evidence_rows
+
+    run = lambda ev, detected, noise: {  # noqa: E731
+        "split": "tuning", "evidence": ev,
+        "presets": {"siso": {"detected": detected, "read_as_noise": noise},
+                    "paper_siso": {"detected": True, "read_as_noise": False}}}
+    rows = evidence_rows([run(5.0, False, False), run(500.0, True, False), run(800.0, False, True),
+                          run(None, None, None)])
+    assert rows == [{"split": "tuning", "bin": "[0, 10)", "changes": 1, "detected": 0, "read_as_noise": 0},
+                    {"split": "tuning", "bin": "[100, 1000)", "changes": 2, "detected": 1, "read_as_noise": 1}]

@@ -35,6 +35,8 @@ def test_the_page_is_self_contained_with_every_section(page):
     assert len(figures) >= 7  # profiles, compare x2, before/after, error fall, timeline, detection x2
     # The alarms detect raised on this record are listed with their times.
     assert "model-plant mismatch" in text and "disturbance change" in text
+    # the disturbance alarm has an MPM alarm on the same output: no pointer to a hidden process change
+    assert "has no model-plant mismatch alarm beside it" not in text
 
 
 def test_an_existing_page_is_not_overwritten(page):

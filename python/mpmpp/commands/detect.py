@@ -26,6 +26,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from ..detect import detect, make_config
+    from ..noise_alarm_check import check_noise_alarms
     from ..io import atomic_output
     from ..preset_timing import span_text
 
@@ -38,7 +39,11 @@ def run(args) -> int:
     result, detector = detect(model, data, trained_s, args.config, return_detector=True)
     if args.save_detector:
         detector.save(args.save_detector)
+    checks = check_noise_alarms(model, data, result)
+    result.notes += [c.note(clock.stamp) for c in checks]
     doc = result_document(result, clock)
+    if checks:
+        doc["noise_alarm_checks"] = clock.stamp_fields([c.to_dict() for c in checks])
     if args.out:
         from ..detect_plots import plot_detection
         from ..timeaxis import origin_of

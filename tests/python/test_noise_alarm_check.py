@@ -1,0 +1,69 @@
+"""The second look at a noise alarm no MPM alarm explains (mpmpp.noise_alarm_check): which
+alarms it checks, that it names a process change the detector read as a disturbance change,
+and the detect command's note and JSON field."""
+import json
+from types import SimpleNamespace
+
+import pytest
+
+from mpmpp import families
+from mpmpp.detect import detect
+from mpmpp.evaluate import nominal_model
+from mpmpp.family_study import score_checks
+from mpmpp.noise_alarm_check import NoiseAlarmCheck, check_noise_alarms, unexplained_noise_alarms
+from mpmpp.simulate import simulate
+
+
+def test_only_noise_alarms_without_an_mpm_alarm_on_the_output_are_checked():
+    result = SimpleNamespace(alarms=[
+        {"kind": "noise", "output": "y1", "start_s": 500.0},
+        {"kind": "noise", "output": "y1", "start_s": 900.0},
+        {"kind": "noise", "output": "y2", "start_s": 300.0},
+        {"kind": "process", "output": "y2", "input": "u1", "start_s": 800.0},
+        {"kind": "noise", "output": "y3", "start_s": 700.0}])
+    assert unexplained_noise_alarms(result) == {"y1": 500.0, "y3": 700.0}
+    assert check_noise_alarms(None, None, SimpleNamespace(alarms=[])) == []   # diagnose never runs
+
+
+def test_a_process_change_read_as_a_noise_change_is_named():
+    """mpc_siso seed 348 (tuning family; detection study seeds 340-359): a time constant x 0.33,
+    the siso preset raises a noise alarm on y1 and no MPM alarm; diagnose names the change."""
+    spec, expect = families.family("mpc_siso").draw(348)
+    assert (expect["effect"], expect["size"]) == ("time_constant", 0.33)
+    model, data = nominal_model(spec), simulate(spec)
+    result = detect(model, data, config="siso")
+    assert not [a for a in result.alarms if a["kind"] == "process"]
+    checks = check_noise_alarms(model, data, result)
+    assert [c.output for c in checks] == ["y1"]
+    f = checks[0].finding
+    assert (f["effect"], f["output"], f["input"]) == ("time_constant", "y1", "u1")
+    assert f["onset_s"] == pytest.approx(expect["onset_s"], abs=3600.0)
+    assert "time constant" in checks[0].note(lambda t: f"{t / 3600:.2f} h")
+    scored = score_checks(checks, spec, expect)
+    assert scored == {"checks": 1, "check_named": True, "check_false": False}
+    # the same finding in a control run is a false claim of a process change
+    control = {**expect, "kind": "none", "effect": "noise_change"}
+    assert score_checks(checks, spec, control) == {"checks": 1, "check_named": False, "check_false": True}
+
+
+def test_a_record_diagnose_refuses_is_said_so():
+    check = NoiseAlarmCheck("y1", 7200.0, None, "too short: 300 rows (0.083 h); need at least 540")
+    assert check.to_dict()["refused"].startswith("too short")
+    assert "could not check it (too short" in check.note(lambda t: f"{t / 3600:.2f} h")
+
+
+def test_detect_command_prints_the_check_and_writes_it_in_json(tmp_path, capsys):
+    from mpmpp.cli import main
+
+    data, model = tmp_path / "d.csv", tmp_path / "m.json"
+    assert main(["simulate", "--family", "mpc_siso", "--seed", "348", "-o", str(data),
+                 "--write-model", str(model)]) == 0
+    capsys.readouterr()
+    assert main(["detect", str(model), str(data)]) == 0
+    text = capsys.readouterr().out
+    assert "note: y1: noise alarm from" in text and "names time constant of y1 <- u1" in text
+    assert main(["detect", str(model), str(data), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    (check,) = doc["noise_alarm_checks"]
+    assert check["output"] == "y1" and check["finding"]["effect"] == "time_constant"
+    assert any(n.startswith("y1: noise alarm from") for n in doc["notes"])

@@ -1,12 +1,11 @@
 """A second look at a noise alarm that no MPM alarm on the same output explains.
 
 In closed loop without external excitation the controller makes the inputs a filtered copy of
-the disturbance, so a channel change adds to the output error a signal that the output's own
-past also predicts. The detector's process test refits the disturbance model in every window
-(that is what keeps a noise change from raising an MPM alarm), and such a window refit absorbs
-much of a process change: the change is then seen only as a noise alarm (docs/families.md
-"Detection by the record's evidence": 12 of the 27 process changes the tuning families' records
-show by more than 100 chi-square units and the presets missed, seeds 340-359).
+the disturbance, so a channel change also changes the colour of the output error: the noise
+test sees it, while the process test, whose power is set by the uncertainty of its training
+reference, may stay below its level. The change is then seen only as a noise alarm
+(docs/families.md "Detection by the record's evidence": 12 of the 27 process changes the tuning
+families' records show by more than 100 chi-square units and the presets missed, seeds 340-359).
 
 ``diagnose`` looks at the whole record at once: it searches the change's onset, fits the
 disturbance beside each candidate and scores candidates on held-out blocks, and on those runs it

@@ -40,7 +40,7 @@ class NoiseAlarmCheck:
             return head + f" could not check it ({self.refused})"
         if self.finding is None:
             return head + " finds no process change either (a disturbance change)"
-        return (head + f" names {self.finding['explanation']} (confidence {self.finding['confidence']:.2f}): "
+        return (head + f" finds: {self.finding['explanation']} (confidence {self.finding['confidence']:.2f}); "
                 "in closed loop a process change can read as a disturbance change; "
                 "see `mpmpp diagnose` before re-identifying the noise model")
 

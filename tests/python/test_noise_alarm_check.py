@@ -61,7 +61,7 @@ def test_detect_command_prints_the_check_and_writes_it_in_json(tmp_path, capsys)
     capsys.readouterr()
     assert main(["detect", str(model), str(data)]) == 0
     text = capsys.readouterr().out
-    assert "note: y1: noise alarm from" in text and "names time constant of y1 <- u1" in text
+    assert "note: y1: noise alarm from" in text and "finds: time constant of y1 <- u1" in text
     assert main(["detect", str(model), str(data), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     (check,) = doc["noise_alarm_checks"]

@@ -49,6 +49,11 @@ def presets_for(size: int) -> tuple:
     return ("siso", "paper_siso") if size == 1 else ("mimo", "paper_mimo")
 
 
+def is_paper(preset: str) -> bool:
+    """A label of one of the paper's presets (every other label is scored as recommended)."""
+    return preset.startswith("paper_")
+
+
 def score(alarms: dict, expect: dict) -> dict:
     """One run's alarm starts ({label: [seconds from the start]}) against its expectation."""
     onset = expect["onset_s"]
@@ -75,23 +80,25 @@ def score(alarms: dict, expect: dict) -> dict:
     return out
 
 
-def score_checks(checks: list, spec: dict, expect: dict) -> dict:
+def score_checks(checks: list, expect: dict, change: dict | None) -> dict:
     """The noise-alarm checks of one run (noise_alarm_check.py): how many, whether one names the
-    scheduled change (diagnosis_study.finding_right), whether one names a process change in a
-    control run (no change, a noise change, a drift: the process did not change)."""
-    change = None if expect["kind"] == "none" else true_change(spec, expect)
+    scheduled ``change`` (diagnosis_study.true_change, finding_right), whether one names a process
+    change in a control run (no change, a noise change, a drift: the process did not change)."""
+    control = expect["kind"] == "none"
     found = [c.finding for c in checks if c.finding is not None]
     return {"checks": len(checks),
-            "check_named": change is not None and any(finding_right(f, expect["effect"], change) for f in found),
-            "check_false": expect["kind"] == "none" and bool(found)}
+            "check_named": not control and change is not None
+            and any(finding_right(f, expect["effect"], change) for f in found),
+            "check_false": control and bool(found)}
 
 
-def evidence(spec: dict, expect: dict, data) -> float | None:
-    """The record's evidence for a linear change (module docstring), None for other effects."""
+def evidence(spec: dict, expect: dict, data, change: dict | None) -> float | None:
+    """The record's evidence for a linear ``change`` (module docstring; diagnosis_study.true_change),
+    None for other effects."""
     if expect.get("effect") not in LINEAR_EFFECTS:
         return None
     truth = nominal_model({**spec, "noise": spec["truth"]["noise"]})
-    return change_evidence(extract(truth, data), true_change(spec, expect), expect["onset_s"])
+    return change_evidence(extract(truth, data), change, expect["onset_s"])
 
 
 def run_family_seed(name: str, seed: int, record_s: float | None = None, configs: dict | None = None,
@@ -104,9 +111,10 @@ def run_family_seed(name: str, seed: int, record_s: float | None = None, configs
     model = nominal_model(spec)
     t0 = time.perf_counter()
     data = simulate(spec)
+    change = true_change(spec, expect)
     result = {"family": name, "split": family.split, "seed": int(seed), "expect": expect,
               "samples": len(data), "sample_time_s": spec["sample_time_s"], "presets": {},
-              "evidence": evidence(spec, expect, data), "seconds": {"simulate": time.perf_counter() - t0}}
+              "evidence": evidence(spec, expect, data, change), "seconds": {"simulate": time.perf_counter() - t0}}
     configs = configs or {p: p for p in presets_for(family.size)}
     for preset, given in configs.items():
         make_config(given, model)  # a bad config is an error here, not a refusal of every run
@@ -119,8 +127,8 @@ def run_family_seed(name: str, seed: int, record_s: float | None = None, configs
         alarms = {channel_label(c): [float(s) - float(data["time"].iloc[0]) for s in det.alarm_starts(k)]
                   for k, c in enumerate(det.channels)}
         result["presets"][preset] = {**score(alarms, expect), "refused": None, "alarms": alarms}
-        if not preset.startswith("paper_"):  # the paper's presets raise noise alarms in most runs
-            result["presets"][preset].update(score_checks(check_noise_alarms(model, data, det), spec, expect))
+        if not is_paper(preset):  # the paper's presets raise noise alarms in most runs
+            result["presets"][preset].update(score_checks(check_noise_alarms(model, data, det), expect, change))
         result["seconds"][preset] = time.perf_counter() - t1
     return result
 
@@ -169,7 +177,7 @@ def by_effect(runs: list) -> list:
         e = r["expect"]
         effect = e["effect"] + (f":{e['nonlinearity']}" if "nonlinearity" in e else "")
         for preset, v in r["presets"].items():
-            kind = "paper" if preset.startswith("paper_") else preset if preset not in ("siso", "mimo") else "recommended"
+            kind = "paper" if is_paper(preset) else preset if preset not in ("siso", "mimo") else "recommended"
             c = cells.setdefault((r["split"], kind, effect), {"runs": 0, "detected": 0, "false_mpm": 0})
             c["runs"] += 1
             c["detected"] += bool(v["detected"])
@@ -186,7 +194,7 @@ def evidence_rows(runs: list) -> list:
         for lo, hi in zip(DETECTION_EVIDENCE_BINS[:-1], DETECTION_EVIDENCE_BINS[1:]):
             scored = [v for r in runs if r["split"] == split and r.get("evidence") is not None
                       and lo <= r["evidence"] < hi
-                      for p, v in r["presets"].items() if not p.startswith("paper_")]
+                      for p, v in r["presets"].items() if not is_paper(p)]
             if scored:
                 rows.append({"split": split, "bin": f"[{lo:g}, {hi:g})", "changes": len(scored),
                              "detected": sum(bool(v["detected"]) for v in scored),
@@ -201,7 +209,7 @@ def check_rows(runs: list) -> list:
     rows = []
     for split in (fam.TUNING, fam.HELD_OUT):
         scored = [(r["expect"]["kind"], v) for r in runs if r["split"] == split
-                  for p, v in r["presets"].items() if not p.startswith("paper_") and "checks" in v]
+                  for p, v in r["presets"].items() if not is_paper(p) and "checks" in v]
         read = [v for kind, v in scored if kind != "none" and v["read_as_noise"]]
         controls = [v for kind, v in scored if kind == "none" and v["checks"]]
         if scored:

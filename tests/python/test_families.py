@@ -157,7 +157,7 @@ def test_evidence_uses_the_true_disturbance_model():
     """The detection study's evidence for a change is the one-step likelihood ratio of the true
     change whitened by the scenario's true H (here a file without a noise model: the file's H = 1
     would whiten nothing), against a plain SciPy one-step error; none for a control."""
-    from scipy.signal import lfilter
+    from evidence_reference import reference_evidence
 
     from mpmpp.diagnosis_study import true_change
     from mpmpp.family_study import evidence
@@ -167,20 +167,14 @@ def test_evidence_uses_the_true_disturbance_model():
     assert "noise" not in spec
     data = simulate(spec)
     model = nominal_model({**spec, "noise": spec["truth"]["noise"]})
-    g0, h = model.process_dict()["y1"]["u1"], model.noise_dict()["y1"]
-    g1 = true_change(spec, expect)["channel"]
-    y = data["y1"].to_numpy() - data["y1"].mean()
-    u = data["u1"].to_numpy() - data["u1"].mean()
-
-    def one_step(g):
-        return lfilter(h.den, h.num, y - lfilter(np.r_[np.zeros(g.delay), g.num], g.den, u))
-    e0, e1 = one_step(g0), one_step(g1)
+    change = true_change(spec, expect)
     k = int(round(expect["onset_s"] / spec["sample_time_s"]))
-    want = np.sum(e0[k:] ** 2 - e1[k:] ** 2) / np.var(e0[:k])
+    want = reference_evidence(data, "y1", "u1", model.process_dict()["y1"]["u1"], change["channel"],
+                              model.noise_dict()["y1"], k)
     assert want > 30.0
-    assert evidence(spec, expect, data) == pytest.approx(want, rel=1e-6)
+    assert evidence(spec, expect, data, change) == pytest.approx(want, rel=1e-6)
     spec, expect = families.family("pi_siso").draw(2, SHORT_S, effect="none")
-    assert evidence(spec, expect, simulate(spec)) is None
+    assert evidence(spec, expect, simulate(spec), true_change(spec, expect)) is None
 
 
 def test_evidence_rows_bin_the_recommended_presets_runs():

@@ -8,6 +8,7 @@ import pytest
 
 from mpmpp import families
 from mpmpp.detect import detect
+from mpmpp.diagnosis_study import true_change
 from mpmpp.evaluate import nominal_model
 from mpmpp.family_study import score_checks
 from mpmpp.noise_alarm_check import NoiseAlarmCheck, check_noise_alarms, unexplained_noise_alarms
@@ -39,11 +40,12 @@ def test_a_process_change_read_as_a_noise_change_is_named():
     assert (f["effect"], f["output"], f["input"]) == ("time_constant", "y1", "u1")
     assert f["onset_s"] == pytest.approx(expect["onset_s"], abs=3600.0)
     assert "time constant" in checks[0].note(lambda t: f"{t / 3600:.2f} h")
-    scored = score_checks(checks, spec, expect)
+    change = true_change(spec, expect)
+    scored = score_checks(checks, expect, change)
     assert scored == {"checks": 1, "check_named": True, "check_false": False}
     # the same finding in a control run is a false claim of a process change
     control = {**expect, "kind": "none", "effect": "noise_change"}
-    assert score_checks(checks, spec, control) == {"checks": 1, "check_named": False, "check_false": True}
+    assert score_checks(checks, control, change) == {"checks": 1, "check_named": False, "check_false": True}
 
 
 def test_a_record_diagnose_refuses_is_said_so():

@@ -26,8 +26,8 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from ..detect import detect, make_config
-    from ..noise_alarm_check import check_noise_alarms
     from ..io import atomic_output
+    from ..noise_alarm_check import check_noise_alarms
     from ..preset_timing import span_text
 
     model, data, clock = load_pair(args)

@@ -1,0 +1,17 @@
+"""A plain NumPy/SciPy version of the studies' evidence statistic (diagnosis_study.change_evidence):
+the drop of the squared one-step error H^-1 (y - G u) after the onset when the channel G0 is
+replaced by G1, over the nominal error's variance before it, on a SISO record's deviations from
+its means."""
+import numpy as np
+from scipy.signal import lfilter
+
+
+def reference_evidence(data, output: str, input_: str, g0, g1, h, onset_sample: int) -> float:
+    y = data[output].to_numpy() - data[output].mean()
+    u = data[input_].to_numpy() - data[input_].mean()
+
+    def one_step(g):
+        return lfilter(h.den, h.num, y - lfilter(np.r_[np.zeros(g.delay), g.num], g.den, u))
+    e0, e1 = one_step(g0), one_step(g1)
+    k = onset_sample
+    return float(np.sum(e0[k:] ** 2 - e1[k:] ** 2) / np.var(e0[:k]))

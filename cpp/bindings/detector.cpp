@@ -100,6 +100,8 @@ void bind_detector(py::module_& m) {
       .def_readwrite("step_significance", &DetectorConfig::step_significance)
       .def_readwrite("outlier_sigmas", &DetectorConfig::outlier_sigmas)
       .def_readwrite("pooled_windows", &DetectorConfig::pooled_windows)
+      .def_readwrite("absent_channels", &DetectorConfig::absent_channels)
+      .def_readwrite("absent_significance", &DetectorConfig::absent_significance)
       .def_readwrite("noise_significance", &DetectorConfig::noise_significance)
       .def_property(
           "noise_test",

@@ -35,7 +35,8 @@ void bind_mpc(py::module_& m) {
       .def_readwrite("cv_max_move", &MpcTuning::cv_max_move)
       .def_readwrite("mv_soft_min", &MpcTuning::mv_soft_min)
       .def_readwrite("mv_soft_max", &MpcTuning::mv_soft_max)
-      .def_readwrite("disturbance", &MpcTuning::disturbance);
+      .def_readwrite("disturbance", &MpcTuning::disturbance)
+      .def_readwrite("clip_moves", &MpcTuning::clip_moves);
 
   py::class_<Mpc>(m, "Mpc", "Linear MPC on a nominal transfer-matrix model (see mpc.hpp)")
       .def(py::init<const Model&, MpcTuning, const Eigen::Ref<const Eigen::VectorXd>&>(),

@@ -459,7 +459,7 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
   Model model = parse_model(rd.field(j, "(top level)", "model").dump(), source + ": model");
   const json& jch = rd.field(j, "(top level)", "channels");
   if (!jch.is_array()) rd.fail("channels", "expected an array");
-  const std::vector<MonitoredChannel> expected = monitored_channels(model);
+  const std::vector<MonitoredChannel> expected = monitored_channels(model, config);
   if (jch.size() != expected.size())
     rd.fail("channels", std::to_string(jch.size()) + " channels, the model has " +
                             std::to_string(expected.size()) + " monitored channels");

@@ -18,6 +18,7 @@ ordered_json channel_json(const Model& model, const MonitoredChannel& c) {
   ordered_json j{{"kind", is_process(c) ? "process" : "noise"},
                  {"output", model.outputs[c.output]}};
   if (is_process(c)) j["input"] = model.inputs[c.input];
+  if (!c.in_model) j["in_model"] = false;  // DetectorConfig::absent_channels
   return j;
 }
 

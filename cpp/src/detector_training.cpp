@@ -341,7 +341,7 @@ Detector train_detector(const Model& model, const DetectorConfig& config,
   if (!std::isfinite(train_end_s) || train_end_s <= 0)
     throw InputError("train_end_s: must be a positive number of seconds, got " +
                      format_seconds(train_end_s));
-  const std::vector<MonitoredChannel> channels = monitored_channels(model);
+  const std::vector<MonitoredChannel> channels = monitored_channels(model, config);
   if (series.features.size() != channels.size())
     throw InputError("train_detector: the series has " + std::to_string(series.features.size()) +
                      " channels, the model " + std::to_string(channels.size()));
@@ -377,6 +377,8 @@ Detector train_detector(const Model& model, const DetectorConfig& config,
     scorers.push_back(
         train_channel_scorer(X, config, channel_seed(config.seed, static_cast<int>(k)), covariances,
                              channels[k].kind == MonitoredChannel::Kind::Noise, ratio));
+    if (!channels[k].in_model && config.absent_significance > 0)
+      scorers.back().significance = config.absent_significance;
   }
   return Detector(model, config, train_end_s, std::move(scorers));
 }

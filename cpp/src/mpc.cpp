@@ -275,8 +275,8 @@ void Mpc::Impl::build_qp() {
       if (std::isfinite(t.mv_min[j])) mv_bounds.push_back({row, j, false, t.mv_min[j]});
       if (std::isfinite(t.mv_max[j])) mv_bounds.push_back({row, j, true, t.mv_max[j]});
     }
-  // Hard move limits.
-  for (int m = 0; m < hc; ++m)
+  // Hard move limits (clipped after the solve instead with clip_moves).
+  for (int m = 0; m < hc && !t.clip_moves; ++m)
     for (int j = 0; j < nu; ++j)
       if (std::isfinite(t.mv_max_move[j]))
         add_row(unit(m * nu + j), -t.mv_max_move[j], t.mv_max_move[j]);
@@ -399,10 +399,10 @@ const Eigen::VectorXd& Mpc::step(const Eigen::Ref<const Eigen::VectorXd>& y) {
   const QpResult& r = s.solver->solve(s.q, s.l, s.u);
   s.last = &r;
   Eigen::VectorXd::ConstSegmentReturnType du = r.x.head(nu);
-  if (r.status == QpStatus::Solved) {
+  if (r.status == QpStatus::Solved && !s.tuning.clip_moves) {
     s.u_out = s.u_prev + du;
   } else {
-    ++s.failed;
+    if (r.status != QpStatus::Solved) ++s.failed;
     for (int j = 0; j < nu; ++j) {
       const double step = std::clamp(du[j], -s.tuning.mv_max_move[j], s.tuning.mv_max_move[j]);
       s.u_out[j] = std::clamp(s.u_prev[j] + step, s.tuning.mv_min[j], s.tuning.mv_max[j]);

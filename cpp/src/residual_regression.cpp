@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <utility>
 
 #include "mpmpp/arx_oe.hpp"
@@ -27,6 +29,11 @@ double laguerre_pole(const TransferFunction& g) {
   double p = 0.5;
   if (g.den().size() > 1) p = g.poles().cwiseAbs().maxCoeff();
   return std::clamp(p, 0.2, 0.99);
+}
+
+// Samples until the last of n Laguerre filters with pole p has fallen to 1 % (from rest).
+int laguerre_settling(double p, int n) {
+  return static_cast<int>(std::ceil((n + 1) * std::log(0.01) / std::log(p)));
 }
 
 // L_k(q) = sqrt(1 - p^2) q^-1 (q^-1 - p)^k / (1 - p q^-1)^(k+1), k = 0..n-1: orthonormal
@@ -210,10 +217,35 @@ ResidualRegression::ResidualRegression(const Model& nominal, int output, std::ve
       max_steps_(config.residual_steps),
       step_significance_(config.step_significance),
       outlier_sigmas_(config.outlier_sigmas) {
+  // The output's own time scale and earliest response, for the channels it lacks.
+  double output_pole = 0.0;
+  int shortest_delay = std::numeric_limits<int>::max();
+  for (int j = 0; j < nominal.num_inputs(); ++j) {
+    if (!nominal.has_channel(output, j)) continue;
+    output_pole = std::max(output_pole, laguerre_pole(*nominal.process[output][j]));
+    shortest_delay = std::min(shortest_delay, nominal.process[output][j]->delay());
+  }
   for (int j : inputs) {
-    if (j < 0 || j >= nominal.num_inputs() || !nominal.has_channel(output, j))
+    if (j < 0 || j >= nominal.num_inputs())
       throw InputError("residual regression: output '" + nominal.outputs[output] +
-                       "' has no channel from input " + std::to_string(j));
+                       "' has no input " + std::to_string(j));
+    if (!nominal.has_channel(output, j)) {
+      if (config.absent_channels < 1 || output_pole == 0.0)
+        throw InputError("residual regression: output '" + nominal.outputs[output] +
+                         "' has no channel from input '" + nominal.inputs[j] + "'");
+      // A channel the model lacks: G0 = 0, so no gain or dead-time direction to perturb; the
+      // Laguerre filters in the output's slowest time scale, starting where its fastest
+      // modelled channel responds (a coupling acting sooner than every modelled channel of
+      // its output is taken as rare), span the first-order responses it may gain.
+      nominal_.emplace_back();
+      std::vector<TransferFunction> dirs;
+      for (auto& l : laguerre_filters(output_pole, config.absent_channels))
+        dirs.emplace_back(l.num(), l.den(), l.delay() + std::max(shortest_delay, 1) - 1);
+      directions_.push_back(std::move(dirs));
+      settle_ = std::max(settle_, std::max(shortest_delay, 1) - 1 +
+                                      laguerre_settling(output_pole, config.absent_channels));
+      continue;
+    }
     const TransferFunction& g = *nominal.process[output][j];
     nominal_.push_back(g);
     // Gain, then two dead-time shifts (one sample either way; d + 2 when d - 1 would be lag 0).
@@ -223,9 +255,8 @@ ResidualRegression::ResidualRegression(const Model& nominal, int output, std::ve
     const double p = laguerre_pole(g);
     for (auto& l : laguerre_filters(p, config.laguerre_terms)) dirs.push_back(std::move(l));
     directions_.push_back(std::move(dirs));
-    const int laguerre_settle =
-        static_cast<int>(std::ceil((config.laguerre_terms + 1) * std::log(0.01) / std::log(p)));
-    settle_ = std::max({settle_, fir_length_to_one_percent(g) + 1, laguerre_settle});
+    settle_ = std::max(
+        {settle_, fir_length_to_one_percent(g) + 1, laguerre_settling(p, config.laguerre_terms)});
   }
 }
 
@@ -254,7 +285,7 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   Eigen::Index c = 0;
   for (int e = 0; e < ne; ++e) {
     const Eigen::VectorXd ue = u.col(e).array() - u.col(e).mean();
-    v -= nominal_[e].filter(ue);
+    if (nominal_[e]) v -= nominal_[e]->filter(ue);
     for (const auto& d : directions_[e]) X.col(c++) = d.filter(ue);
   }
   const Eigen::VectorXd vv = v.tail(m);

@@ -7,11 +7,14 @@
 
 namespace mpmpp {
 
-std::vector<MonitoredChannel> monitored_channels(const Model& model) {
+std::vector<MonitoredChannel> monitored_channels(const Model& model, const DetectorConfig& config) {
+  const bool monitors_absent =
+      config.absent_channels > 0 && config.process_test == ProcessTest::Residual;
   std::vector<MonitoredChannel> channels;
   for (int i = 0; i < model.num_outputs(); ++i)
     for (int j = 0; j < model.num_inputs(); ++j)
-      if (model.has_channel(i, j)) channels.push_back({MonitoredChannel::Kind::Process, i, j});
+      if (model.has_channel(i, j) || monitors_absent)
+        channels.push_back({MonitoredChannel::Kind::Process, i, j, model.has_channel(i, j)});
   for (int i = 0; i < model.num_outputs(); ++i)
     channels.push_back({MonitoredChannel::Kind::Noise, i, -1});
   return channels;
@@ -67,25 +70,25 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
   config.validate();
   window_ = config.window_samples(nominal.sample_time_s);
   step_ = config.step_samples(nominal.sample_time_s);
-  channels_ = monitored_channels(nominal);
+  channels_ = monitored_channels(nominal, config);
   feature_length_.assign(channels_.size(), 0);
   for (int i = 0; i < num_outputs_; ++i) {
-    std::vector<int> inputs, channels;
+    std::vector<int> inputs, channels, arx_inputs;
     for (size_t k = 0; k < channels_.size(); ++k)
       if (channels_[k].kind == MonitoredChannel::Kind::Process && channels_[k].output == i) {
         inputs.push_back(channels_[k].input);
         channels.push_back(static_cast<int>(k));
+        if (channels_[k].in_model) arx_inputs.push_back(channels_[k].input);
       }
-    if (inputs.empty())
+    if (arx_inputs.empty())
       throw InputError("detector: output '" + nominal.outputs[i] +
                        "' has no process channel in the model; nothing to monitor it against");
+    // The ARX-OE problem is over the modelled channels; without absent channels (the SVM paths
+    // allow none) its entry e is monitored channel channels[e].
     std::vector<int> fir_after_delay;
-    ArxOeConfig c = output_problem_config(nominal, config, i, inputs, fir_after_delay);
-    std::vector<int> skip;
-    for (size_t e = 0; e < inputs.size(); ++e) {
-      skip.push_back(c.arx.delays[e]);
+    ArxOeConfig c = output_problem_config(nominal, config, i, arx_inputs, fir_after_delay);
+    for (size_t e = 0; e < fir_after_delay.size(); ++e)
       feature_length_[channels[e]] = fir_after_delay[e];
-    }
     int noise_channel = 0;
     for (size_t k = 0; k < channels_.size(); ++k)
       if (channels_[k].kind == MonitoredChannel::Kind::Noise && channels_[k].output == i)
@@ -98,9 +101,12 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
         feature_length_[channels[e]] = residual->block_size(static_cast<int>(e));
       if (noise_from_residual_) feature_length_[noise_channel] = residual->ar_order();
     }
+    const std::vector<int> skip(c.arx.delays);
     problems_.push_back(OutputProblem{
-        inputs, channels, skip, noise_channel, ArxOeEstimator(std::move(c)),
-        Eigen::MatrixXd(window_, static_cast<Eigen::Index>(inputs.size())), std::move(residual)});
+        inputs, channels, arx_inputs, skip, noise_channel, ArxOeEstimator(std::move(c)),
+        Eigen::MatrixXd(window_, static_cast<Eigen::Index>(inputs.size())),
+        Eigen::MatrixXd(window_, static_cast<Eigen::Index>(arx_inputs.size())),
+        std::move(residual)});
   }
 }
 
@@ -126,14 +132,15 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
   for (auto& p : problems_) {
     const int i = channels_[p.noise_channel].output;
     for (size_t e = 0; e < p.inputs.size(); ++e) p.u.col(e) = u.col(p.inputs[e]);
+    for (size_t e = 0; e < p.arx_inputs.size(); ++e) p.u_arx.col(e) = u.col(p.arx_inputs[e]);
     // NoiseTest::Residual: A(q) comes from the residual regression, no ARX-OE step is needed;
     // with the residual process test and NoiseTest::Wald the ARX step alone gives A(q).
     if (!noise_from_residual_) {
       try {
         if (p.residual && noise_wald_)
-          p.estimator.estimate_arx(y.col(i), p.u, result_.arx);
+          p.estimator.estimate_arx(y.col(i), p.u_arx, result_.arx);
         else
-          p.estimator.estimate(y.col(i), p.u, result_);
+          p.estimator.estimate(y.col(i), p.u_arx, result_);
       } catch (const NumericalError& err) {
         if (skip_reason) *skip_reason = err.what();
         return false;

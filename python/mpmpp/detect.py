@@ -110,10 +110,13 @@ def _arrays(model, data: pd.DataFrame):
 
 def _channel_dicts(model, core_channels):
     out = []
+    modelled = set(model.channels())
     for kind, i, j in core_channels:
         c = {"kind": kind, "output": model.outputs[i]}
         if kind == "process":
             c["input"] = model.inputs[j]
+            if (c["output"], c["input"]) not in modelled:  # config absent_channels
+                c["in_model"] = False
         out.append(c)
     return out
 
@@ -163,7 +166,8 @@ class DetectionResult:
         for k, c in enumerate(self.channels):
             starts = self.alarm_starts(k)
             text = ", ".join(stamp(s) for s in starts) if starts.size else "none"
-            lines.append(f"{channel_label(c):<{width}}  {'MPM' if c['kind'] == 'process' else 'noise':<6} {text}")
+            absent = " (a channel the model lacks: a coupling appeared)" if starts.size and c.get("in_model") is False else ""
+            lines.append(f"{channel_label(c):<{width}}  {'MPM' if c['kind'] == 'process' else 'noise':<6} {text}{absent}")
         n_skipped = int(self.windows["skipped"].sum())
         if n_skipped:
             lines.append(f"{n_skipped} window(s) skipped (missing values or not informative)")

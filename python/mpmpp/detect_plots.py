@@ -27,6 +27,8 @@ def _pyplot():
 def _channel_title(channel: dict) -> str:
     if channel["kind"] == "noise":
         return f"{channel['output']}: disturbance (noise model)"
+    if channel.get("in_model") is False:
+        return f"{channel['output']} \u2190 {channel['input']} (no channel in the model: a new coupling?)"
     return f"{channel['output']} \u2190 {channel['input']} (process model)"
 
 

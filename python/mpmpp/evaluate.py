@@ -69,11 +69,14 @@ def nominal_model(scenario: dict):
 _PROCESS_EVENTS = ("process", "gain", "time_constant", "delay")
 
 
-def truth_onsets(scenario: dict) -> dict:
+def truth_onsets(scenario: dict, absent_channels: bool = False) -> dict:
     """First change time (s) per monitored channel, None if it never changes:
-    {"process": {(output, input): t}, "noise": {output: t}} over the model's channels."""
+    {"process": {(output, input): t}, "noise": {output: t}} over the model's channels, and with
+    ``absent_channels`` (the config's) over every output-input pair: a coupling that appears
+    where the model has none changes its absent channel."""
     model = nominal_model(scenario)
-    process = {(o, i): None for o, i in model.channels()}
+    pairs = [(o, i) for o in model.outputs for i in model.inputs] if absent_channels else model.channels()
+    process = {(o, i): None for o, i in pairs}
     noise = {o: None for o in model.outputs}
     for ev in scenario.get("events", []):
         t = float(ev["time_s"])
@@ -137,7 +140,7 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
                             progress, unit="runs")
     wall = time.perf_counter() - started
     runs.sort(key=lambda r: r["seed"])
-    summary = summarise(runs, truth_onsets(scenario), nominal_model(scenario))
+    summary = summarise(runs, truth_onsets(scenario, cfg.absent_channels > 0), nominal_model(scenario))
     summary.update({"scenario": spec if isinstance(spec, str) else scenario.get("name", "scenario"),
                     "seeds": len(seeds), "seed_range": [min(seeds), max(seeds)], "wall_seconds": wall, "where": where,
                     "cpu_seconds": float(sum(r["seconds"]["total"] for r in runs)),

@@ -37,7 +37,7 @@ class Family:
     name: str
     split: str                          # TUNING or HELD_OUT
     summary: str
-    controller: str                     # "mpc" | "mpc_move_limits" | "pi" | "pid"
+    controller: str                     # "mpc" | "mpc_move_limits" | "mpc_clip" | "pi" | "pid"
     size: int                           # 1..3 outputs = inputs
     effects: tuple                      # drawn uniformly per seed (MPM_EFFECTS, CONTROL_EFFECTS,
                                         # "unmodeled_input")
@@ -208,9 +208,14 @@ def _controller(fam, rng, ts, chans, outs, ins, y0, u0):
                  "min": u0[u] - 200 / abs(k), "max": u0[u] + 200 / abs(k)}
         if fam.controller == "mpc_move_limits":
             entry["max_move"] = rng.uniform(0.1, 0.3) / abs(k)  # binds on most noise-driven moves
+        elif fam.controller == "mpc_clip":  # from most moves clipped to a few
+            entry["max_move"] = _log_uniform(rng, 0.15, 1.5) / abs(k)
         mv[u] = entry
-    return {"prediction_horizon": hp, "control_horizon": int(rng.integers(1, 4)),
-            "cv": {o: {"target": y0[o]} for o in outs}, "mv": mv}
+    controller = {"prediction_horizon": hp, "control_horizon": int(rng.integers(1, 4)),
+                  "cv": {o: {"target": y0[o]} for o in outs}, "mv": mv}
+    if fam.controller == "mpc_clip":  # a DMC's way: the unconstrained plan's first move clipped
+        controller["clip_moves"] = True
+    return controller
 
 
 def _times(rng, ts, record, count):
@@ -281,10 +286,13 @@ def _effect(effect, rng, spec, chans, diag_gain, onset, ts) -> dict:
         absent = [(i, j) for i in range(len(outs)) for j in range(len(ins)) if (i, j) not in chans]
         i, j = absent[int(rng.integers(len(absent)))]
         k = abs(diag_gain[i]) * rng.uniform(0.3, 0.6) * rng.choice([-1, 1])
-        tau, d = chans[(i, i)][1], chans[(i, i)][2]
+        # Its own dynamics, within a factor of 3 (time constant) and 2 (dead time) of the
+        # output's diagonal channel: a detector must not find it only where it copies them.
+        tau = chans[(i, i)][1] * _log_uniform(rng, 1 / 3, 3)
+        d = max(1, int(round(chans[(i, i)][2] * _log_uniform(rng, 0.5, 2))))
         events.append({"time_s": onset, "type": "process", "output": outs[i], "input": ins[j],
                        "model": _channel(k, tau, d, ts)})
-        return {"kind": "mpm", "onset_s": onset, "size": float(k),
+        return {"kind": "mpm", "onset_s": onset, "size": float(k), "absent_channel": [outs[i], ins[j]],
                 "channels": [[outs[i], u] for (o2, u) in modelled if o2 == outs[i]]}
     if effect == "input_nonlinearity":
         j = int(rng.integers(len(ins)))
@@ -381,6 +389,14 @@ FAMILIES = [
            time_constant_samples=(10.0, 100.0), dead_time_samples=(2, 20),
            noise_colours=("ar2", "arma22", "highpass"), model_forms=("discrete+noise", "foptd"),
            record_hours=(14.0, 16.0), step_ramp_disturbances=True, outliers=True),
+    Family("mpc_siso_clipped", HELD_OUT, "MPC whose moves are clipped after an unconstrained solve "
+           "(a DMC with move clipping), SISO, ARMA(1,1) / AR(2) noise, discrete model without noise "
+           "model or FOPTD", "mpc_clip", 1, _EFFECTS_SISO + ("none", "noise_change"),
+           sample_times_s=(5.0, 10.0), noise_colours=("arma11", "ar2"), model_forms=("discrete", "foptd")),
+    Family("mpc_3x3_clipped", HELD_OUT, "MPC with clipped moves, 3x3, 5 s sampling, white / ARMA(1,1) "
+           "noise, discrete model with or without noise model", "mpc_clip", 3,
+           _EFFECTS_MIMO + ("none", "noise_change"), time_constant_samples=(2.0, 20.0), sample_times_s=(5.0,),
+           noise_colours=("white", "arma11"), model_forms=("discrete+noise", "discrete")),
     Family("pi_siso_short", HELD_OUT, "single PI loop, records of 2-8 h (shorter than the presets' "
            "training plus a window: detect refuses the shortest)", "pi", 1, ("gain", "time_constant", "none"),
            sample_times_s=(1.0, 2.0, 5.0), model_forms=("foptd",), record_hours=(2.0, 8.0), setpoint_steps=True),

@@ -67,7 +67,8 @@ def score(alarms: dict, expect: dict) -> dict:
            "mislocated": None, "read_as_noise": None}
     if control:
         return out
-    hits = [channel_label({"kind": "process", "output": o, "input": i}) for o, i in expect["channels"]]
+    hits = [channel_label({"kind": "process", "output": o, "input": i})
+            for o, i in expect["channels"] + ([expect["absent_channel"]] if "absent_channel" in expect else [])]
     if expect["kind"] == "any":
         hits.append(channel_label({"kind": "noise", "output": expect["output"]}))
     after = [s for k in hits for s in alarms.get(k, []) if s >= onset]

@@ -24,7 +24,7 @@ TRUTH_KEYS = {"process", "noise", "sigma", "extra", "actuators", "outliers"}
 OUTLIER_KEYS = {"probability", "size"}
 EXTRA_KEYS = {"operating_point", "sigma", "noise", "affects"}
 ACTUATOR_KEYS = {"stiction_s", "stiction_j", "deadband", "backlash", "min", "max"}
-CONTROLLER_KEYS = {"kind", "prediction_horizon", "control_horizon", "cv", "mv", "disturbance"}
+CONTROLLER_KEYS = {"kind", "prediction_horizon", "control_horizon", "cv", "mv", "disturbance", "clip_moves"}
 PID_KEYS = {"kind", "cv", "mv", "loops"}
 PID_LOOP_KEYS = {"cv", "mv", "gain", "integral_time_s", "derivative_time_s", "derivative_filter", "min", "max"}
 CV_KEYS = {"target", "target_weight", "minmax_weight", "min", "max", "max_move", "scale"}
@@ -214,6 +214,10 @@ def _tuning(spec, outputs, inputs) -> Any:
     if disturbance not in ("bias", "noise_model"):
         _fail("controller.disturbance", f"must be 'bias' or 'noise_model', got {disturbance!r}")
     t.disturbance = getattr(_core.DisturbanceModel, disturbance)
+    clip = c.get("clip_moves", False)
+    if not isinstance(clip, bool):
+        _fail("controller.clip_moves", f"must be true or false, got {clip!r}")
+    t.clip_moves = clip
     cvs = _obj(c["cv"], "controller.cv", set(outputs), set(outputs))
     mvs = _obj(c["mv"], "controller.mv", set(inputs), set(inputs))
     cv = {k: [] for k in ("target", "target_weight", "minmax_weight", "min", "max", "max_move")}

@@ -45,6 +45,8 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
     c->outlier_sigmas = 5.0;
     c->threshold = 0.5;
     c->window_significance = 0.001;
+    c->absent_channels = 2;  // the channels the model lacks, at a third of mimo's level
+    c->absent_significance = 3e-4;
   }
   pap_siso.pooled_windows = 3;  // three disjoint windows pooled, at a level of 0.01
   pap_siso.window_significance = 0.01;
@@ -68,6 +70,7 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
   EXPECT_DOUBLE_EQ(DetectorConfig::paper_mimo().noise_alpha, 0.0);  // 0: the same alpha
   EXPECT_EQ(pap_siso.resampling, mpmpp::Resampling::Independent);   // Sec. 4.2 as printed
   EXPECT_THROW(DetectorConfig::preset("sisoo"), mpmpp::InputError);
+  EXPECT_EQ(DetectorConfig::paper_mimo().absent_channels, 0);  // the paper monitors G's channels
 }
 
 TEST(DetectorConfig, JsonRoundTripAndPresetOverrides) {
@@ -111,5 +114,7 @@ TEST(DetectorConfig, BadFieldsNameTheField) {
   expect_msg(R"({"window_s": 1)", "JSON");
   expect_msg(R"({"preset": "siso", "pooled_windows": 0})", "pooled_windows");
   expect_msg(R"({"noise_significance": 1})", "noise_significance");
+  expect_msg(R"({"preset": "mimo", "absent_channels": -1})", "absent_channels");
+  expect_msg(R"({"preset": "mimo", "absent_significance": 1})", "absent_significance");
   EXPECT_THROW(DetectorConfig::paper_siso().window_samples(7.0), mpmpp::InputError);
 }

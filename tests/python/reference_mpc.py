@@ -123,8 +123,9 @@ class NumpyMpc:
         ahead = [np.dot(h[k:k + len(e)], e[: impulse_terms - k]) for k in range(1, steps + 1)]
         return np.cumsum(ahead)
 
-    def qp(self, y):
-        """The QP of this sample in quadprog's terms (minimise 1/2 z'Pz + q'z, C'z >= b)."""
+    def qp(self, y, clip=False):
+        """The QP of this sample in quadprog's terms (minimise 1/2 z'Pz + q'z, C'z >= b); with
+        clip the move limits are left out (they are applied to the first move afterwards)."""
         f = self.free_response(y)
         r = np.repeat(self.cv_target, self.hp)
         gap = np.tile(self.u_prev - self.mv_target, self.hc)
@@ -132,7 +133,7 @@ class NumpyMpc:
         rows, rhs = [], []
         lo = np.tile(self.mv_min - self.u_prev, self.hc)
         hi = np.tile(self.mv_max - self.u_prev, self.hc)
-        mm = np.tile(self.max_move, self.hc)
+        mm = np.tile(np.full(self.nu, np.inf) if clip else self.max_move, self.hc)
         eye = np.eye(self.nu * self.hc)
         for k in range(self.nu * self.hc):
             if np.isfinite(lo[k]):
@@ -148,13 +149,16 @@ class NumpyMpc:
                 rhs.append(-mm[k])
         return q, np.array(rows).reshape(-1, self.nu * self.hc), np.array(rhs)
 
-    def step(self, y, constrained=True):
-        q, G, h = self.qp(y)
+    def step(self, y, constrained=True, clip=False):
+        """The next input; clip: a DMC with move clipping (the first planned move clipped to
+        +-max_move, then the input to [mv_min, mv_max])."""
+        q, G, h = self.qp(y, clip)
         if constrained and len(h):
             z = quadprog.solve_qp(self.P, -q, G.T, h)[0]
         else:
             z = np.linalg.solve(self.P, -q)
-        self.u_prev = self.u_prev + z[: self.nu]
+        du = np.clip(z[: self.nu], -self.max_move, self.max_move) if clip else z[: self.nu]
+        self.u_prev = np.clip(self.u_prev + du, self.mv_min, self.mv_max) if clip else self.u_prev + du
         return self.u_prev.copy()
 
 

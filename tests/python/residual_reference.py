@@ -1,6 +1,7 @@
 """A plain NumPy/SciPy implementation of one window of the residual regression
 (cpp/src/residual_regression.cpp): the output error y - G0 u regressed on the Laguerre and
-delay directions after whitening by A(q), with A(q) refitted from what beta leaves, twice;
+delay directions (Laguerre alone for a channel the model lacks) after whitening by A(q), with
+A(q) refitted from what beta leaves, twice;
 both fits with up to `breaks` step + hinge pairs chosen greedily by brute force (every
 position's two columns built and projected explicitly), on the rows that read no outlier."""
 import numpy as np
@@ -11,16 +12,33 @@ def _tf(num, den, delay, x):
     return lfilter(np.concatenate([np.zeros(delay), num]), den, x)
 
 
-def _directions(g, x, terms):
-    num, den, d = np.asarray(g.num), np.asarray(g.den), int(g.delay)
-    cols = [_tf(num, den, d, x), _tf(num, den, d + 1, x), _tf(num, den, d - 1 if d >= 2 else d + 2, x)]
-    p = float(np.clip(np.max(np.abs(np.roots(den))) if len(den) > 1 else 0.5, 0.2, 0.99))
+def _pole(g):
+    den = np.asarray(g.den)
+    return float(np.clip(np.max(np.abs(np.roots(den))) if len(den) > 1 else 0.5, 0.2, 0.99))
+
+
+def _laguerre(p, x, terms, lag=1):
+    """L_0 .. L_{terms-1} of x with pole p, L_0 = c q^-lag / (1 - p q^-1)."""
     c = np.sqrt(1 - p * p)
-    cur = lfilter([0.0, c], [1.0, -p], x)  # L_0 = c q^-1 / (1 - p q^-1)
+    cur = lfilter(np.concatenate([np.zeros(lag), [c]]), [1.0, -p], x)
+    cols = []
     for _ in range(terms):
         cols.append(cur)
         cur = lfilter([-p, 1.0], [1.0, -p], cur)
-    return np.column_stack(cols), p
+    return cols
+
+
+def _directions(g, x, terms):
+    num, den, d = np.asarray(g.num), np.asarray(g.den), int(g.delay)
+    cols = [_tf(num, den, d, x), _tf(num, den, d + 1, x), _tf(num, den, d - 1 if d >= 2 else d + 2, x)]
+    return np.column_stack(cols + _laguerre(_pole(g), x, terms))
+
+
+def _absent_directions(modelled, x, terms):
+    """A channel the model lacks: Laguerre filters with the slowest pole of the output's
+    modelled channels, the first responding at their shortest delay."""
+    lag = max(min(int(g.delay) for g in modelled), 1)
+    return np.column_stack(_laguerre(max(_pole(g) for g in modelled), x, terms, lag))
 
 
 def _lstsq(Z, z):
@@ -87,9 +105,28 @@ def rows_clear_of_outliers(v, trend, na, sigmas):
 
 
 def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01, outlier_sigmas=0.0):
-    yc, uc = y - y.mean(), u - u.mean()
-    v = yc - _tf(np.asarray(g.num), np.asarray(g.den), int(g.delay), uc)
-    X, _ = _directions(g, uc, terms)
+    """One channel g (a TransferFunction) of input u: (beta, its covariance, A(q)'s ar, theirs)."""
+    b, cov, ar, ar_cov = reference_window_miso([g], y, u[:, None], na, terms, 0, settle, breaks,
+                                               significance, outlier_sigmas)
+    return b[0], cov[0], ar, ar_cov
+
+
+def reference_window_miso(channels, y, U, na, terms, absent_terms, settle, breaks=0, significance=0.01,
+                          outlier_sigmas=0.0):
+    """channels[e]: the model's channel from column e of U, or None where the model lacks one
+    (its absent_terms Laguerre directions alone). Per input: beta_e and its covariance; then
+    A(q)'s ar and covariance."""
+    modelled = [g for g in channels if g is not None]
+    yc, Uc = y - y.mean(), U - U.mean(0)
+    v = yc.copy()
+    blocks = []
+    for g, x in zip(channels, Uc.T):
+        if g is None:
+            blocks.append(_absent_directions(modelled, x, absent_terms))
+            continue
+        v -= _tf(np.asarray(g.num), np.asarray(g.den), int(g.delay), x)
+        blocks.append(_directions(g, x, terms))
+    X = np.column_stack(blocks)
     skip = min(settle, len(y) // 3)
     v, X = v[skip:], X[skip:]
     rows = len(v) - na
@@ -107,6 +144,7 @@ def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01, ou
         coef, cov = _fit(np.column_stack([lfilter(A, [1.0], X, axis=0)[na:], trend])[kept],
                          lfilter(A, [1.0], v)[na:][kept], breaks, edge, threshold)
         b = coef[:X.shape[1]]
-    p = X.shape[1]
+    edges = np.cumsum([0] + [blk.shape[1] for blk in blocks])
     # A(q) of the last pass in the ARX step's signs (A = 1 + ar_1 q^-1 + ...), with its covariance.
-    return b, cov[:p, :p], -a, a_cov[:na, :na]
+    return ([b[lo:hi] for lo, hi in zip(edges[:-1], edges[1:])],
+            [cov[lo:hi, lo:hi] for lo, hi in zip(edges[:-1], edges[1:])], -a, a_cov[:na, :na])

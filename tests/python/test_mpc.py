@@ -85,6 +85,26 @@ def test_constrained_steps_equal_quadprog():
     assert active > 20  # the limits did bind: the comparison covered constrained steps
 
 
+def test_clipped_moves_equal_numpy_dmc_with_clipping():
+    """clip_moves: the QP plans without move limits and the first move is clipped (a DMC with
+    move clipping), against the NumPy reference doing the same; the limits bind often and the
+    inputs differ from the move-constrained MPC's."""
+    t = tuning(mv_min=(9.6, 19.5), mv_max=(10.4, 20.3), max_move=(0.05, 0.08), clip_moves=True)
+    mpc, ref = _core.Mpc(core_model(), t, U0), reference(t)
+    constrained = _core.Mpc(core_model(), tuning(mv_min=(9.6, 19.5), mv_max=(10.4, 20.3), max_move=(0.05, 0.08)), U0)
+    clipped, differ = 0, 0
+    for y in measurements(150, 2.0, seed=2):
+        u_prev = mpc.u.copy()
+        u = mpc.step(y)
+        u_ref = ref.step(y, clip=True)
+        assert np.allclose(u, u_ref, rtol=0, atol=1e-7), (u, u_ref)
+        assert np.all(np.abs(u - u_prev) <= t.mv_max_move + 1e-12)
+        clipped += np.any(np.isclose(np.abs(u - u_prev), t.mv_max_move))
+        differ += not np.allclose(u, constrained.step(y), atol=1e-6)
+    assert clipped > 20 and differ > 20
+    assert mpc.A.shape[0] < constrained.A.shape[0]  # the QP holds no move-limit rows
+
+
 def osqp_form_to_quadprog(P, q, A, l, u):
     """min 1/2 x'Px + q'x, l <= Ax <= u  ->  quadprog's C'x >= b with equalities first."""
     P, q, A, l, u = (np.array(v, dtype=float) for v in (P, q, A, l, u))

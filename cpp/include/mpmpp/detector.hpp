@@ -113,7 +113,7 @@ struct DetectionResult {
 
 class Detector {
  public:
-  // scorers[k] belongs to monitored_channels(nominal)[k]. train_end_s is counted from the
+  // scorers[k] belongs to monitored_channels(nominal, config)[k]. train_end_s is counted from the
   // first sample of a monitored series: windows ending at or before time_s[0] + train_end_s
   // are training windows.
   Detector(Model nominal, DetectorConfig config, double train_end_s,
@@ -162,7 +162,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 8;  // history in CHANGELOG.md, "File formats"
+  static constexpr int kFormatVersion = 9;  // history in CHANGELOG.md, "File formats"
 
  private:
   Model model_;

@@ -109,6 +109,16 @@ struct DetectorConfig {
   // two, ... window lengths earlier; window_pooling.hpp); 1 = the window alone.
   int pooled_windows = 1;
   NoiseTest noise_test = NoiseTest::Svm;
+  // Residual: when > 0, also monitor every channel the model lacks (output i <- input j with no
+  // process[i][j], "absent": the model claims no coupling), each by this many Laguerre
+  // directions of u_j in the output's own time scale (residual_regression.hpp); 0 = not
+  // monitored. A coupling that appears then has a channel of its own to alarm on; without one
+  // it reaches the process test only through the output's modelled channels. The SVM process
+  // test has no estimate for such a channel (ARX-OE fits the modelled ones), so with it none is
+  // monitored whatever this says.
+  int absent_channels = 0;
+  // The absent channels' window level; 0 = window_significance.
+  double absent_significance = 0.0;
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the
   // choices the paper leaves open are documented next to their values in detector_config.cpp.

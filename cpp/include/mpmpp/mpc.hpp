@@ -68,6 +68,10 @@ struct MpcTuning {
   Eigen::VectorXd cv_max_move;       // soft, default +inf
   Eigen::VectorXd mv_soft_min, mv_soft_max;  // soft, default -inf/+inf
   DisturbanceModel disturbance = DisturbanceModel::Bias;
+  // How mv_max_move acts: false (the default), as hard QP constraints on every planned move;
+  // true, as a DMC with move clipping does it: the QP plans without them and the first move
+  // is clipped to +-mv_max_move (then to [mv_min, mv_max]) before it is applied.
+  bool clip_moves = false;
 };
 
 class Mpc {

@@ -30,7 +30,11 @@
 // sigma^2, which the window re-estimates, so it does not move beta: no MPM alarm for a noise
 // change. Near-collinear directions (a smooth input, a Laguerre pole at the model's own) are
 // handled by a truncated SVD of the column-scaled regressors.
+// A channel the model lacks (DetectorConfig::absent_channels) has G0 = 0 and only the Laguerre
+// directions, in the slowest time scale of the output's modelled channels and from the lag of
+// the fastest of them: a coupling that appears is then beta_j != 0 on a channel of its own.
 #include <Eigen/Dense>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -43,7 +47,8 @@ namespace mpmpp {
 class ResidualRegression {
  public:
   // Output `output` of `nominal`, regressed on the channels from `inputs` (each a channel the
-  // model has). InputError when an input has no channel.
+  // model has, or with config.absent_channels one it lacks). InputError when an input has no
+  // channel and absent channels are not monitored.
   ResidualRegression(const Model& nominal, int output, std::vector<int> inputs,
                      const DetectorConfig& config);
 
@@ -62,7 +67,7 @@ class ResidualRegression {
   int ar_order() const { return ar_order_; }
 
  private:
-  std::vector<TransferFunction> nominal_;                  // G0_ij per input
+  std::vector<std::optional<TransferFunction>> nominal_;   // G0_ij per input, none if absent
   std::vector<std::vector<TransferFunction>> directions_;  // x_j = directions_[e][k] u_j
   int ar_order_;
   int settle_;

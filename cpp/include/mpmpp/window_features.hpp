@@ -3,7 +3,9 @@
 // ARX-OE (arx_oe.hpp) on each moving window, turned into one feature vector per monitored
 // channel:
 //   process channel G_ij (every channel the nominal model has): the FIR coefficients
-//     g_0 .. g_m of the estimated G_ij after the nominal delay (eq. 21);
+//     g_0 .. g_m of the estimated G_ij after the nominal delay (eq. 21), or with
+//     ProcessTest::Residual the residual regression's coefficients (also for the channels the
+//     model lacks, with DetectorConfig::absent_channels);
 //   noise channel H_i (one per output): a_1 .. a_na of the estimated A_i(q) = 1/H_i (Remark 5).
 // Each output is one MISO ARX-OE problem over the inputs its model channels use (Sec. 3.3).
 // Choices: the ARX uses the paper's order n_b for B_ij, i.e. n_b + 1 coefficients
@@ -28,11 +30,13 @@ struct MonitoredChannel {
   enum class Kind { Process, Noise };
   Kind kind = Kind::Process;
   int output = 0;
-  int input = -1;  // -1 for a noise channel
+  int input = -1;        // -1 for a noise channel
+  bool in_model = true;  // false: a channel the model lacks (DetectorConfig::absent_channels)
 };
 
-// Every process channel the model has (output-major), then one noise channel per output.
-std::vector<MonitoredChannel> monitored_channels(const Model& model);
+// Every process channel the model has (output-major) and, with config.absent_channels and the
+// residual process test, those it lacks in their place; then one noise channel per output.
+std::vector<MonitoredChannel> monitored_channels(const Model& model, const DetectorConfig& config);
 
 // One moving window [first, first + window_samples) of a series.
 struct FeatureWindow {
@@ -86,12 +90,14 @@ class WindowFeatures {
 
  private:
   struct OutputProblem {
-    std::vector<int> inputs;    // model inputs in this output's MISO problem
-    std::vector<int> channels;  // monitored process channel per entry of inputs
-    std::vector<int> skip;      // leading FIR samples (the nominal delay) dropped per input
+    std::vector<int> inputs;      // model inputs of this output's monitored process channels
+    std::vector<int> channels;    // monitored process channel per entry of inputs
+    std::vector<int> arx_inputs;  // the inputs of its modelled channels: the ARX-OE problem's
+    std::vector<int> skip;        // leading FIR samples (the nominal delay) dropped per input
     int noise_channel = 0;
     ArxOeEstimator estimator;
-    Eigen::MatrixXd u;  // window workspace: the problem's input columns
+    Eigen::MatrixXd u;      // window workspace: the columns of inputs
+    Eigen::MatrixXd u_arx;  // and of arx_inputs
     // ProcessTest::Residual: the process channels' features come from here (the ARX-OE
     // estimate, or with NoiseTest::Wald its ARX step alone, gives the noise channel's; with
     // NoiseTest::Residual this regression's A(q) does).

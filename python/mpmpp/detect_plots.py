@@ -28,7 +28,7 @@ def _channel_title(channel: dict) -> str:
     if channel["kind"] == "noise":
         return f"{channel['output']}: disturbance (noise model)"
     if channel.get("in_model") is False:
-        return f"{channel['output']} \u2190 {channel['input']} (no channel in the model: a new coupling?)"
+        return f"{channel['output']} \u2190 {channel['input']} (not in the model)"
     return f"{channel['output']} \u2190 {channel['input']} (process model)"
 
 
@@ -133,6 +133,7 @@ def plot_detection(result: DetectionResult, path, kinds=("noise", "process"), ev
     if title:
         fig.suptitle(title, fontsize=10)
     legend_rows = -(-len(labels) // 4)
-    fig.tight_layout(rect=(0, (0.1 + 0.22 * legend_rows) / fig.get_figheight(), 1, 1))
+    top = 1 - (0.3 / fig.get_figheight() if title else 0)  # the suptitle above the first row's titles
+    fig.tight_layout(rect=(0, (0.1 + 0.22 * legend_rows) / fig.get_figheight(), 1, top))
     fig.savefig(path, dpi=110)
     plt.close(fig)

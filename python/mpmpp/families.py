@@ -50,6 +50,10 @@ class Family:
     setpoint_steps: bool = False
     step_ramp_disturbances: bool = False
     outliers: bool = False
+    # The model file as a user writes it by hand from a bump test or a datasheet, not the plant:
+    # FOPTD values off by up to a third (gain), a half (time constant) and a sample (dead time),
+    # rounded; the plant is the truth, so the model is wrong from the start besides the effect.
+    hand_written: bool = False
     details: dict = field(default_factory=dict)
 
     def draw(self, seed: int, record_s: float | None = None, effect: str | None = None) -> tuple[dict, dict]:
@@ -84,6 +88,17 @@ def _foptd(gain, tau_samples, delay, ts):
     """The same channel in continuous form: a zero-order hold adds the one sample, so a dead
     time of (d - 1) Ts makes y respond at k + d, like the discrete form."""
     return {"gain": gain, "time_constant_s": tau_samples * ts, "dead_time_s": (delay - 1) * ts}
+
+
+def _hand_written(rng, k, tau, d, ts):
+    """The FOPTD entry a user writes for the channel (K, tau samples, y responding at k + d):
+    gain within 0.75-1.33x and time constant within 0.67-1.5x, both to two significant
+    figures, dead time a sample either way or right, in whole seconds."""
+    def two_figures(x):
+        return float(f"{x:.2g}")
+    dead = max((d - 1 + int(rng.integers(-1, 2))) * ts, 0.0)
+    return {"gain": two_figures(k * _log_uniform(rng, 0.75, 4 / 3)),
+            "time_constant_s": two_figures(tau * ts * _log_uniform(rng, 2 / 3, 1.5)), "dead_time_s": round(dead)}
 
 
 def _noise(rng, colour):
@@ -150,6 +165,11 @@ def _draw(fam: Family, rng, seed: int, record_s: float | None, forced_effect: st
     process = {o: {} for o in outs}
     for (i, j), (k, tau, d) in chans.items():
         process[outs[i]][ins[j]] = make(k, tau, d, ts)
+    truth_process = None
+    if fam.hand_written:
+        truth_process, process = process, {o: {} for o in outs}
+        for (i, j), (k, tau, d) in chans.items():
+            process[outs[i]][ins[j]] = _hand_written(rng, k, tau, d, ts)
     noise = {o: _noise(rng, str(rng.choice(fam.noise_colours))) for o in outs}
     sigma = {o: 1.0 for o in outs}
     y0 = {o: float(np.round(rng.uniform(10, 100), 1)) for o in outs}
@@ -159,6 +179,8 @@ def _draw(fam: Family, rng, seed: int, record_s: float | None, forced_effect: st
     spec = {"name": f"{fam.name} seed {seed}", "sample_time_s": ts, "inputs": ins, "outputs": outs,
             "process": process, "truth": {"sigma": sigma, "noise": noise},
             "duration_s": record, "seed": int(rng.integers(2**31)), "events": []}
+    if truth_process is not None:
+        spec["truth"]["process"] = truth_process
     if form == "discrete+noise":
         spec["noise"] = noise
     diag_gain = [chans[(i, i)][0] for i in range(n)]
@@ -276,7 +298,7 @@ def _effect(effect, rng, spec, chans, diag_gain, onset, ts) -> dict:
             size = float(rng.choice([0.33, 0.5, 2.0, 3.0]))
             ev["factor"] = size
         else:
-            d = parse_transfer_function(spec["process"][o][u], "process", ts).delay
+            d = parse_transfer_function(spec["truth"].get("process", spec["process"])[o][u], "process", ts).delay
             size = int(max(1, round(d * float(rng.choice([0.5, 1.5, 2.0])))))
             size = size if size != d else d + 2
             ev["delay"] = size
@@ -397,6 +419,11 @@ FAMILIES = [
            "noise, discrete model with or without noise model", "mpc_clip", 3,
            _EFFECTS_MIMO + ("none", "noise_change"), time_constant_samples=(2.0, 20.0), sample_times_s=(5.0,),
            noise_colours=("white", "arma11"), model_forms=("discrete+noise", "discrete")),
+    Family("pi_siso_handwritten", HELD_OUT, "single PI loop with setpoint steps, 1-10 s sampling, the "
+           "FOPTD model a user writes by hand (off by up to a third in gain, a half in time constant, "
+           "a sample in dead time) without noise model", "pi", 1, _EFFECTS_SISO + ("none", "noise_change"),
+           sample_times_s=(1.0, 2.0, 5.0, 10.0), noise_colours=("white", "ar1", "arma11", "ar2"),
+           model_forms=("foptd",), record_hours=(10.0, 24.0), setpoint_steps=True, hand_written=True),
     Family("pi_siso_short", HELD_OUT, "single PI loop, records of 2-8 h (shorter than the presets' "
            "training plus a window: detect refuses the shortest)", "pi", 1, ("gain", "time_constant", "none"),
            sample_times_s=(1.0, 2.0, 5.0), model_forms=("foptd",), record_hours=(2.0, 8.0), setpoint_steps=True),

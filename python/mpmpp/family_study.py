@@ -98,7 +98,10 @@ def evidence(spec: dict, expect: dict, data, change: dict | None) -> float | Non
     None for other effects."""
     if expect.get("effect") not in LINEAR_EFFECTS:
         return None
-    truth = nominal_model({**spec, "noise": spec["truth"]["noise"]})
+    # The plant before the change (a hand-written model file is not it): the evidence is the
+    # change's alone.
+    truth = nominal_model({**spec, "process": spec["truth"].get("process", spec["process"]),
+                           "noise": spec["truth"]["noise"]})
     return change_evidence(extract(truth, data), change, expect["onset_s"])
 
 

@@ -126,6 +126,11 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
         return run
     run["findings"] = [_finding_record(f, effect, change, drifting_outputs(spec)) for f in diagnosis.findings]
     process = [f for f in diagnosis.findings if f.effect in PROCESS_EFFECTS]
+    if family.hand_written:
+        # The model is wrong from the start (as users' models are): what stands from the first
+        # row is the model's own error, not the scheduled effect, and no false finding in a
+        # control run; the top finding with an onset inside the record is judged.
+        process = [f for f in process if f.onset_s > float(data["time"].iloc[0])]
     top = process[0] if process else None
     if top is not None:
         run["top_process"] = _finding_record(top, effect, change)
@@ -133,7 +138,9 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
     run["false_process"] = effect in fam.CONTROL_EFFECTS and top is not None
     if effect in LINEAR_EFFECTS:
         run["update"] = update_quality(model, data, top, change)
-        run["evidence"] = true_evidence(model, data, change, expect["onset_s"])
+        # against the plant before the change (a hand-written model is not it)
+        plant = nominal_model({**spec, "process": spec["truth"].get("process", spec["process"])})
+        run["evidence"] = true_evidence(plant, data, change, expect["onset_s"])
     run["seconds"] = time.perf_counter() - t0
     return run
 

@@ -391,6 +391,10 @@ FAMILIES = [
     Family("pi_siso_slow", TUNING, "single PI loop, 20-40 s sampling, day-long records, FOPTD model "
            "without noise model", "pi", 1, _EFFECTS_SISO + ("none",), sample_times_s=(20.0, 40.0),
            model_forms=("foptd",), record_hours=(24.0, 36.0), setpoint_steps=True),
+    Family("pi_siso_rough", TUNING, "single PI loop with setpoint steps and the FOPTD model a user "
+           "writes by hand (wrong from the start), without noise model", "pi", 1,
+           _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(5.0, 10.0), model_forms=("foptd",),
+           setpoint_steps=True, hand_written=True),
     Family("pid_siso_slow", HELD_OUT, "PID (derivative on measurement), 30-60 s sampling, 2-3 day "
            "records, second-order noise, FOPTD or discrete model without noise model", "pid", 1,
            _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(30.0, 60.0),

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .diagnose import DiagnoseResult, ModelChange, diagnose, one_step_errors
+from .diagnose.changes import apply_changes
 from .diagnose.pipeline import BLOCK_S, SEGMENT_S, diagnosis_signals, record_lengths
 from .diagnose.process_error import process_errors
 from .diagnose.result import PROCESS_METRIC
@@ -123,27 +124,6 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
         process_before, process_after = process_errors(sig, i, changes, sig.seconds_to_index(onset_s), block)
         errors.append(OutputError(out_name, onset_s, _rms(before[ok]), _rms(after[ok]), process_before, process_after))
     return UpdateResult(applied=ids, errors=errors, model=new_model, diagnosis=diagnosis)
-
-
-def apply_changes(model, changes: list[ModelChange], name: str | None = None):
-    """A new mpmpp.Model: ``model`` with the channel and noise changes applied."""
-    from .io import Model
-
-    process = {o: dict(chans) for o, chans in model.process_dict().items()}
-    noise = dict(model.noise_dict())
-    actuators = dict(model.actuators_dict())
-    inputs = list(model.inputs)
-    for c in changes:
-        if c.actuator is not None:
-            actuators[c.input] = c.actuator
-        if c.channel is not None:
-            if c.new_input and c.input not in inputs:
-                inputs.append(c.input)
-            process.setdefault(c.output, {})[c.input] = c.channel
-        if c.noise is not None:
-            noise[c.output] = c.noise
-    return Model(name or f"{model.name} (updated)", model.sample_time_s, inputs, list(model.outputs),
-                 process, noise, actuators)
 
 
 def _rms(x: np.ndarray) -> float:

@@ -11,6 +11,7 @@ from ..record_length import minimum_rows, require_rows, scaled_rows
 from ..signals import Signals, extract
 from ..timeaxis import seconds_of
 from .actuator import actuator_findings, rival_score
+from .changes import apply_changes
 from .confidence import calibrated_confidence
 from .errors import one_step_errors
 from .loops import single_loops
@@ -113,8 +114,21 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     ``actuator_search``: search for actuator nonlinearities that set in during the record
     (True), never (False), or when the record is within the search's cost budget (None; a day
     of a 3x3 process at 5 s, see ``actuator.SEARCH_WORK``; a note says when it was skipped).
+
+    A model that is wrong from the record's start (a hand-written model: a gain a quarter off)
+    and changed later too shows both, but a change searched against the wrong model competes
+    with the standing error and loses. So when linear channel findings stand from the start,
+    they are applied and the record is diagnosed again: the findings of that second pass with
+    an onset inside the record are reported beside them (``_with_later_changes``).
     """
     lengths = record_lengths(len(data), model.sample_time_s, min_segment_s, block_s)
+    first = _one_pass(model, data, train_end_s, lengths, min_effect, actuator_search)
+    return _with_later_changes(first, model, data, train_end_s, lengths, min_effect, actuator_search)
+
+
+def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, min_effect: float,
+              actuator_search: bool | None) -> DiagnoseResult:
+    """One diagnosis of ``data`` against ``model`` (``diagnose`` without the second pass)."""
     prepared = diagnosis_signals(model, data, train_end_s)
     sig, notes = prepared.sig, list(prepared.notes)
     time_s = sig.time_s
@@ -211,6 +225,39 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
                           process_parts=shown,
                           notes=notes)
+
+
+def _with_later_changes(first: DiagnoseResult, model, data, train_end_s: float | None, lengths: RecordLengths,
+                        min_effect: float, actuator_search: bool | None) -> DiagnoseResult:
+    """``first`` and, when linear channel findings of it stand from the record's start (or from
+    ``train_end_s``), the findings of a second pass against the model with them applied whose
+    onset lies inside the record: the changes the standing error hid. Every finding keeps the
+    figures of its own pass; the second pass's errors before are those of the corrected model."""
+    start = first.time_s[0] if train_end_s is None else first.time_s[np.searchsorted(first.time_s, train_end_s)]
+    standing = [f for f in first.findings if f.effect in LINEAR_CHANNEL_EFFECTS and f.onset_s <= start]
+    if not standing:
+        return first
+    corrected = apply_changes(model, [c for f in standing for c in f.model_changes()])
+    second = _one_pass(corrected, data, train_end_s, lengths, min_effect, actuator_search)
+    later = [f for f in second.findings if f.onset_s > start]
+    if not later:
+        return first
+    residuals_after, process_parts = {}, {}
+    for source, findings in ((first, first.findings), (second, later)):
+        for f in findings:
+            residuals_after[id(f)] = source.residuals_after.get(f.id)
+            process_parts[id(f)] = source.process_parts.get(f.id)
+    found = sorted(first.findings + later, key=lambda f: -f.score)
+    for k, f in enumerate(found, start=1):
+        f.id = f"F{k}"
+    basis = ", ".join(f.id for f in standing)
+    for f in later:
+        f.explanation = f"with {basis} applied (the model as it should have been from the start): {f.explanation}"
+    notes = first.notes + [n for n in second.notes if n not in first.notes]
+    return dataclasses.replace(
+        first, findings=found, notes=notes,
+        residuals_after={f.id: residuals_after[id(f)] for f in found if residuals_after[id(f)] is not None},
+        process_parts={f.id: process_parts[id(f)] for f in found if process_parts[id(f)] is not None})
 
 
 LINEAR_CHANNEL_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input")

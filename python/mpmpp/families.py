@@ -391,6 +391,13 @@ FAMILIES = [
     Family("pi_siso_slow", TUNING, "single PI loop, 20-40 s sampling, day-long records, FOPTD model "
            "without noise model", "pi", 1, _EFFECTS_SISO + ("none",), sample_times_s=(20.0, 40.0),
            model_forms=("foptd",), record_hours=(24.0, 36.0), setpoint_steps=True),
+    Family("mpc_siso_clip", TUNING, "MPC with clipped moves (a DMC's), SISO, 5-10 s, discrete model "
+           "with or without noise model", "mpc_clip", 1, _EFFECTS_SISO + ("none", "noise_change"),
+           sample_times_s=(5.0, 10.0), model_forms=("discrete+noise", "discrete")),
+    Family("mpc_2x2_clip", TUNING, "MPC with clipped moves, 2x2, setpoint steps, discrete model with "
+           "or without noise model", "mpc_clip", 2, _EFFECTS_MIMO + ("none", "noise_change"),
+           time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0), model_forms=("discrete+noise", "discrete"),
+           setpoint_steps=True),
     Family("pi_siso_rough", TUNING, "single PI loop with setpoint steps and the FOPTD model a user "
            "writes by hand (wrong from the start), without noise model", "pi", 1,
            _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(5.0, 10.0), model_forms=("foptd",),

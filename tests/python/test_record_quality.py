@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from mpmpp.cli import main
-from mpmpp.stiction.record_quality import interpolated_share, record_notes, repeated_share
+from mpmpp.stiction import fit_valve
+from mpmpp.stiction.record_quality import interpolated_share, rate_limited_share, record_notes, repeated_share
 
 
 def noisy(n=751, seed=0):
@@ -53,11 +54,31 @@ def test_an_op_ramping_at_its_rate_limit_is_not_compression():
     for t in range(1, 751):
         op[t] = op[t - 1] + np.clip(wanted[t] - op[t - 1] + 50.0, -0.4, 0.4)
     assert np.mean(np.abs(np.abs(np.diff(op)) - 0.4) < 1e-12) > 0.5   # the limit binds mostly
-    assert interpolated_share(op) < 0.05 and record_notes({"OP": op}) == []
+    assert interpolated_share(op) < 0.05
+    assert rate_limited_share(op) == pytest.approx(np.mean(np.abs(np.abs(np.diff(op)) - 0.4) < 1e-12))
+    (note,) = record_notes({"OP": op})                                   # a rate limit, not compression
+    assert note.startswith("OP moves by its largest step in") and "no valve fault is reported" in note
     kept = np.arange(0, 751, 5)
     compressed = np.interp(np.arange(751), kept, op[kept])
     # the gaps over which the OP ramped at its limit anyway are the record as sampled
     assert interpolated_share(compressed) > 0.3 and "straight lines" in record_notes({"OP": compressed})[0]
+
+
+def test_no_valve_verdict_on_a_rate_limited_op():
+    """A DMC clipping its moves (tuning family mpc_siso_clip, seed 7, no change: a linear valve):
+    the OP moves by its limit in most samples and the valve fit, free, calls a backlash; held to
+    the limit, it calls nothing, and a free OP's largest move is rare."""
+    from mpmpp import families
+    from mpmpp.simulate import simulate
+
+    spec, _ = families.family("mpc_siso_clip").draw(7, effect="none")
+    data = simulate(spec)
+    op, pv = data["u1"].to_numpy(), data["y1"].to_numpy()
+    assert rate_limited_share(op) > 0.7
+    fit = fit_valve(op, pv)
+    assert fit.kind == "backlash" and fit.confidence > 0.5   # what the fit alone would say
+    assert not fit.verdict
+    assert rate_limited_share(noisy()) < 0.01
 
 
 def test_stiction_command_notes_a_compressed_pv(tmp_path, capsys):

@@ -30,6 +30,22 @@ def repeated_share(x: np.ndarray) -> float:
     return float(np.mean((np.diff(x) == 0.0) & inside))
 
 
+def _at_largest_move(x: np.ndarray) -> np.ndarray:
+    """Per move of x: whether its size is the record's largest (to rounding)."""
+    d1 = np.abs(np.diff(x))
+    scale = max(float(np.ptp(x)), np.finfo(float).tiny)
+    return np.abs(d1 - d1.max()) <= 1e-9 * scale
+
+
+def rate_limited_share(x: np.ndarray) -> float:
+    """Share of the moves of x that are its largest move: an OP held to a rate or move limit
+    (an MPC's move limit, a DMC clipping its moves, a positioner's slew rate) moves by that limit
+    again and again, where a free OP's largest move happens once."""
+    if len(x) < 2 or np.ptp(x) == 0:
+        return 0.0
+    return float(np.mean(_at_largest_move(x)))
+
+
 def interpolated_share(x: np.ndarray) -> float:
     """Share of interior samples on the straight line through their neighbours that are not
     also flat (linear interpolation between stored points), to rounding. Samples reached and
@@ -44,7 +60,7 @@ def interpolated_share(x: np.ndarray) -> float:
     scale = max(float(np.ptp(x)), np.finfo(float).tiny)
     on_line = np.abs(d2) <= 1e-9 * scale
     moving = (d1[1:] != 0.0) | (d1[:-1] != 0.0)
-    at_rate = np.abs(np.abs(d1) - np.abs(d1).max()) <= 1e-9 * scale
+    at_rate = _at_largest_move(x)
     return float(np.mean(on_line & moving & ~(at_rate[1:] & at_rate[:-1])))
 
 
@@ -58,6 +74,11 @@ def record_notes(signals: dict) -> list[str]:
             notes.append(f"{name} lies on straight lines between its neighbours in {100 * line:.0f} % of the "
                          f"samples: a historian record compressed with interpolation; stiction tests on "
                          f"compressed data can both miss and invent a valve fault (export it uncompressed)")
+        limited = rate_limited_share(x)
+        if limited > NOTABLE_SHARE:
+            notes.append(f"{name} moves by its largest step in {100 * limited:.0f} % of the samples: a rate or move "
+                         f"limit (an MPC's move limit, a positioner's slew rate); a valve fit reads such moves as "
+                         f"stick-slip, so no valve fault is reported from this record")
         if held > NOTABLE_SHARE:
             notes.append(f"{name} repeats its previous value in {100 * held:.0f} % of the samples: a quantized "
                          f"or hold-compressed record; small valve moves are not visible in it")

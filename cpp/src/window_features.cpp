@@ -132,10 +132,10 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
   for (auto& p : problems_) {
     const int i = channels_[p.noise_channel].output;
     for (size_t e = 0; e < p.inputs.size(); ++e) p.u.col(e) = u.col(p.inputs[e]);
-    for (size_t e = 0; e < p.arx_inputs.size(); ++e) p.u_arx.col(e) = u.col(p.arx_inputs[e]);
     // NoiseTest::Residual: A(q) comes from the residual regression, no ARX-OE step is needed;
     // with the residual process test and NoiseTest::Wald the ARX step alone gives A(q).
     if (!noise_from_residual_) {
+      for (size_t e = 0; e < p.arx_inputs.size(); ++e) p.u_arx.col(e) = u.col(p.arx_inputs[e]);
       try {
         if (p.residual && noise_wald_)
           p.estimator.estimate_arx(y.col(i), p.u_arx, result_.arx);

@@ -139,7 +139,7 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
     if effect in LINEAR_EFFECTS:
         run["update"] = update_quality(model, data, top, change)
         # against the plant before the change (a hand-written model is not it)
-        plant = nominal_model({**spec, "process": spec["truth"].get("process", spec["process"])})
+        plant = nominal_model({**spec, "process": fam.plant_process(spec)})
         run["evidence"] = true_evidence(plant, data, change, expect["onset_s"])
     run["seconds"] = time.perf_counter() - t0
     return run

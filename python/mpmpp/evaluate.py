@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import scenarios
-from ._core import Model
+from . import _core
+from ._core import DetectorConfig, Model
 from .parallel import run_tasks
 from .simulate import simulate
 from .baselines import BASELINES, baseline_alarms, baseline_indices
@@ -69,13 +70,15 @@ def nominal_model(scenario: dict):
 _PROCESS_EVENTS = ("process", "gain", "time_constant", "delay")
 
 
-def truth_onsets(scenario: dict, absent_channels: bool = False) -> dict:
+def truth_onsets(scenario: dict, config: DetectorConfig | None = None) -> dict:
     """First change time (s) per monitored channel, None if it never changes:
-    {"process": {(output, input): t}, "noise": {output: t}} over the model's channels, and with
-    ``absent_channels`` (the config's) over every output-input pair: a coupling that appears
-    where the model has none changes its absent channel."""
+    {"process": {(output, input): t}, "noise": {output: t}} over the process channels ``config``
+    monitors (the model's, and with its absent channels those the model lacks: a coupling that
+    appears there changes its channel), by default the model's."""
     model = nominal_model(scenario)
-    pairs = [(o, i) for o in model.outputs for i in model.inputs] if absent_channels else model.channels()
+    pairs = model.channels() if config is None else [
+        (model.outputs[i], model.inputs[j]) for kind, i, j in _core.WindowFeatures(model, config).channels
+        if kind == "process"]
     process = {(o, i): None for o, i in pairs}
     noise = {o: None for o in model.outputs}
     for ev in scenario.get("events", []):
@@ -140,7 +143,7 @@ def evaluate(spec, seeds, config=None, scheduler=None, workers=None, progress: b
                             progress, unit="runs")
     wall = time.perf_counter() - started
     runs.sort(key=lambda r: r["seed"])
-    summary = summarise(runs, truth_onsets(scenario, cfg.absent_channels > 0), nominal_model(scenario))
+    summary = summarise(runs, truth_onsets(scenario, cfg), nominal_model(scenario))
     summary.update({"scenario": spec if isinstance(spec, str) else scenario.get("name", "scenario"),
                     "seeds": len(seeds), "seed_range": [min(seeds), max(seeds)], "wall_seconds": wall, "where": where,
                     "cpu_seconds": float(sum(r["seconds"]["total"] for r in runs)),

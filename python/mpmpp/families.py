@@ -101,6 +101,12 @@ def _hand_written(rng, k, tau, d, ts):
             "time_constant_s": two_figures(tau * ts * _log_uniform(rng, 2 / 3, 1.5)), "dead_time_s": round(dead)}
 
 
+def plant_process(spec: dict) -> dict:
+    """The true plant's channels at the start of a scenario (a hand-written model file is not
+    them; otherwise the model file's)."""
+    return spec["truth"].get("process", spec["process"])
+
+
 def _noise(rng, colour):
     """A monic, stable, inversely stable ARMA noise model of the given colour."""
     if colour == "white":
@@ -298,7 +304,7 @@ def _effect(effect, rng, spec, chans, diag_gain, onset, ts) -> dict:
             size = float(rng.choice([0.33, 0.5, 2.0, 3.0]))
             ev["factor"] = size
         else:
-            d = parse_transfer_function(spec["truth"].get("process", spec["process"])[o][u], "process", ts).delay
+            d = parse_transfer_function(plant_process(spec)[o][u], "process", ts).delay
             size = int(max(1, round(d * float(rng.choice([0.5, 1.5, 2.0])))))
             size = size if size != d else d + 2
             ev["delay"] = size

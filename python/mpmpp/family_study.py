@@ -100,8 +100,7 @@ def evidence(spec: dict, expect: dict, data, change: dict | None) -> float | Non
         return None
     # The plant before the change (a hand-written model file is not it): the evidence is the
     # change's alone.
-    truth = nominal_model({**spec, "process": spec["truth"].get("process", spec["process"]),
-                           "noise": spec["truth"]["noise"]})
+    truth = nominal_model({**spec, "process": fam.plant_process(spec), "noise": spec["truth"]["noise"]})
     return change_evidence(extract(truth, data), change, expect["onset_s"])
 
 

@@ -39,12 +39,14 @@ void bind_change_scan(py::module_& m) {
   py::class_<ProjectedOnsetScan>(m, "ProjectedOnsetScan",
                                  "cross-validated onset scans of candidates fitted beside nuisance "
                                  "columns, for one residual")
-      .def(py::init<
-               const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>&,
-               const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const RowMatrixXd>&,
-               const Eigen::Ref<const RowMatrixXd>&, Eigen::Index, Eigen::Index, Eigen::Index>(),
+      .def(py::init<const Eigen::Ref<const Eigen::VectorXd>&,
+                    const Eigen::Ref<const Eigen::VectorXd>&,
+                    const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const RowMatrixXd>&,
+                    const Eigen::Ref<const RowMatrixXd>&, Eigen::Index, Eigen::Index, Eigen::Index,
+                    double>(),
            py::arg("r"), py::arg("weight"), py::arg("odd"), py::arg("columns"), py::arg("solve"),
-           py::arg("begin"), py::arg("min_segment"), py::arg("step"))
+           py::arg("begin"), py::arg("min_segment"), py::arg("step"),
+           py::arg("onset_penalty") = 0.0)
       .def("fit", &ProjectedOnsetScan::fit, py::arg("x"), py::arg("nominal") = py::none(),
            py::arg("weight") = py::none(), py::call_guard<py::gil_scoped_release>());
   m.def("fit_at_onset", &fit_at_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"),

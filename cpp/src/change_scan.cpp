@@ -152,14 +152,16 @@ class GridSums {
   // do not move, so it cannot tell where there the change starts, and the held-out drop is
   // then only counted from where the fold saw it (the earliest onset would charge the other
   // fold for a change applied before it happened).
-  OnsetFit scan(int j, Eigen::Index* row = nullptr, bool latest_tie = false) const {
+  // An onset after the first grid onset competes with its statistic less `onset_penalty`.
+  OnsetFit scan(int j, Eigen::Index* row = nullptr, bool latest_tie = false,
+                double onset_penalty = 0.0) const {
     Eigen::Index best_row = 0;
-    double best = statistic(0, j), s = best;
+    double best = statistic(0, j), s = best - onset_penalty;
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
       // a fold's sums stand still through the other fold's blocks: same sums, same statistic
       if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) ||
           pp_(i, j) != pp_(i - 1, j))
-        s = statistic(i, j);
+        s = statistic(i, j) - onset_penalty;
       if (s > best || (latest_tie && s == best)) {
         best = s;
         best_row = i;
@@ -182,12 +184,12 @@ class GridSums {
   }
 
   // The full scan, each fold's scan and each fold's fit scored on the other fold.
-  CrossValidatedOnset cross_validated() const {
+  CrossValidatedOnset cross_validated(double onset_penalty = 0.0) const {
     CrossValidatedOnset out;
-    out.full = scan(0);
+    out.full = scan(0, nullptr, false, onset_penalty);
     for (int k = 0; k < 2; ++k) {
       Eigen::Index row = 0;
-      out.fold[k] = scan(1 + k, &row, true);
+      out.fold[k] = scan(1 + k, &row, true, onset_penalty);
       out.heldout[k] = drop_with(2 - k, row, out.fold[k].theta);
     }
     return out;
@@ -300,8 +302,14 @@ ProjectedOnsetScan::ProjectedOnsetScan(const Eigen::Ref<const Eigen::VectorXd>& 
                                        const Eigen::Ref<const RowMatrixXd>& columns,
                                        const Eigen::Ref<const RowMatrixXd>& solve,
                                        Eigen::Index begin, Eigen::Index min_segment,
-                                       Eigen::Index step)
-    : r_(r), weight_(weight), odd_(odd), columns_(columns), solve_(solve), begin_(begin) {
+                                       Eigen::Index step, double onset_penalty)
+    : r_(r),
+      weight_(weight),
+      odd_(odd),
+      columns_(columns),
+      solve_(solve),
+      begin_(begin),
+      onset_penalty_(onset_penalty) {
   const Eigen::Index n = r.size(), m = columns.cols();
   if (weight.size() != n || odd.size() != n || columns.rows() != n)
     throw InputError("r, weight, odd and the nuisance columns must have the same length");
@@ -309,6 +317,7 @@ ProjectedOnsetScan::ProjectedOnsetScan(const Eigen::Ref<const Eigen::VectorXd>& 
     throw InputError("the nuisance solve must be (columns) x (samples)");
   if (min_segment < 1 || step < 1) throw InputError("min_segment and step must be >= 1");
   if (begin < 0 || begin >= n) throw InputError("begin must be inside the record");
+  if (!(onset_penalty >= 0.0)) throw InputError("onset_penalty must be >= 0");
   onsets_ = scan_onsets(begin, n, min_segment, step);
   const std::vector<Eigen::Index>& onsets = *onsets_;
   const Eigen::Index rows = static_cast<Eigen::Index>(onsets.size());
@@ -388,7 +397,7 @@ CrossValidatedOnset ProjectedOnsetScan::fit(const Eigen::Ref<const Eigen::Vector
     }
   }
   sums.sum_folds();
-  return sums.cross_validated();
+  return sums.cross_validated(onset_penalty_);
 }
 
 Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,

@@ -17,7 +17,10 @@ process finding, ``update`` with the top one. Scoring per run, from the scenario
   barely shows is told apart from a miss of the method;
 * every finding (process or not) with its confidence and whether it is right, for the
   reliability tables; an ``output_drift`` finding on an output the family gave a background
-  step/ramp disturbance also counts as right (the drift is real, only not the scheduled effect).
+  step/ramp disturbance also counts as right (the drift is real, only not the scheduled effect),
+  and so does, in a family with hand-written models, a linear channel finding from the first
+  row whose update removes a quarter of its channel's error against the plant
+  (``standing_error_named``: the model's own error, which a user needs to hear about too).
 """
 from __future__ import annotations
 
@@ -29,6 +32,7 @@ import numpy as np
 from . import families as fam
 from ._core import TransferFunction
 from .diagnose import PROCESS_EFFECTS, diagnose
+from .diagnose.changes import apply_changes
 from .diagnose.errors import one_step_errors
 from .diagnose.pipeline import diagnosis_signals
 from .diagnose.result import ModelChange
@@ -42,6 +46,9 @@ from .update import update
 # Effects whose changed channel is linear, so a step response measures the model error.
 LINEAR_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input")
 CONFIDENCE_BINS = (0.0, 0.5, 0.9, 0.99, 1.0)
+# A finding names a hand-written model's standing error when its update removes at least this
+# share of its channel's step-response error against the plant (standing_error_named).
+STANDING_ERROR_FALL = 0.25
 # Evidence bins (chi-square units) for the accuracy-by-evidence table. Fixed a priori: below
 # 10 no search over hundreds of candidate shapes and onsets can single out the truth; above 100
 # the record shows the change plainly.
@@ -94,14 +101,31 @@ def drifting_outputs(spec: dict) -> set:
     return {ev["output"] for ev in spec["events"] if ev["type"] == "drift"}
 
 
-def _finding_record(f, effect: str, change: dict | None, drifting: set = frozenset()) -> dict:
+def standing_error_named(model, plant, f) -> bool:
+    """For a model wrong from the start (a hand-written one): whether linear channel finding
+    ``f`` names part of that error, i.e. its update lowers its channel's step-response error
+    against the plant (``plant``, the model at the record's start) by at least
+    STANDING_ERROR_FALL. A hand-written model is wrong in gain, time constant and dead time at
+    once, so the label alone cannot be judged: what it is worth is how much of the error its
+    fix removes."""
+    truth = _channel(plant, f.output, f.input)
+    if truth is None:
+        return False
+    before = step_response_error(_channel(model, f.output, f.input), truth)
+    after = step_response_error(_channel(apply_changes(model, f.model_changes()), f.output, f.input), truth)
+    return after <= (1.0 - STANDING_ERROR_FALL) * before
+
+
+def _finding_record(f, effect: str, change: dict | None, drifting: set = frozenset(),
+                    standing_named: bool = False) -> dict:
     d = f.to_dict()
     d["score"] = float(f.score)
     d["evidence_confidence"] = float(f.evidence_confidence)
     d["actuator_score"] = f.actuator_score
     d["calibrated"] = f.calibrated   # scored by its own calibration, not the family map
     d["process"] = f.effect in PROCESS_EFFECTS
-    d["right"] = finding_right(d, effect, change) or (f.effect == "output_drift" and f.output in drifting)
+    d["right"] = (finding_right(d, effect, change) or (f.effect == "output_drift" and f.output in drifting)
+                  or standing_named)
     return d
 
 
@@ -124,13 +148,21 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
         run["refused"] = str(exc)
         run["seconds"] = time.perf_counter() - t0
         return run
-    run["findings"] = [_finding_record(f, effect, change, drifting_outputs(spec)) for f in diagnosis.findings]
+    start = float(data["time"].iloc[0])
+    plant = nominal_model({**spec, "process": fam.plant_process(spec)})
+
+    def standing_named(f) -> bool:   # a hand-written model's own error, named from the first row
+        return (family.hand_written and f.effect in LINEAR_EFFECTS and f.onset_s <= start
+                and standing_error_named(model, plant, f))
+
+    run["findings"] = [_finding_record(f, effect, change, drifting_outputs(spec), standing_named(f))
+                       for f in diagnosis.findings]
     process = [f for f in diagnosis.findings if f.effect in PROCESS_EFFECTS]
     if family.hand_written:
         # The model is wrong from the start (as users' models are): what stands from the first
         # row is the model's own error, not the scheduled effect, and no false finding in a
         # control run; the top finding with an onset inside the record is judged.
-        process = [f for f in process if f.onset_s > float(data["time"].iloc[0])]
+        process = [f for f in process if f.onset_s > start]
     top = process[0] if process else None
     if top is not None:
         run["top_process"] = _finding_record(top, effect, change)
@@ -139,7 +171,6 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
     if effect in LINEAR_EFFECTS:
         run["update"] = update_quality(model, data, top, change)
         # against the plant before the change (a hand-written model is not it)
-        plant = nominal_model({**spec, "process": fam.plant_process(spec)})
         run["evidence"] = true_evidence(plant, data, change, expect["onset_s"])
     run["seconds"] = time.perf_counter() - t0
     return run

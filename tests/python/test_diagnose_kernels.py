@@ -77,17 +77,23 @@ def test_cross_validated_scan_matches_numpy(late_start):
         assert cv.heldout[k] == pytest.approx(heldout, rel=1e-9, abs=1e-9)
 
 
-def numpy_cross_validated(r, r_without, psi, weight, odd, begin, min_segment, step):
+def numpy_cross_validated(r, r_without, psi, weight, odd, begin, min_segment, step, penalty=0.0):
     """(full (onset, statistic, theta), per fold (onset, statistic, theta, held-out drop)) of
-    the scan on samples from ``begin`` on, onsets as sample indices (latest of tied onsets)."""
+    the scan on samples from ``begin`` on, onsets as sample indices (latest of tied onsets); an
+    onset after ``begin`` competes with its statistic less ``penalty``."""
     tail = slice(begin, None)
     folds = [weight * (odd == 0), weight * (odd != 0)]
-    onset, stat, theta = brute_scan(r[tail], r_without[tail], psi[tail], weight[tail], min_segment, step)
+
+    def charged(fit):
+        return fit[1] - (penalty if fit[0] > 0 else 0.0)
+
+    fits = list(brute_fits(r[tail], r_without[tail], psi[tail], weight[tail], min_segment, step))
+    onset, stat, theta = max(fits, key=charged)    # the first of tied maxima
     per_fold = []
     for k in (0, 1):
         fits = list(brute_fits(r[tail], r_without[tail], psi[tail], folds[k][tail], min_segment, step))
-        best = max(f[1] for f in fits)
-        on, s, th = max((f for f in fits if f[1] == pytest.approx(best, rel=1e-10)), key=lambda f: f[0])
+        best = max(charged(f) for f in fits)
+        on, s, th = max((f for f in fits if charged(f) == pytest.approx(best, rel=1e-10)), key=lambda f: f[0])
         on += begin
         test = folds[1 - k][on:]
         heldout = np.sum(test * (r[on:] ** 2 - (r_without[on:] - th * psi[on:]) ** 2))
@@ -95,7 +101,7 @@ def numpy_cross_validated(r, r_without, psi, weight, odd, begin, min_segment, st
     return (begin + onset, stat, theta), per_fold
 
 
-@pytest.mark.parametrize("case", ["full", "late_start", "nominal", "own_weight", "begin"])
+@pytest.mark.parametrize("case", ["full", "late_start", "nominal", "own_weight", "begin", "penalty", "snap"])
 @pytest.mark.parametrize("width", [1, 5])
 def test_projected_scan_matches_numpy(case, width):
     """ProjectedOnsetScan: the candidate projected beside nuisance columns Z inside the scan
@@ -121,12 +127,19 @@ def test_projected_scan_matches_numpy(case, width):
     nominal = 0.3 * (rng.standard_normal(n) - z @ (solve @ rng.standard_normal(n))) if case == "nominal" else None
     own = weight * (rng.random(n) > 0.1) if case == "own_weight" else None
     r_without = r if nominal is None else r + nominal
-    scan = _core.ProjectedOnsetScan(r, weight, odd, z, solve, begin, 60, 7)
+    penalty = 0.0
+    if case in ("penalty", "snap"):   # a charge of half / twice what the best onset gains over the start
+        stats = [st for _, st in brute_statistics(r, r_without, psi, weight, 60, 7)]
+        penalty = (0.5 if case == "penalty" else 2.0) * (max(stats) - stats[0])
+        assert penalty > 1.0
+    scan = _core.ProjectedOnsetScan(r, weight, odd, z, solve, begin, 60, 7, penalty)
     cv = scan.fit(x, nominal, own)
     w = weight if own is None else own
-    full, folds = numpy_cross_validated(r, r_without, psi, w, odd, begin, 60, 7)
+    full, folds = numpy_cross_validated(r, r_without, psi, w, odd, begin, 60, 7, penalty)
     if case == "late_start":
         assert full[0] < 430 and max(f[0] for f in folds) < 430
+    if case in ("penalty", "snap"):
+        assert (full[0] == begin) == (case == "snap")
     assert cv.full.onset == full[0]
     assert cv.full.statistic == pytest.approx(full[1], rel=1e-9)
     assert cv.full.theta == pytest.approx(full[2], rel=1e-9)

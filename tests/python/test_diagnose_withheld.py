@@ -12,7 +12,7 @@ import pytest
 from mpmpp import TransferFunction, families
 from mpmpp.diagnose import diagnose
 from mpmpp.diagnose.pipeline import CHANNEL_EFFECTS, _without_unconfirmed_standing_changes, diagnosis_signals
-from mpmpp.diagnose.process_error import process_parts
+from mpmpp.diagnose.process_error import held_out_rms, process_parts
 from mpmpp.diagnose.result import Finding, ModelChange
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
@@ -39,20 +39,23 @@ def standing_gain(model, ratio, onset_s=0.0):
                    error_before=1.0, error_after=0.9, explanation=f"gain {ratio}x", change=change)
 
 
-@pytest.mark.parametrize("plant_gain, found, kept", [(1.0, 1.5, False), (2.0, 2.0, True)])
-def test_a_change_throughout_stays_only_when_the_process_part_confirms_it(plant_gain, found, kept):
+@pytest.mark.parametrize("plant_gain, plant_onset, found, kept",
+                         [(1.0, 0, 1.5, False), (2.0, 0, 2.0, True), (2.0, 4000, 1.2, False)])
+def test_a_change_throughout_stays_only_when_the_process_part_confirms_it(plant_gain, plant_onset, found, kept):
     """A gain change present from the first row, on the closed-loop test loop whose plant gain is
-    ``plant_gain`` times the model's throughout: a 1.5x on an exact model raises the held-out
-    process-part error and is withheld with a note; the true 2x lowers it and stays. The same
-    1.5x with an onset is not this rule's to judge."""
+    ``plant_gain`` times the model's from ``plant_onset``: a 1.5x on an exact model raises the
+    held-out process-part error and is withheld with a note; the true 2x throughout lowers it in
+    both halves of the record and stays; a 1.2x throughout where the plant doubled only in the
+    second half lowers the whole record's process-part error but raises the first half's, and
+    is withheld. The same 1.5x with an onset is not this rule's to judge."""
     model = loop.model()
-    sig = diagnosis_signals(model, loop.simulate(n=8000, seed=3, onset=0, gain=plant_gain)).sig
+    sig = diagnosis_signals(model, loop.simulate(n=8000, seed=3, onset=plant_onset, gain=plant_gain)).sig
     finding = standing_gain(model, found)
-    def parts_of(f):
-        return process_parts(sig, 0, f.model_changes(), sig.seconds_to_index(f.onset_s), 720)
-
-    got, notes = _without_unconfirmed_standing_changes([finding], sig, 0, 720, parts_of)
+    got, notes = _without_unconfirmed_standing_changes([finding], sig, 0, 720)
     assert (got == [finding]) == kept
-    assert bool(notes) != kept and all("withheld" in n and "process part" in n for n in notes)
+    assert bool(notes) != kept and all("withheld" in n and "both halves" in n for n in notes)
+    if plant_onset:   # the whole record's process part alone would have kept it
+        before, after = (held_out_rms(p, 720) for p in process_parts(sig, 0, finding.model_changes(), 0, 720))
+        assert after < before
     later = standing_gain(model, found, onset_s=float(sig.time_s[4000]))
-    assert _without_unconfirmed_standing_changes([later], sig, 0, 720, parts_of) == ([later], [])
+    assert _without_unconfirmed_standing_changes([later], sig, 0, 720) == ([later], [])

@@ -2,6 +2,8 @@
 scenario, the tables' counts."""
 import pytest
 
+import mpmpp
+
 from mpmpp import diagnosis_study as ds
 from mpmpp import families as fam
 from mpmpp.evaluate import nominal_model
@@ -88,3 +90,34 @@ def test_true_evidence_is_the_one_step_likelihood_ratio_of_the_true_change():
     assert evidence == pytest.approx(want, rel=1e-6)
     # the true change written as the nominal channel carries no evidence
     assert ds.true_evidence(model, data, {**change, "channel": g0}, expect["onset_s"]) == 0.0
+
+
+def test_a_standing_finding_is_right_when_its_fix_removes_a_quarter_of_the_model_error():
+    """Hand-written families: a finding from the first row is judged by how much of the model's
+    own error (against the plant at the start) its update removes, not by its label."""
+    from types import SimpleNamespace
+
+    from mpmpp.diagnose.result import ModelChange
+    from mpmpp.step_response import step_response_error
+
+    spec, _ = fam.family("pi_siso_rough").draw(2, effect="none")
+    model = nominal_model(spec)
+    plant = nominal_model({**spec, "process": fam.plant_process(spec)})
+    [out], [inp] = model.outputs, model.inputs
+    truth = plant.process_dict()[out][inp]
+    written = model.process_dict()[out][inp]
+    before = step_response_error(written, truth)
+    assert before > 0.05    # the drawn hand-written model is materially wrong
+
+    def finding(channel):
+        return SimpleNamespace(output=out, input=inp,
+                               model_changes=lambda: [ModelChange(output=out, input=inp, channel=channel)])
+
+    assert ds.standing_error_named(model, plant, finding(truth))         # the whole error removed
+    assert not ds.standing_error_named(model, plant, finding(written))   # nothing removed
+    # the written channel's gain scaled 10 % of the way to the plant's: under a quarter of the error
+    k = written.dc_gain() + 0.1 * (truth.dc_gain() - written.dc_gain())
+    partway = mpmpp.TransferFunction(list(map(float, written.num * k / written.dc_gain())), list(written.den), written.delay)
+    fell = 1 - step_response_error(partway, truth) / before
+    assert 0.0 < fell < ds.STANDING_ERROR_FALL
+    assert not ds.standing_error_named(model, plant, finding(partway))

@@ -62,6 +62,11 @@ CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::Vec
 // it; the scan covers samples from `begin` on and reports onsets as sample indices. Before a
 // candidate that starts late (a drift) psi = -Z S x, and the nuisance's own suffix sums, kept
 // at the scanned onsets, give the sums there without visiting the samples.
+// `onset_penalty`: an onset after `begin` is taken only when its statistic beats the one at
+// `begin` by more than this (in each fold's scan as in the full one): a change present
+// from `begin` is the simpler hypothesis, and without the charge a stretch that shows the
+// change weakly (no excitation) is cut off by chance, dating an error of the model from the
+// start an hour or more into the record.
 class ProjectedOnsetScan {
  public:
   ProjectedOnsetScan(const Eigen::Ref<const Eigen::VectorXd>& r,
@@ -69,7 +74,7 @@ class ProjectedOnsetScan {
                      const Eigen::Ref<const Eigen::VectorXd>& odd,
                      const Eigen::Ref<const RowMatrixXd>& columns,
                      const Eigen::Ref<const RowMatrixXd>& solve, Eigen::Index begin,
-                     Eigen::Index min_segment, Eigen::Index step);
+                     Eigen::Index min_segment, Eigen::Index step, double onset_penalty = 0.0);
   // `nominal`: the projected response of the nominal channel the candidate replaces
   // (r_without = r + nominal; none for a channel the model lacks). `weight`: the candidate's
   // own weighting when its drive is missing in places (default: the scan's).
@@ -81,6 +86,7 @@ class ProjectedOnsetScan {
   Eigen::VectorXd r_, weight_, odd_;
   RowMatrixXd columns_, solve_;
   Eigen::Index begin_;
+  double onset_penalty_;
   std::shared_ptr<const std::vector<Eigen::Index>> onsets_;
   RowMatrixXd rz_[2], zz_[2];  // per fold, at each onset: suffix sums of w r z and of w z z'
 };

@@ -455,8 +455,15 @@ class _Search:
 
     def scan(self, r: np.ndarray, responses: ShapeResponses) -> _core.ProjectedOnsetScan:
         """The onset scans of this output's candidates on residual r, beside the responses'
-        disturbances."""
-        return responses.nuisance.scan(r, self.out.fold[1], self.first_onset, self.min_segment, self.step)
+        disturbances. An onset inside the record is charged the log(N)/2 the score charges for
+        it (``_best_per_channel``) already when it is chosen: uncharged, a hand-written model's
+        error from the start was dated 1-3 h in whenever the first hours showed it weakly, and
+        the second pass (pipeline._with_later_changes) never ran. Tuning family pi_siso_rough,
+        seeds 0-15: controls with a false process finding 10/32 -> 3/32, changes named 37 -> 40/64
+        (the charge halved inside the folds: 2/32 and 39/64, no clearer); eight exact-model tuning
+        families, seeds 0-5: changes named 132 -> 133/204, controls the same."""
+        return responses.nuisance.scan(r, self.out.fold[1], self.first_onset, self.min_segment, self.step,
+                                       0.5 * self.logn)
 
     def disturbances(self) -> FirstRound:
         """The level and the step + ramp disturbances every candidate is fitted beside, with the

@@ -62,10 +62,10 @@ class ProcessBasis:
 
 
 def process_part(sig: Signals, i: int, changes: list[ModelChange], onset: int, block: int,
-                 basis: ProcessBasis) -> np.ndarray:
+                 basis: ProcessBasis, end: int | None = None) -> np.ndarray:
     """The input-explained part of y_i - G_i u (G the model after ``changes``) on every usable
-    row after ``onset``, NaN elsewhere (all NaN when the blocks after the onset are too short);
-    fitted on the even blocks after ``onset`` only."""
+    row from ``onset`` to ``end`` (the record's end when None), NaN elsewhere (all NaN when the
+    blocks there are too short); fitted on the even blocks there only."""
     noise = sig.noise[i]
     for c in changes:
         if c.output == sig.outputs[i] and c.noise is not None:
@@ -73,7 +73,7 @@ def process_part(sig: Signals, i: int, changes: list[ModelChange], onset: int, b
     e = one_step_errors(sig, i, changes)
     x, columns = basis.x, basis.columns
     t = np.arange(len(e))
-    usable = (t >= onset) & np.isfinite(e) & np.isfinite(columns).all(axis=1) & np.isfinite(x).all(axis=1)
+    usable = (t >= onset) & (t < (len(e) if end is None else end)) & np.isfinite(e) & np.isfinite(columns).all(axis=1) & np.isfinite(x).all(axis=1)
     odd = (t // block) % 2 == 1
     fit = usable & ~odd
     series = np.full(len(e), np.nan)
@@ -98,13 +98,13 @@ def process_error(sig: Signals, i: int, changes: list[ModelChange], onset: int, 
 
 
 def process_parts(sig: Signals, i: int, changes: list[ModelChange], onset: int,
-                  block: int) -> tuple[np.ndarray, np.ndarray]:
-    """(before, after): the process part with the nominal model and with ``changes``, both with
-    the same explanatory columns and basis."""
+                  block: int, end: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(before, after): the process part from ``onset`` to ``end`` with the nominal model and
+    with ``changes``, both with the same explanatory columns and basis."""
     _, columns = explanatory_columns(sig, changes)
     basis = ProcessBasis(sig, columns, laguerre_filters(laguerre_pole(sig, i)))
-    return (process_part(sig, i, [], onset, block, basis),
-            process_part(sig, i, changes, onset, block, basis))
+    return (process_part(sig, i, [], onset, block, basis, end),
+            process_part(sig, i, changes, onset, block, basis, end))
 
 
 def process_errors(sig: Signals, i: int, changes: list[ModelChange], onset: int,

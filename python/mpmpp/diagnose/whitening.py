@@ -229,10 +229,12 @@ class Nuisance:
         return x - self.columns @ (self.solve @ x)
 
     def scan(self, r: np.ndarray, odd: np.ndarray, begin: int, min_segment: int,
-             step: int) -> _core.ProjectedOnsetScan:
+             step: int, onset_penalty: float) -> _core.ProjectedOnsetScan:
         """Cross-validated onset scans (fold ``odd``) of candidates fitted beside the columns to
-        the projected residual ``r``; a candidate is passed unprojected."""
-        return _core.ProjectedOnsetScan(r, self.weight, odd, self.columns, self.solve, begin, min_segment, step)
+        the projected residual ``r``; a candidate is passed unprojected. An onset after
+        ``begin`` must beat ``begin``'s statistic by ``onset_penalty``."""
+        return _core.ProjectedOnsetScan(r, self.weight, odd, self.columns, self.solve, begin, min_segment, step,
+                                        onset_penalty)
 
 
 def disturbance_onsets(out: OutputResidual, e: np.ndarray, first_onset: int, grid: int) -> list[int]:

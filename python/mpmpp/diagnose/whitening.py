@@ -268,10 +268,11 @@ def has_noise_model(h: TransferFunction) -> bool:
     return not (h.delay == 0 and np.array_equal(h.num, [1.0]) and np.array_equal(h.den, [1.0]))
 
 
-def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray) -> TransferFunction:
+def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray, beside_inputs: bool = True) -> TransferFunction:
     """H = 1 / A(q), A the least-squares AR(NOISE_ORDER) of the output error y_i - G_i u on
     ``rows`` less its best step + ramp and its mean (roots reflected inside the unit circle,
-    so H^-1 = A and H are stable). A drift is a candidate of its own: an AR fitted with it
+    so H^-1 = A and H are stable), fitted beside the inputs' basis (``input_basis``) unless
+    ``beside_inputs`` is False. A drift is a candidate of its own: an AR fitted with it
     gets a root near 1 whose inverse differences the drift, and the controller's
     compensation of it, away before any candidate can explain it, and the compensation's
     leftovers then pose as a channel change."""
@@ -282,7 +283,8 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray) -> TransferFun
     usable &= rows
     free = v - trend_fit(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE).trend
     free -= free[usable].mean()
-    return TransferFunction([1.0], stable(masked_ar(free, usable, NOISE_ORDER, input_basis(sig, i))), 0)
+    basis = input_basis(sig, i) if beside_inputs else None
+    return TransferFunction([1.0], stable(masked_ar(free, usable, NOISE_ORDER, basis)), 0)
 
 
 def masked_ar(e: np.ndarray, mask: np.ndarray, order: int = AR_ORDER, inputs: np.ndarray | None = None) -> np.ndarray:

@@ -73,7 +73,8 @@ def process_part(sig: Signals, i: int, changes: list[ModelChange], onset: int, b
     e = one_step_errors(sig, i, changes)
     x, columns = basis.x, basis.columns
     t = np.arange(len(e))
-    usable = (t >= onset) & (t < (len(e) if end is None else end)) & np.isfinite(e) & np.isfinite(columns).all(axis=1) & np.isfinite(x).all(axis=1)
+    end = len(e) if end is None else end
+    usable = (t >= onset) & (t < end) & np.isfinite(e) & np.isfinite(columns).all(axis=1) & np.isfinite(x).all(axis=1)
     odd = (t // block) % 2 == 1
     fit = usable & ~odd
     series = np.full(len(e), np.nan)

@@ -255,6 +255,25 @@ def accuracy_rows(runs: list) -> list:
     return rows
 
 
+def family_rows(runs: list, high: float = 0.9) -> list:
+    """Per family, in the runs' order: right top process findings over the change runs, control
+    runs with a false process finding, and findings at >= ``high`` right."""
+    rows: dict = {}
+    for r in runs:
+        row = rows.setdefault(r["family"], {"split": r["split"], "family": r["family"], "right": 0, "changes": 0,
+                                            "false": 0, "controls": 0, "right_high": 0, "n_high": 0})
+        if r["effect"] in fam.CONTROL_EFFECTS:
+            row["false"] += r["false_process"]
+            row["controls"] += 1
+        else:
+            row["right"] += r["top_right"]
+            row["changes"] += 1
+        high_findings = [f for f in r["findings"] if f["confidence"] >= high]
+        row["n_high"] += len(high_findings)
+        row["right_high"] += sum(f["right"] for f in high_findings)
+    return list(rows.values())
+
+
 def evidence_rows(runs: list) -> list:
     """Per split and evidence bin (``true_evidence``), over the linear change runs: right top
     process finding, and runs without any process finding."""
@@ -358,6 +377,12 @@ def format_tables(study: dict) -> str:
     for r in reliability_by_effect(runs):
         out.append(f"| {r['split']} | {r['effect']} | {r['n']} | {_frac(r['right'], r['n'])} | {r['n_high']} | "
                    f"{_frac(r['right_high'], r['n_high'])} |")
+    out += ["", "Per family (top process finding right / change runs; control runs with a false process finding; "
+            "findings at >= 0.9 right)", "",
+            "| split | family | right | controls false | right at >= 0.9 |", "| --- | --- | --- | --- | --- |"]
+    for r in family_rows(runs):
+        out.append(f"| {r['split']} | {r['family']} | {_frac(r['right'], r['changes'])} | "
+                   f"{_frac(r['false'], r['controls'])} | {_frac(r['right_high'], r['n_high'])} |")
     out.append(f"\n{len(runs)} runs, seeds {study['seeds'][0]}-{study['seeds'][-1]}, "
                f"{study['wall_seconds']:.0f} s wall on {study['where']}")
     return "\n".join(out)

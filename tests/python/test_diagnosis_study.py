@@ -40,7 +40,7 @@ def test_tables_count_what_the_runs_say():
     def run(split, effect, right, false=False, update=None, conf=1.0):
         findings = [{"effect": "gain", "confidence": conf, "right": right}] if right or false else []
         top = {"effect": "gain"} if (right or false) else None
-        return {"split": split, "effect": effect, "top_right": right, "false_process": false,
+        return {"family": f"a_{split}_family", "split": split, "effect": effect, "top_right": right, "false_process": false,
                 "refused": None, "top_process": top, "findings": findings, "update": update}
     up = {"true_before": 1.0, "true_after": 0.4, "shown_before": 1.0, "shown_after": 0.9, "process_before": 1.0, "process_after": 0.3}
     bad = {"true_before": 1.0, "true_after": 1.2, "shown_before": 1.0, "shown_after": 0.99, "process_before": 1.0, "process_after": 0.9}
@@ -56,6 +56,11 @@ def test_tables_count_what_the_runs_say():
     assert rel[(fam.HELD_OUT, "[0.99, 1]")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.99, 1]")]["right"] == 1
     assert rel[(fam.HELD_OUT, "[0.9, 0.99)")]["n"] == 1 and rel[(fam.HELD_OUT, "[0.9, 0.99)")]["right"] == 0
     [held] = ds.reliability_by_effect(runs)   # the tuning run has no finding
+    fams = {r["family"]: r for r in ds.family_rows(runs)}
+    held_fam, tuning_fam = fams[f"a_{fam.HELD_OUT}_family"], fams[f"a_{fam.TUNING}_family"]
+    assert (held_fam["right"], held_fam["changes"], held_fam["false"], held_fam["controls"]) == (1, 2, 1, 1)
+    assert (held_fam["right_high"], held_fam["n_high"]) == (1, 2)   # the right gain at 1.0, the false one at 0.95
+    assert (tuning_fam["changes"], tuning_fam["controls"], tuning_fam["n_high"]) == (0, 1, 0)
     runs[0]["evidence"], runs[1]["evidence"] = 250.0, 4.0
     ev = {r["bin"]: r for r in ds.evidence_rows(runs)}
     assert set(ev) == {"[0, 10)", "[100, inf)"}   # runs without an evidence are left out

@@ -148,7 +148,7 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
         run["refused"] = str(exc)
         run["seconds"] = time.perf_counter() - t0
         return run
-    start = float(data["time"].iloc[0])
+    start = diagnosis.start_s
     plant = nominal_model({**spec, "process": fam.plant_process(spec)})
 
     def standing_named(f) -> bool:   # a hand-written model's own error, named from the first row

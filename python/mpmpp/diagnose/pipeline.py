@@ -235,7 +235,7 @@ def _with_later_changes(first: DiagnoseResult, model, data, train_end_s: float |
     ``train_end_s``), the findings of a second pass against the model with them applied whose
     onset lies inside the record: the changes the standing error hid. Every finding keeps the
     figures of its own pass; the second pass's errors before are those of the corrected model."""
-    start = first.time_s[0] if train_end_s is None else first.time_s[np.searchsorted(first.time_s, train_end_s)]
+    start = first.start_s
     standing = [f for f in first.findings if f.effect in LINEAR_CHANNEL_EFFECTS and f.onset_s <= start]
     if not standing:
         return first

@@ -126,6 +126,13 @@ class DiagnoseResult:
     # of the search the data were too short for)
     notes: list[str] = field(default_factory=list)
 
+    @property
+    def start_s(self) -> float:
+        """The first row diagnosed (the record's, or the first at or after ``train_end_s``): a
+        finding with this onset is present from the start, the model's own error."""
+        first = 0 if self.train_end_s is None else int(np.searchsorted(self.time_s, self.train_end_s))
+        return float(self.time_s[first])
+
     def to_dict(self) -> dict:
         d = {"findings": [f.to_dict() for f in self.findings]}
         if self.notes:

@@ -102,6 +102,8 @@ void bind_detector(py::module_& m) {
       .def_readwrite("pooled_windows", &DetectorConfig::pooled_windows)
       .def_readwrite("absent_channels", &DetectorConfig::absent_channels)
       .def_readwrite("absent_significance", &DetectorConfig::absent_significance)
+      .def_readwrite("model_reference_significance", &DetectorConfig::model_reference_significance)
+      .def_readwrite("training_confirmation", &DetectorConfig::training_confirmation)
       .def_readwrite("noise_significance", &DetectorConfig::noise_significance)
       .def_property(
           "noise_test",
@@ -177,6 +179,8 @@ void bind_detector(py::module_& m) {
       .def_readwrite("reference_covariance", &ChannelScorer::reference_covariance)
       .def_readwrite("mean_covariance", &ChannelScorer::mean_covariance)
       .def_readwrite("significance", &ChannelScorer::significance)
+      .def_readwrite("confirmation", &ChannelScorer::confirmation)
+      .def_readwrite("model_p_value", &ChannelScorer::model_p_value)
       .def_readwrite("support_vectors", &ChannelScorer::support_vectors)
       .def_readwrite("dual_coef", &ChannelScorer::dual_coef)
       .def_readwrite("offset", &ChannelScorer::offset)

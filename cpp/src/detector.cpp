@@ -62,8 +62,11 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x) const {
 double ChannelScorer::wald_log_p_value(
     const Eigen::Ref<const Eigen::VectorXd>& x,
     const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const {
-  const Eigen::VectorXd deviation = x - feature_mean;
-  const Eigen::MatrixXd S = window_covariance + mean_covariance;
+  return mpmpp::wald_log_p_value(x - feature_mean, window_covariance + mean_covariance);
+}
+
+double wald_log_p_value(const Eigen::Ref<const Eigen::VectorXd>& deviation,
+                        const Eigen::Ref<const Eigen::MatrixXd>& S) {
   // In correlation form, so that the rank cut does not depend on the directions' units (a
   // direction without variance drops out).
   const Eigen::Index n = deviation.size();
@@ -74,7 +77,7 @@ double ChannelScorer::wald_log_p_value(
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(R);
   if (eig.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
   const Eigen::VectorXd& lambda = eig.eigenvalues();
-  const double cut = kWaldRankTolerance * lambda.maxCoeff();
+  const double cut = ChannelScorer::kWaldRankTolerance * lambda.maxCoeff();
   double T = 0;
   int dof = 0;
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -92,8 +95,14 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
       (window_covariance.rows() != x.size() || window_covariance.cols() != x.size()))
     throw InputError("detector: the window covariance must be " + std::to_string(x.size()) + " x " +
                      std::to_string(x.size()));
-  if (significance > 0)
-    return (wald_log_p_value(x, window_covariance) - std::log(significance)) / std::log(10.0);
+  if (significance > 0) {
+    const double training = wald_log_p_value(x, window_covariance) - std::log(significance);
+    if (!(confirmation > 0)) return training / std::log(10.0);
+    const double model = mpmpp::wald_log_p_value(x, window_covariance) - std::log(significance);
+    const double confirmed = training + std::log(significance) - std::log(confirmation);
+    if (std::isnan(model) || std::isnan(confirmed)) return std::numeric_limits<double>::quiet_NaN();
+    return std::max(model, confirmed) / std::log(10.0);
+  }
   Eigen::VectorXd deviation = x - feature_mean;
   if (reference_covariance.size() != 0) {
     Eigen::MatrixXd reference_root, window_inverse_root;
@@ -159,6 +168,9 @@ void ChannelScorer::validate(int feature_length, const std::string& where) const
        !mean_covariance.isApprox(mean_covariance.transpose())))
     fail("mean_covariance must be empty or, with reference_covariance, a finite symmetric " +
          std::to_string(feature_length) + " x " + std::to_string(feature_length) + " matrix");
+  if (!(confirmation >= 0 && confirmation <= 1))
+    fail("confirmation must be in [0, 1] (0 = the training mean alone)");
+  if (confirmation > 0 && !(significance > 0)) fail("confirmation needs a Wald-test channel");
   if (significance > 0) {
     if (!(significance < 1)) fail("significance must be in (0, 1)");
     if (reference_covariance.size() == 0 || mean_covariance.size() == 0)
@@ -417,6 +429,8 @@ std::string Detector::to_json() const {
     jc["reference_covariance"] = rows_json(s.reference_covariance);
     jc["mean_covariance"] = rows_json(s.mean_covariance);
     jc["significance"] = s.significance;
+    jc["confirmation"] = s.confirmation;
+    jc["model_p_value"] = s.model_p_value < 0 ? json(nullptr) : json(s.model_p_value);
     jc["svm"] = s.significance > 0 ? json(nullptr)
                                    : json{{"kernel_scale", s.kernel_scale},
                                           {"nu", s.nu},
@@ -504,6 +518,11 @@ Detector Detector::from_json(const std::string& text, const std::string& source)
     if (version >= 4)  // earlier files predate it: the training mean taken as exact
       s.mean_covariance =
           rd.matrix(rd.field(c, p, "mean_covariance"), p + ".mean_covariance", m, false);
+    if (version >= 10) {  // earlier files predate it: the training mean alone
+      s.confirmation = rd.number(rd.field(c, p, "confirmation"), p + ".confirmation");
+      const json& mp = rd.field(c, p, "model_p_value");
+      s.model_p_value = mp.is_null() ? -1.0 : rd.number(mp, p + ".model_p_value");
+    }
     scorers.push_back(std::move(s));
   }
   try {

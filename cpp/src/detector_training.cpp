@@ -9,6 +9,7 @@
 
 #include "mpmpp/error.hpp"
 #include "mpmpp/resampling.hpp"
+#include "mpmpp/window_pooling.hpp"
 
 namespace mpmpp {
 namespace {
@@ -62,6 +63,32 @@ std::string format_seconds(double s) {
   std::ostringstream out;
   out << s;
   return out.str();
+}
+
+// p of channel k's training against the model (DetectorConfig::model_reference_significance):
+// its coefficients pooled over the disjoint training windows ending at the last one, every
+// `lag` windows back (the windows a monitored window is pooled with, window_pooling.hpp), and
+// Wald-tested against beta = 0. Pooled rather than the plain training mean: in a loop excited
+// by a few setpoint steps the windows' precisions differ by orders of magnitude, and the plain
+// mean's variance, set by the average window, hides a model error the pooled windows resolve.
+// -1 when no training window is usable for the channel.
+double training_model_p_value(const WindowFeatures::Series& series, int k,
+                              const std::vector<int>& train, int lag) {
+  const Eigen::Index d = series.features[k].cols();
+  std::vector<Eigen::VectorXd> xs;
+  std::vector<Eigen::MatrixXd> cs;
+  for (int w = train.back(); w >= 0; w -= lag) {
+    if (!std::binary_search(train.begin(), train.end(), w)) continue;
+    const Eigen::VectorXd x = series.features[k].row(w).transpose();
+    const Eigen::VectorXd c = series.covariances[k].row(w).transpose();
+    if (!x.allFinite() || !c.allFinite()) continue;
+    xs.push_back(x);
+    cs.push_back(Eigen::Map<const RowMatrixXd>(c.data(), d, d));
+  }
+  if (xs.empty()) return -1.0;
+  const PooledEstimate pooled = pool_estimates(xs, cs);
+  const double log_p = wald_log_p_value(pooled.mean, pooled.covariance);
+  return std::isnan(log_p) ? -1.0 : std::exp(log_p);
 }
 
 }  // namespace
@@ -377,8 +404,16 @@ Detector train_detector(const Model& model, const DetectorConfig& config,
     scorers.push_back(
         train_channel_scorer(X, config, channel_seed(config.seed, static_cast<int>(k)), covariances,
                              channels[k].kind == MonitoredChannel::Kind::Noise, ratio));
+    ChannelScorer& s = scorers.back();
     if (!channels[k].in_model && config.absent_significance > 0)
-      scorers.back().significance = config.absent_significance;
+      s.significance = config.absent_significance;
+    if (config.model_reference_significance > 0 && s.significance > 0 &&
+        channels[k].kind == MonitoredChannel::Kind::Process) {
+      s.model_p_value = training_model_p_value(series, static_cast<int>(k), train,
+                                               config.pooling_lag(model.sample_time_s));
+      if (s.model_p_value > config.model_reference_significance)
+        s.confirmation = config.training_confirmation;
+    }
   }
   return Detector(model, config, train_end_s, std::move(scorers));
 }

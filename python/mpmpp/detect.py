@@ -121,6 +121,23 @@ def _channel_dicts(model, core_channels):
     return out
 
 
+STANDING_ERROR_P = 1e-3
+
+
+def _reference_notes(core: _core.Detector) -> list:
+    """A note per channel whose training data reject the model (DetectorConfig::
+    model_reference_significance): the model is off already there, and the channel is judged
+    against the training alone. Noted only at p < STANDING_ERROR_P: at the gate's own 5 % level
+    one exact channel in twenty would be, one MIMO run in three with nine channels (the
+    detector file and DetectionResult.training keep every channel's p)."""
+    channels = _channel_dicts(core.model, _core.WindowFeatures(core.model, core.config).channels)
+    return [f"{channel_label(c)}: the training data reject the model (Wald test p = {s.model_p_value:.2g}); "
+            "judged against the training alone, so an MPM alarm means a change since training "
+            "(mpmpp diagnose names the standing error)"
+            for c, s in zip(channels, core.scorers)
+            if 0 <= s.model_p_value < STANDING_ERROR_P and s.confirmation == 0]
+
+
 def channel_label(channel: dict) -> str:
     """G[y <- u] for a process channel, H[y] for a noise channel."""
     return _core.channel_label(channel["output"], channel.get("input", "") if channel["kind"] == "process" else "")
@@ -213,8 +230,8 @@ class Detector:
             _check_record(config, model.sample_time_s, time_s, float(train_end_s))
         config, notes = _cover_disturbance(config, model, time_s, u, y, float(train_end_s))
         series = _core.WindowFeatures(model, config).extract_series(time_s, u, y)
-        notes = timing + notes
-        return cls(_core.train_detector(model, config, series, float(train_end_s)), notes), series
+        core = _core.train_detector(model, config, series, float(train_end_s))
+        return cls(core, timing + notes + _reference_notes(core)), series
 
     def monitor(self, data: pd.DataFrame) -> DetectionResult:
         time_s, u, y = _arrays(self.model, data)
@@ -229,7 +246,9 @@ class Detector:
         for k, _, start in r.alarms:
             alarms.append({**channels[k], "start_s": float(start), "channel": int(k)})
         training = [{"windows": s.training_windows, "outlier_fraction": s.outlier_fraction,
-                     "cv_accuracy": None if s.cv_accuracy < 0 else s.cv_accuracy} for s in self._core.scorers]
+                     "cv_accuracy": None if s.cv_accuracy < 0 else s.cv_accuracy,
+                     "model_p_value": None if s.model_p_value < 0 else s.model_p_value,
+                     "model_reference": s.confirmation > 0} for s in self._core.scorers]
         return DetectionResult(train_end_s=self.train_end_s, threshold=self.config.threshold, channels=channels,
                                windows=windows, scores=np.asarray(r.scores), indicator=np.asarray(r.indicator),
                                alarms=alarms, training=training, notes=self.notes, core=(self._core, r))

@@ -167,6 +167,39 @@ TEST(Detector, MeanCovarianceAddsToTheWindowCovariance) {
   EXPECT_THROW(asymmetric.validate(2, "channel"), InputError);
 }
 
+// The model as reference (ChannelScorer::confirmation): score = log10 max(p_0 / level,
+// p / confirmation), p_0 of x ~ N(0, C) and p of x - mean ~ N(0, C + C_mean). One coefficient,
+// C = C_mean = 1, mean 0.5: chi-square(1) tails are erfc(|z| / sqrt 2), analytic.
+TEST(Detector, ModelReferenceIsAnIntersectionUnionTest) {
+  ChannelScorer s;
+  s.feature_mean = Eigen::VectorXd::Constant(1, 0.5);
+  s.feature_scale = Eigen::VectorXd::Ones(1);
+  s.reference_covariance = Eigen::MatrixXd::Constant(1, 1, 2.0);
+  s.mean_covariance = Eigen::MatrixXd::Ones(1, 1);
+  s.significance = 0.01;
+  ChannelScorer referenced = s;
+  referenced.confirmation = 0.5;
+  referenced.validate(1, "channel");
+  const Eigen::MatrixXd C = Eigen::MatrixXd::Ones(1, 1);
+  auto tail = [](double z) { return std::erfc(std::abs(z) / std::sqrt(2.0)); };
+  for (double x : {0.6, 3.0, 8.0}) {
+    const double p0 = tail(x), p = tail((x - 0.5) / std::sqrt(2.0));
+    const Eigen::VectorXd v = Eigen::VectorXd::Constant(1, x);
+    EXPECT_NEAR(s.score(v, C), std::log10(p / 0.01), 1e-9) << x;
+    EXPECT_NEAR(referenced.score(v, C), std::log10(std::max(p0 / 0.01, p / 0.5)), 1e-9) << x;
+  }
+  // x = 3: the model rejects (p_0 = 0.0027) but the training does not (p = 0.077 > 0.01),
+  // and with the confirmation at 0.5 the window is negative.
+  EXPECT_GT(s.score(Eigen::VectorXd::Constant(1, 3.0), C), 0);
+  EXPECT_LT(referenced.score(Eigen::VectorXd::Constant(1, 3.0), C), 0);
+  ChannelScorer svm = referenced;
+  svm.significance = 0;  // the SVM path has no model reference
+  EXPECT_THROW(svm.validate(1, "channel"), InputError);
+  ChannelScorer over = referenced;
+  over.confirmation = 1.5;
+  EXPECT_THROW(over.validate(1, "channel"), InputError);
+}
+
 // Resampling::Estimator: the window's deviation is carried into the training precision,
 // x <- mean + C_ref^1/2 C^-1/2 (x - mean). Analytic cases: C = C_ref is the identity map,
 // C = C_ref / 4 doubles the deviation; and the file keeps C_ref exactly.

@@ -47,6 +47,7 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
     c->window_significance = 0.001;
     c->absent_channels = 2;  // the channels the model lacks, at a third of mimo's level
     c->absent_significance = 3e-4;
+    c->model_reference_significance = 0.05;  // the model as reference where the training agrees
   }
   pap_siso.pooled_windows = 3;  // three disjoint windows pooled, at a level of 0.01
   pap_siso.window_significance = 0.01;
@@ -116,5 +117,8 @@ TEST(DetectorConfig, BadFieldsNameTheField) {
   expect_msg(R"({"noise_significance": 1})", "noise_significance");
   expect_msg(R"({"preset": "mimo", "absent_channels": -1})", "absent_channels");
   expect_msg(R"({"preset": "mimo", "absent_significance": 1})", "absent_significance");
+  expect_msg(R"({"preset": "mimo", "model_reference_significance": 1})",
+             "model_reference_significance");
+  expect_msg(R"({"preset": "mimo", "training_confirmation": 0})", "training_confirmation");
   EXPECT_THROW(DetectorConfig::paper_siso().window_samples(7.0), mpmpp::InputError);
 }

@@ -1,7 +1,9 @@
 """Pooled residual Wald test (config pooled_windows, cpp/include/mpmpp/window_pooling.hpp): each
-monitored window's coefficients are pooled with those of the disjoint windows before it. The
-scores against a plain NumPy implementation of the same equations on the detector's own window
-estimates, and the streaming detector (with a checkpoint in the middle) against the batch path."""
+monitored window's coefficients are pooled with those of the disjoint windows before it; where
+the training agrees with the model (model_reference_significance) the window is judged against
+the model and the training mean together (ChannelScorer::confirmation). The scores against a
+plain NumPy implementation of the same equations on the detector's own window estimates, and
+the streaming detector (with a checkpoint in the middle) against the batch path."""
 import numpy as np
 import pytest
 from scipy.stats import chi2
@@ -30,14 +32,33 @@ def pooled(estimates, covariances):
     return scale * mean, scale[:, None] * cov * scale[None, :]
 
 
-def wald_score(x, cov, mean, mean_cov, level):
-    """log10(p / level) of the Wald test of x against the training mean (correlation form)."""
-    s = cov + mean_cov
+def wald_log10_p(deviation, s):
+    """log10 p of the Wald test of deviation ~ N(0, s) (correlation form)."""
     inv = 1.0 / np.sqrt(np.diag(s))
     lam, v = np.linalg.eigh(inv[:, None] * s * inv[None, :])
     keep = lam > RANK_TOLERANCE * lam.max()
-    t = np.sum((v[:, keep].T @ (inv * (x - mean))) ** 2 / lam[keep])
-    return (chi2.logsf(t, keep.sum()) - np.log(level)) / np.log(10)
+    t = np.sum((v[:, keep].T @ (inv * deviation)) ** 2 / lam[keep])
+    return chi2.logsf(t, keep.sum()) / np.log(10)
+
+
+def wald_score(x, cov, mean, mean_cov, level, confirmation=0.0):
+    """log10(p / level) of the Wald test of x against the training mean; with a confirmation,
+    the intersection-union test with the one against the model (beta = 0, no reference
+    variance): log10 max(p_0 / level, p / confirmation)."""
+    training = wald_log10_p(x - mean, cov + mean_cov)
+    if confirmation == 0:
+        return training - np.log10(level)
+    return max(wald_log10_p(x, cov) - np.log10(level), training - np.log10(confirmation))
+
+
+def training_model_p(features, covs, training, lag):
+    """p of the training's coefficients, pooled over the disjoint windows ending at its last
+    one, against the model (beta = 0)."""
+    d = features.shape[1]
+    last = np.flatnonzero(training)[-1]
+    members = [w for w in range(last, -1, -lag) if np.all(np.isfinite(features[w]))]
+    x, c = pooled([features[w] for w in members], [covs[w].reshape(d, d) for w in members])
+    return 10 ** wald_log10_p(x, c)
 
 
 @pytest.fixture(scope="module")
@@ -60,12 +81,17 @@ def test_scores_match_numpy(loop, pooled_windows):
     features, covs = np.asarray(series.features[k]), np.asarray(series.covariances[k])
     d = features.shape[1]
     checked = 0
-    for w in np.flatnonzero(~result.windows["training"].to_numpy()):
+    training = result.windows["training"].to_numpy()
+    model_p = training_model_p(features, covs, training, lag)
+    assert scorer.model_p_value == pytest.approx(model_p, rel=1e-6)
+    assert model_p > detector.config.model_reference_significance  # the exact model: judged against it
+    assert scorer.confirmation == detector.config.training_confirmation
+    for w in np.flatnonzero(~training):
         members = [w - m * lag for m in range(pooled_windows) if w - m * lag >= 0]
         members = [m for m in members if np.all(np.isfinite(features[m]))]
         x, c = pooled([features[m] for m in members], [covs[m].reshape(d, d) for m in members])
         expected = wald_score(x, c, np.asarray(scorer.feature_mean), np.asarray(scorer.mean_covariance),
-                              detector.config.window_significance)
+                              detector.config.window_significance, scorer.confirmation)
         assert result.scores[w, k] == pytest.approx(expected, rel=1e-6, abs=1e-6)
         checked += len(members) == pooled_windows
     assert checked > 10  # most windows pooled the full count

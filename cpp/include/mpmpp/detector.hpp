@@ -31,6 +31,12 @@ namespace mpmpp {
 // l) (eq. 20 in the paper's scaling: same sign as scikit-learn's decision_function), with D =
 // feature_decorrelation (lower triangular, the inverse Cholesky factor of the resampled
 // coefficients' correlation matrix, Resampling::Covariance) or the identity when it is empty.
+// log p of the Wald test of `deviation` ~ N(0, covariance): T = deviation' covariance^+
+// deviation against chi-square(rank), the pseudo-inverse and rank taken in correlation form
+// with ChannelScorer::kWaldRankTolerance; NaN when no direction has variance.
+double wald_log_p_value(const Eigen::Ref<const Eigen::VectorXd>& deviation,
+                        const Eigen::Ref<const Eigen::MatrixXd>& covariance);
+
 struct ChannelScorer {
   Eigen::VectorXd feature_mean, feature_scale;
   Eigen::MatrixXd feature_decorrelation;  // empty or m x m
@@ -71,7 +77,18 @@ struct ChannelScorer {
   // (A union of nested gain / gain-and-dead-time / full tests with a Bonferroni correction
   // was tried: tuning families, seeds 0-19, it detected fewer changes, 15/35 against 18/35.)
   double significance = 0;
+  // Wald-test process channels whose training agreed with the model
+  // (DetectorConfig::model_reference_significance; else 0): the window is also tested against
+  // the model, beta = 0 with no reference variance, T_0 = x' C^+ x. Intersection-union test:
+  // the window is negative only when both reject, p_0 < significance and p < confirmation, so
+  // its score is log10 max(p_0 / significance, p / confirmation). The model as reference adds
+  // the power the training mean's variance takes; the confirmation keeps an alarm a change
+  // since training (a model error the training could not resolve stays out of it).
+  double confirmation = 0;
+  // Training report: p of the training's pooled coefficients against the model (-1: not tested).
+  double model_p_value = -1;
   static constexpr double kWaldRankTolerance = 1e-9;  // eigenvalues of the correlation form
+  // log p of the Wald test of x against feature_mean (covariance window + mean_covariance).
   double wald_log_p_value(const Eigen::Ref<const Eigen::VectorXd>& x,
                           const Eigen::Ref<const Eigen::MatrixXd>& window_covariance) const;
 
@@ -162,7 +179,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 9;  // history in CHANGELOG.md, "File formats"
+  static constexpr int kFormatVersion = 10;  // history in CHANGELOG.md, "File formats"
 
  private:
   Model model_;

@@ -119,6 +119,17 @@ struct DetectorConfig {
   int absent_channels = 0;
   // The absent channels' window level; 0 = window_significance.
   double absent_significance = 0.0;
+  // Residual: when > 0, a process channel whose training agrees with the model is judged
+  // against the model itself as well as against the training mean. Agreement: the channel's
+  // coefficients pooled over the disjoint training windows that end at the training's last
+  // window (window_pooling.hpp), Wald-tested against beta = 0 (the model), give p above this.
+  // Such a channel's window is negative only when both tests reject: the one against the model
+  // (no reference variance) at the window level and the one against the training mean at
+  // training_confirmation (ChannelScorer::confirmation). 0 = the training mean alone (the
+  // paper's reference: normal is what the training saw). The SVM process test has no such
+  // reference, so with it this is not used.
+  double model_reference_significance = 0.0;
+  double training_confirmation = 0.5;
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the
   // choices the paper leaves open are documented next to their values in detector_config.cpp.

@@ -48,6 +48,7 @@ TEST(DetectorConfig, RecommendedPresetsDifferFromThePaperOnlyWhereDocumented) {
     c->absent_channels = 2;  // the channels the model lacks, at a third of mimo's level
     c->absent_significance = 3e-4;
     c->model_reference_significance = 0.05;  // the model as reference where the training agrees
+    c->training_confirmation = 0.05;
   }
   pap_siso.pooled_windows = 3;  // three disjoint windows pooled, at a level of 0.01
   pap_siso.window_significance = 0.01;

@@ -39,7 +39,7 @@ def test_exact_model_is_the_reference(loop):
     for k in _process(detector):
         s = detector._core.scorers[k]
         assert s.model_p_value > detector.config.model_reference_significance
-        assert s.confirmation == detector.config.training_confirmation == 0.5
+        assert s.confirmation == detector.config.training_confirmation == 0.05
 
 
 def test_a_model_the_training_disproves_keeps_the_training_mean(loop):
@@ -64,7 +64,7 @@ def test_intersection_union_is_never_more_negative_than_the_model_test(loop):
     spec, data = loop
     detector, series = Detector._train(_scaled_gain(spec, 1.05), data, None, "siso")
     k = _process(detector)[0]
-    assert detector._core.scorers[k].confirmation == 0.5
+    assert detector._core.scorers[k].confirmation == 0.05
     scorers = list(detector._core.scorers)
     alone = _core.ChannelScorer()  # a copy: the property's elements are the detector's own
     for field in ("feature_scale", "reference_covariance", "significance", "training_windows"):
@@ -89,7 +89,7 @@ def test_detector_file_keeps_the_reference_and_version_9_loads_without_it(loop, 
     again = _core.Detector.load(str(path))
     assert again.to_json() == detector._core.to_json()
     k = _process(detector)[0]
-    assert again.scorers[k].confirmation == 0.5
+    assert again.scorers[k].confirmation == 0.05
     doc = json.loads(path.read_text())
     doc["version"] = 9
     for c in doc["channels"]:

@@ -129,7 +129,7 @@ struct DetectorConfig {
   // paper's reference: normal is what the training saw). The SVM process test has no such
   // reference, so with it this is not used.
   double model_reference_significance = 0.0;
-  double training_confirmation = 0.5;
+  double training_confirmation = 0.05;
 
   // Table 1 (SISO MD example) and Table 3 (MIMO MD example), verbatim (alpha 1.5); the
   // choices the paper leaves open are documented next to their values in detector_config.cpp.

@@ -26,17 +26,17 @@
 
 namespace mpmpp {
 
-// The trained SVM of one channel and the standardisation of its features:
-// z = D ((x - feature_mean) / feature_scale),  h(x) = (sum_i dual_coef_i k(sv_i, z) - offset) / (nu
-// l) (eq. 20 in the paper's scaling: same sign as scikit-learn's decision_function), with D =
-// feature_decorrelation (lower triangular, the inverse Cholesky factor of the resampled
-// coefficients' correlation matrix, Resampling::Covariance) or the identity when it is empty.
 // log p of the Wald test of `deviation` ~ N(0, covariance): T = deviation' covariance^+
 // deviation against chi-square(rank), the pseudo-inverse and rank taken in correlation form
 // with ChannelScorer::kWaldRankTolerance; NaN when no direction has variance.
 double wald_log_p_value(const Eigen::Ref<const Eigen::VectorXd>& deviation,
                         const Eigen::Ref<const Eigen::MatrixXd>& covariance);
 
+// The trained SVM of one channel and the standardisation of its features:
+// z = D ((x - feature_mean) / feature_scale),  h(x) = (sum_i dual_coef_i k(sv_i, z) - offset) / (nu
+// l) (eq. 20 in the paper's scaling: same sign as scikit-learn's decision_function), with D =
+// feature_decorrelation (lower triangular, the inverse Cholesky factor of the resampled
+// coefficients' correlation matrix, Resampling::Covariance) or the identity when it is empty.
 struct ChannelScorer {
   Eigen::VectorXd feature_mean, feature_scale;
   Eigen::MatrixXd feature_decorrelation;  // empty or m x m

@@ -96,12 +96,12 @@ double ChannelScorer::score(const Eigen::Ref<const Eigen::VectorXd>& x,
     throw InputError("detector: the window covariance must be " + std::to_string(x.size()) + " x " +
                      std::to_string(x.size()));
   if (significance > 0) {
-    const double training = wald_log_p_value(x, window_covariance) - std::log(significance);
-    if (!(confirmation > 0)) return training / std::log(10.0);
-    const double model = mpmpp::wald_log_p_value(x, window_covariance) - std::log(significance);
-    const double confirmed = training + std::log(significance) - std::log(confirmation);
-    if (std::isnan(model) || std::isnan(confirmed)) return std::numeric_limits<double>::quiet_NaN();
-    return std::max(model, confirmed) / std::log(10.0);
+    const double log_p = wald_log_p_value(x, window_covariance);  // against the training mean
+    if (!(confirmation > 0)) return (log_p - std::log(significance)) / std::log(10.0);
+    const double log_p0 = mpmpp::wald_log_p_value(x, window_covariance);  // against the model
+    if (std::isnan(log_p) || std::isnan(log_p0)) return std::numeric_limits<double>::quiet_NaN();
+    return std::max(log_p0 - std::log(significance), log_p - std::log(confirmation)) /
+           std::log(10.0);
   }
   Eigen::VectorXd deviation = x - feature_mean;
   if (reference_covariance.size() != 0) {

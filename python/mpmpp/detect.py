@@ -124,13 +124,13 @@ def _channel_dicts(model, core_channels):
 STANDING_ERROR_P = 1e-3
 
 
-def _reference_notes(core: _core.Detector) -> list:
-    """A note per channel whose training data reject the model (DetectorConfig::
+def _reference_notes(core: _core.Detector, channels: list) -> list:
+    """A note per channel (``channels``: _channel_dicts of the detector's) whose training data
+    reject the model (DetectorConfig::
     model_reference_significance): the model is off already there, and the channel is judged
     against the training alone. Noted only at p < STANDING_ERROR_P: at the gate's own 5 % level
     one exact channel in twenty would be, one MIMO run in three with nine channels (the
     detector file and DetectionResult.training keep every channel's p)."""
-    channels = _channel_dicts(core.model, _core.WindowFeatures(core.model, core.config).channels)
     return [f"{channel_label(c)}: the training data reject the model (Wald test p = {s.model_p_value:.2g}); "
             "judged against the training alone, so an MPM alarm means a change since training "
             "(mpmpp diagnose names the standing error)"
@@ -229,9 +229,10 @@ class Detector:
         if monitored:
             _check_record(config, model.sample_time_s, time_s, float(train_end_s))
         config, notes = _cover_disturbance(config, model, time_s, u, y, float(train_end_s))
-        series = _core.WindowFeatures(model, config).extract_series(time_s, u, y)
+        features = _core.WindowFeatures(model, config)
+        series = features.extract_series(time_s, u, y)
         core = _core.train_detector(model, config, series, float(train_end_s))
-        return cls(core, timing + notes + _reference_notes(core)), series
+        return cls(core, timing + notes + _reference_notes(core, _channel_dicts(model, features.channels))), series
 
     def monitor(self, data: pd.DataFrame) -> DetectionResult:
         time_s, u, y = _arrays(self.model, data)

@@ -250,6 +250,8 @@ void DetectorConfig::validate() const {
     fail("noise_significance", "must be in [0, 1) (0 = window_significance)");
   if (laguerre_terms < 0) fail("laguerre_terms", "must be >= 0");
   if (residual_ar_order < 0) fail("residual_ar_order", "must be >= 0 (0 = arx_order_a)");
+  for (int order : residual_ar_orders)
+    if (order < 1) fail("residual_ar_orders", "entries must be >= 1");
   if (residual_steps < 0) fail("residual_steps", "must be >= 0 (0 = none)");
   if (!(step_significance > 0 && step_significance < 1))
     fail("step_significance", "must be in (0, 1)");
@@ -384,6 +386,7 @@ nlohmann::json config_to_json(const DetectorConfig& c) {
       {"noise_significance", c.noise_significance},
       {"laguerre_terms", c.laguerre_terms},
       {"residual_ar_order", c.residual_ar_order},
+      {"residual_ar_orders", c.residual_ar_orders},
       {"residual_steps", c.residual_steps},
       {"step_significance", c.step_significance},
       {"outlier_sigmas", c.outlier_sigmas},
@@ -471,7 +474,12 @@ DetectorConfig config_from_json(const nlohmann::json& j, const std::string& wher
       c.laguerre_terms = static_cast<int>(integer(key, v));
     else if (key == "residual_ar_order")
       c.residual_ar_order = static_cast<int>(integer(key, v));
-    else if (key == "residual_steps")
+    else if (key == "residual_ar_orders") {
+      if (!v.is_array()) throw InputError(where + ": residual_ar_orders must be an array");
+      c.residual_ar_orders.clear();
+      for (const auto& order : v)
+        c.residual_ar_orders.push_back(static_cast<int>(integer(key, order)));
+    } else if (key == "residual_steps")
       c.residual_steps = static_cast<int>(integer(key, v));
     else if (key == "step_significance")
       c.step_significance = number(key, v);

@@ -23,7 +23,7 @@ import pandas as pd
 
 from . import _core
 from ._core import DetectorConfig
-from .disturbance import describe, disturbance_orders
+from .disturbance import WHITENING_FLOOR, describe, disturbance_orders
 from .preset_timing import TIMING_FIELDS, fit_to_record, resolve_timing, span_text
 from .signals import through_actuators
 from .timeaxis import seconds_of
@@ -284,14 +284,21 @@ def record_span(time_s, sample_time_s: float) -> float:
 
 def _cover_disturbance(config: DetectorConfig, model, time_s, u, y, train_end_s: float):
     """(config, notes): the config with the ARX order raised to the disturbance models' AR order
-    where it falls short (mpmpp.disturbance), and a note per output whose disturbance model
-    was estimated from the training rows because the model file has none."""
+    where it falls short (mpmpp.disturbance), the residual test's whitening order per output set
+    to its disturbance's when the config leaves it open (``residual_ar_order`` 0), and a note per
+    output whose disturbance model was estimated from the training rows because the model file
+    has none."""
     orders = disturbance_orders(model, time_s, u, y, train_end_s, config.window_samples(model.sample_time_s))
     needed = max([config.arx_order_a] + [d.order for d in orders])
-    if needed != config.arx_order_a:
+    whitening = []
+    if str(config.process_test) == "residual" and config.residual_ar_order == 0 and not config.residual_ar_orders:
+        whitening = [needed if d.whitening is None else max(WHITENING_FLOOR, d.whitening) for d in orders]
+    if needed != config.arx_order_a or whitening:
         config = DetectorConfig.from_json(config.to_json())
         config.arx_order_a = needed
-    return config, [describe(d, needed) for d in orders if d.estimated]
+        config.residual_ar_orders = whitening
+    return config, [describe(d, needed, whitening[k] if whitening else None)
+                    for k, d in enumerate(orders) if d.estimated]
 
 
 def detect(model, data: pd.DataFrame, train_end_s: Optional[float] = None, config: ConfigLike = None,

@@ -16,6 +16,16 @@ disturbance model's AR order:
 
 Both are capped at ``MAX_ORDER`` and at one coefficient per ``WINDOW_ROWS_PER_COEFFICIENT``
 window samples, so a 2 h window at 60 s keeps the preset's order.
+
+The residual process test whitens each window's output error by an AR(p) refitted in the window
+(residual_regression.hpp). There p must not exceed what the disturbance needs: in closed loop
+without excitation a process change is predictable from the output error's own past, and an
+AR(18) absorbs most of it (docs/detection.md "The whitening order"). So every output, with or
+without a noise model in the file, also gets ``whitening``: the BIC order of its training
+output error (the model file's H is a claim; the training rows are the disturbance itself).
+``detect`` whitens by at least ``WHITENING_FLOOR`` coefficients: a disturbance that changes
+colour after training (a noise change) needs some room, or the colour left in the whitened
+error biases beta and passes for a process change.
 """
 from __future__ import annotations
 
@@ -31,6 +41,10 @@ from .signals import longest_run
 MAX_ORDER = 30
 WINDOW_ROWS_PER_COEFFICIENT = 24
 IMPULSE_TOLERANCE = 0.01
+# Chosen on the tuning families (docs/detection.md "The whitening order"): the BIC order alone
+# (often 0-1) let 25 of 210 forced noise changes raise an MPM alarm, at least 3 let 7 (the
+# AR(18) before: 4), at least 4 the same 7 with 2 fewer detections.
+WHITENING_FLOOR = 3
 
 
 @dataclass
@@ -42,6 +56,7 @@ class DisturbanceOrder:
     estimated: bool                 # True: fitted to the training rows (no noise model in the file)
     polynomial: np.ndarray = None   # A(q) = [1, a_1, ..., a_p] of the estimate; None when not estimable
     rows: int = 0                   # rows the estimate used (or had)
+    whitening: int | None = None    # BIC order of the training output error (every output); None when not estimable
 
 
 def inverse_order(h, cap: int) -> int:
@@ -78,42 +93,55 @@ def _settling_samples(row, length: int) -> int:
     return settle
 
 
+def _training_error_ar(model, i: int, train: np.ndarray, u: np.ndarray, y: np.ndarray, cap: int):
+    """(p, A, rows): the BIC-chosen AR of output i's error y_i - G_i u on the longest complete
+    stretch of the training rows, after G's settling time; (None, None, rows) when fewer than
+    10 rows per coefficient remain."""
+    name = model.outputs[i]
+    row = [model.process(name, j) for j in model.inputs]
+    used = [j for j, g in enumerate(row) if g is not None]
+    ok = train & np.isfinite(y[:, i]) & np.isfinite(u[:, used]).all(axis=1)
+    a, b = longest_run(ok)
+    begin = a + _settling_samples(row, b - a) + cap
+    if b - begin < 10 * cap:
+        return None, None, max(b - begin, 0)
+    # Deviations from the training operating point; G filters them from rest at row a.
+    du = u[a:b] - u[a:b].mean(axis=0)
+    dy = y[a:b, i] - y[a:b, i].mean()
+    v = np.asarray(_core.output_error(row, np.ascontiguousarray(dy), np.asfortranarray(du)), dtype=float).ravel()
+    order, poly = bic_ar(v, begin - a, b - a, cap)
+    return order, poly, b - begin
+
+
 def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, train_end_s: float,
                        window_samples: int) -> list[DisturbanceOrder]:
     """Per output, the AR order of its disturbance model: from the model file's H, or estimated
     (BIC) on the longest complete stretch of the training rows; order 0 without a polynomial
-    when fewer than 10 rows per coefficient remain after settling."""
+    when fewer than 10 rows per coefficient remain after settling. ``whitening`` is the
+    estimate's order for every output."""
     cap = max(1, min(MAX_ORDER, window_samples // WINDOW_ROWS_PER_COEFFICIENT))
     train = (time_s - time_s[0]) < train_end_s
     out = []
     for i, name in enumerate(model.outputs):
+        order, poly, rows = _training_error_ar(model, i, train, u, y, cap)
         h = model.noise(name)
         if has_noise_model(h):
-            out.append(DisturbanceOrder(name, inverse_order(h, cap), estimated=False))
-            continue
-        row = [model.process(name, j) for j in model.inputs]
-        used = [j for j, g in enumerate(row) if g is not None]
-        ok = train & np.isfinite(y[:, i]) & np.isfinite(u[:, used]).all(axis=1)
-        a, b = longest_run(ok)
-        begin = a + _settling_samples(row, b - a) + cap
-        if b - begin < 10 * cap:  # too short to estimate: the preset's order stands, and the note says why
-            out.append(DisturbanceOrder(name, 0, estimated=True, rows=max(b - begin, 0)))
-            continue
-        # Deviations from the training operating point; G filters them from rest at row a.
-        du = u[a:b] - u[a:b].mean(axis=0)
-        dy = y[a:b, i] - y[a:b, i].mean()
-        v = np.asarray(_core.output_error(row, np.ascontiguousarray(dy), np.asfortranarray(du)), dtype=float).ravel()
-        order, poly = bic_ar(v, begin - a, b - a, cap)
-        out.append(DisturbanceOrder(name, order, estimated=True, polynomial=poly, rows=b - begin))
+            out.append(DisturbanceOrder(name, inverse_order(h, cap), estimated=False, rows=rows, whitening=order))
+        else:  # the estimate; too short to estimate: order 0, the preset's order stands and the note says why
+            out.append(DisturbanceOrder(name, order or 0, estimated=True, polynomial=poly, rows=rows,
+                                        whitening=order))
     return out
 
 
-def describe(d: DisturbanceOrder, arx_order: int) -> str:
-    """One note line for an output without a noise model."""
+def describe(d: DisturbanceOrder, arx_order: int, whitening: int | None = None) -> str:
+    """One note line for an output without a noise model; ``whitening``: the residual test's
+    AR order for it (None: the ARX step's order n_a is the one that matters)."""
     if d.polynomial is None:
+        used = (f"the residual test whitens each window by the config's AR({whitening})" if whitening is not None
+                else f"the ARX order n_a = {arx_order} of the config stands")
         return (f"{d.output}: the model has no noise model, and the training period leaves {d.rows} complete "
-                f"rows after the process settles, too few to estimate one; the ARX order n_a = {arx_order} "
-                f"of the config stands")
+                f"rows after the process settles, too few to estimate one; {used}")
+    used = (f"the residual test whitens each window by an AR({whitening})" if whitening is not None
+            else f"the ARX order n_a = {arx_order} covers it")
     return (f"{d.output}: the model has no noise model; its disturbance model was estimated from "
-            f"{d.rows} training rows as H = 1/A(q), A the BIC-chosen AR({d.order}) of y - G u; "
-            f"the ARX order n_a = {arx_order} covers it")
+            f"{d.rows} training rows as H = 1/A(q), A the BIC-chosen AR({d.order}) of y - G u; {used}")

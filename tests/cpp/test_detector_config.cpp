@@ -1,9 +1,12 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "mpmpp/detector_config.hpp"
 #include "mpmpp/error.hpp"
+#include "mpmpp/window_features.hpp"
+#include "small_loop.hpp"
 
 using mpmpp::DetectorConfig;
 using mpmpp::NoiseTest;
@@ -82,6 +85,8 @@ TEST(DetectorConfig, JsonRoundTripAndPresetOverrides) {
   c.seed = 123456789012345ULL;
   auto back = DetectorConfig::from_json(c.to_json());
   EXPECT_EQ(back.to_json(), c.to_json());
+  c.residual_ar_orders = {3, 5};
+  EXPECT_EQ(DetectorConfig::from_json(c.to_json()).residual_ar_orders, (std::vector<int>{3, 5}));
   auto o = DetectorConfig::from_json(R"({"preset": "paper_mimo", "alpha": 2.0})");
   EXPECT_EQ(o.arx_order_a, 18);
   EXPECT_DOUBLE_EQ(o.alpha, 2.0);
@@ -121,5 +126,17 @@ TEST(DetectorConfig, BadFieldsNameTheField) {
   expect_msg(R"({"preset": "mimo", "model_reference_significance": 1})",
              "model_reference_significance");
   expect_msg(R"({"preset": "mimo", "training_confirmation": 0})", "training_confirmation");
+  expect_msg(R"({"preset": "siso", "residual_ar_orders": [3, 0]})", "residual_ar_orders");
+  expect_msg(R"({"preset": "siso", "residual_ar_orders": 3})", "residual_ar_orders");
+  // One whitening order per output of the model.
+  DetectorConfig two = DetectorConfig::siso();
+  two.residual_ar_orders = {3, 4};
+  try {
+    mpmpp::WindowFeatures(mpmpp::test_loops::small_siso_model(), two);
+    FAIL() << "no error for two whitening orders on one output";
+  } catch (const mpmpp::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("residual_ar_orders has 2 entries"), std::string::npos)
+        << e.what();
+  }
   EXPECT_THROW(DetectorConfig::paper_siso().window_samples(7.0), mpmpp::InputError);
 }

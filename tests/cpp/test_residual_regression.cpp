@@ -54,3 +54,39 @@ TEST(ResidualRegression, RefusesAWindowTooShortAndAnInputWithoutAChannel) {
   EXPECT_FALSE(r.estimate(s.y.col(0), s.u, beta, cov, &reason));
   EXPECT_NE(reason.find("too short"), std::string::npos);
 }
+
+// Pure feedback, no excitation: u(t) = -k y(t), white disturbance. When the plant's dead time
+// is two samples longer than the model's, the inputs are a filtered copy of the output error's
+// past, so a long whitening polynomial can predict dG u from v's own past and take the change
+// into the noise model; one near the disturbance's order cannot (docs/detection.md "The
+// whitening order"). With the model right, the short whitening leaves the test at its null.
+TEST(ResidualRegression, ALongWhiteningAbsorbsADeadTimeChangeUnderPureFeedback) {
+  const Model m = test_loops::small_siso_model(2);
+  const TransferFunction& g = *m.process[0][0];
+  const double b = g.num()[0], a = -g.den()[1];
+  auto wald = [&](int plant_delay, int order) {
+    const Eigen::Index n = 1440;  // a 2 h window at 5 s
+    std::mt19937_64 rng(11);
+    std::normal_distribution<double> e(0.0, 0.05);
+    Eigen::VectorXd y(n);
+    Eigen::MatrixXd u = Eigen::MatrixXd::Zero(n, 1);
+    double x = 0.0;  // the process part of y: b q^-d / (1 - a q^-1) u
+    for (Eigen::Index t = 0; t < n; ++t) {
+      x = a * x + (t >= plant_delay ? b * u(t - plant_delay, 0) : 0.0);
+      y[t] = x + e(rng);
+      u(t, 0) = -3.0 * y[t];
+    }
+    DetectorConfig c = DetectorConfig::siso();
+    c.residual_ar_orders = {order};
+    const ResidualRegression r(m, 0, {0}, c);
+    EXPECT_EQ(r.ar_order(), order);
+    std::vector<Eigen::VectorXd> beta;
+    std::vector<Eigen::MatrixXd> cov;
+    EXPECT_TRUE(r.estimate(y, u, beta, cov));
+    return beta[0].dot(cov[0].ldlt().solve(beta[0]));
+  };
+  const double changed_short = wald(g.delay() + 2, 3), changed_long = wald(g.delay() + 2, 18);
+  EXPECT_GT(changed_short, 100.0);                // measured 196
+  EXPECT_GT(changed_short, 20.0 * changed_long);  // measured 1.3 with AR(18)
+  EXPECT_LT(wald(g.delay(), 3), 22.5);            // chi-square(6) at 0.001
+}

@@ -96,7 +96,9 @@ def test_null_distribution_is_chi_square():
 
 def test_detect_alarms_on_the_appearing_coupling(coupling_run):
     """The coupling the model lacks raises an MPM alarm on its own channel after it appears and
-    none before; without absent channels the same run raises no MPM alarm at all."""
+    none before; without absent channels it reaches the test only through the modelled channel
+    of its output, later (measured 12.6 h against 12.9 h, the coupling from 11.5 h; no MPM
+    alarm at all with the AR(18) whitening used before 2026-11-29)."""
     spec, expect, model, data = coupling_run
     o, u = expect["absent_channel"]
     assert (o, u) not in model.channels()
@@ -110,7 +112,9 @@ def test_detect_alarms_on_the_appearing_coupling(coupling_run):
     doc = result.to_dict()
     assert {"kind": "process", "output": o, "input": u, "in_model": False} in doc["channels"]
     without = detect(model, data, config={"preset": "mimo", "absent_channels": 0})
-    assert not [a for a in without.alarms if a["kind"] == "process"]
+    late = [a for a in without.alarms if a["kind"] == "process"]
+    assert all(a["output"] == o and (o, a["input"]) in model.channels() and a["start_s"] - t0 > starts[0]
+               for a in late)
 
 
 def test_detector_file_and_stream_with_absent_channels(tmp_path, coupling_run):

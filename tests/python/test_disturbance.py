@@ -10,9 +10,9 @@ import pandas as pd
 from scipy.signal import lfilter
 
 import mpmpp
-from mpmpp import scenarios
-from mpmpp.detect import _arrays, _cover_disturbance, detect, make_config
-from mpmpp.disturbance import disturbance_orders, inverse_order
+from mpmpp import _core, scenarios
+from mpmpp.detect import Detector, _arrays, _cover_disturbance, detect, make_config
+from mpmpp.disturbance import WHITENING_FLOOR, disturbance_orders, inverse_order
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
 
@@ -29,10 +29,10 @@ def model(noise=None):
     return mpmpp.Model.from_json(json.dumps(doc), "test")
 
 
-def loop_data(n=6000, seed=1):
+def loop_data(n=6000, seed=1, ar=AR_TRUE):
     rng = np.random.default_rng(seed)
     u = 3.0 + np.repeat(rng.normal(0, 1, n // 40 + 1), 40)[:n]
-    v = lfilter([1.0], AR_TRUE, rng.normal(0, 0.1, n))
+    v = lfilter([1.0], ar, rng.normal(0, 0.1, n))
     g = lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, u - u.mean())
     return pd.DataFrame({"time": TS * np.arange(n), "u": u, "y": 10.0 + g + v})
 
@@ -94,6 +94,49 @@ def test_detect_says_when_it_estimated_the_disturbance_model(tmp_path):
     assert json.loads(path.read_text())["notes"] == plain.notes
     given = detect(model({"num": [1.0], "den": [1.0, -1.2, 0.5]}), data, 3 * 3600.0, "paper_siso")
     assert given.notes == [] and given.to_dict()["notes"] == []
+
+
+AR_FOURTH = np.poly([0.9, -0.8, 0.6 + 0.5j, 0.6 - 0.5j]).real
+
+
+def test_the_residual_test_whitens_by_the_training_error_order_at_least_the_floor(tmp_path):
+    """Every output's whitening order is the BIC order of its training output error (a noise
+    model in the file does not set it), at least WHITENING_FLOOR; explicit orders and the SVM
+    presets are left alone; the orders travel in the detector file, whose version 10 loads
+    without them."""
+    cases = {"AR(2)": (AR_TRUE, WHITENING_FLOOR), "AR(4)": (AR_FOURTH, 4)}
+    for label, (poly, expected) in cases.items():
+        data = loop_data(ar=poly)
+        t, u, y = _arrays(model(), data)
+        claimed = model({"num": [1.0], "den": [1.0, -0.5]})   # 1/H = 1 - 0.5 q^-1: order 1
+        (d,) = disturbance_orders(claimed, t, u, y, 5000 * TS, 1440)
+        rows = 5000
+        v = (y[:rows, 0] - y[:rows, 0].mean()) - lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN,
+                                                        u[:rows, 0] - u[:rows, 0].mean())
+        p, _ = numpy_bic_ar(v, rows - d.rows, rows, min(30, 1440 // 24))
+        assert (d.order, d.whitening) == (1, p) and p == len(poly) - 1, label
+        config, _ = _cover_disturbance(make_config("siso"), claimed, t, u, y, 5000 * TS)
+        assert config.residual_ar_orders == [expected], label
+    for given in ({"preset": "siso", "residual_ar_order": 5}, "paper_siso"):
+        config, _ = _cover_disturbance(make_config(given), claimed, t, u, y, 5000 * TS)
+        assert config.residual_ar_orders == []
+    _, notes = _cover_disturbance(make_config("siso"), model(), t, u, y, 5000 * TS)
+    assert notes[0].endswith("A the BIC-chosen AR(4) of y - G u; the residual test whitens each window by an AR(4)")
+    _, det = detect(model(), data, 3 * 3600.0, "siso", return_detector=True)
+    assert det._core.config.residual_ar_orders == [4]
+    path = tmp_path / "d.json"
+    det.save(path)
+    assert json.loads(path.read_text())["config"]["residual_ar_orders"] == [4]
+    # A version 10 file whitened every output by n_a (9 here): without the key it still does.
+    _, det = detect(model(), data, 3 * 3600.0, {"preset": "siso", "residual_ar_orders": [9]}, return_detector=True)
+    det.save(path)
+    doc = json.loads(path.read_text())
+    assert doc["version"] == 11
+    doc["version"] = 10
+    del doc["config"]["residual_ar_orders"]
+    old = _core.Detector.from_json(json.dumps(doc), "v10.json")
+    assert old.config.residual_ar_orders == [] and old.config.arx_order_a == 9
+    np.testing.assert_array_equal(Detector(old).monitor(data).scores, det.monitor(data).scores)
 
 
 def test_too_few_training_rows_keep_the_config_order_and_say_so():

@@ -59,10 +59,11 @@ def test_a_model_the_training_disproves_keeps_the_training_mean(loop):
 def test_intersection_union_is_never_more_negative_than_the_model_test(loop):
     """The confirmation can only keep a window from being negative: with it, a window's score
     is at least that of the test against the model alone (feature_mean and mean_covariance
-    zeroed, confirmation off). A gain written 5 % high: the training does not reject it
-    (p = 0.08), the windows against the model do, and the confirmation keeps them normal."""
+    zeroed, confirmation off). A gain written 4 % high: the training does not reject it
+    (p = 0.16), half the windows against the model do, and the confirmation keeps them normal
+    (5 % high, the training rejects it since the whitening follows the disturbance's order)."""
     spec, data = loop
-    detector, series = Detector._train(_scaled_gain(spec, 1.05), data, None, "siso")
+    detector, series = Detector._train(_scaled_gain(spec, 1.04), data, None, "siso")
     k = _process(detector)[0]
     assert detector._core.scorers[k].confirmation == 0.05
     scorers = list(detector._core.scorers)
@@ -78,7 +79,7 @@ def test_intersection_union_is_never_more_negative_than_the_model_test(loop):
     monitored = ~np.asarray(both.training)
     a, b = np.asarray(model_only.scores)[monitored, k], np.asarray(both.scores)[monitored, k]
     assert np.all(b >= a - 1e-12)
-    assert np.mean(a < 0) > 0.5 and not np.any(b < 0)  # no window negative with the confirmation
+    assert np.mean(a < 0) >= 0.4 and not np.any(b < 0)  # no window negative with the confirmation
 
 
 def test_detector_file_keeps_the_reference_and_version_9_loads_without_it(loop, tmp_path):

@@ -27,12 +27,13 @@ def test_only_noise_alarms_without_an_mpm_alarm_on_the_output_are_checked():
 
 
 def test_a_process_change_read_as_a_noise_change_is_named():
-    """mpc_siso_disturbed seed 3 (tuning family; detection study seeds 0-19): a time constant
-    x 2, the siso preset raises a noise alarm on y1 and no MPM alarm; diagnose names the change.
-    (mpc_siso seed 348, the example before, is now detected by the MPM test itself since the
-    model is the reference where the training agrees with it.)"""
-    spec, expect = families.family("mpc_siso_disturbed").draw(3)
-    assert (expect["effect"], expect["size"]) == ("time_constant", 2.0)
+    """mpc_siso_1s seed 11 (tuning family; detection study seeds 0-19): a time constant x 0.33
+    at 2 s sampling, the siso preset raises a noise alarm on y1 and no MPM alarm; diagnose names
+    the change. (The examples before, mpc_siso seed 348 and mpc_siso_disturbed seed 3, are now
+    detected by the MPM test itself: the model as reference, then the whitening at the
+    disturbance's order.)"""
+    spec, expect = families.family("mpc_siso_1s").draw(11)
+    assert (expect["effect"], expect["size"]) == ("time_constant", 0.33)
     model, data = nominal_model(spec), simulate(spec)
     result = detect(model, data, config="siso")
     assert not [a for a in result.alarms if a["kind"] == "process"]
@@ -60,7 +61,7 @@ def test_detect_command_prints_the_check_and_writes_it_in_json(tmp_path, capsys)
     from mpmpp.cli import main
 
     data, model = tmp_path / "d.csv", tmp_path / "m.json"
-    assert main(["simulate", "--family", "mpc_siso_disturbed", "--seed", "3", "-o", str(data),
+    assert main(["simulate", "--family", "mpc_siso_1s", "--seed", "11", "-o", str(data),
                  "--write-model", str(model)]) == 0
     capsys.readouterr()
     assert main(["detect", str(model), str(data)]) == 0

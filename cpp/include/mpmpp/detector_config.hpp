@@ -93,8 +93,17 @@ struct DetectorConfig {
   double window_significance = 0.01;  // Residual: a window is negative when its Wald p < this
   // Wald noise channels' window level (NoiseTest::Wald / Residual); 0 = window_significance.
   double noise_significance = 0.0;
-  int laguerre_terms = 3;     // Residual: Laguerre directions per channel
-  int residual_ar_order = 0;  // Residual: order of the whitening A(q); 0 = arx_order_a
+  int laguerre_terms = 3;  // Residual: Laguerre directions per channel
+  // Residual: order of the whitening A(q) for every output; 0 = arx_order_a, unless
+  // residual_ar_orders is given.
+  int residual_ar_order = 0;
+  // Residual: the whitening order per output (one entry per model output), overriding
+  // residual_ar_order. mpmpp.detect sets it from the training when residual_ar_order is 0 (the
+  // presets): each output's disturbance order, by BIC on its training output error, at least 3
+  // (python/mpmpp/disturbance.py). A whitening longer than the disturbance needs lets A(q)
+  // absorb a process change, which under feedback alone is predictable from the output error's
+  // past (docs/detection.md "The whitening order"). Empty = residual_ar_order.
+  std::vector<int> residual_ar_orders;
   // Residual: at most this many breaks (a level shift and a hinge at one row: an unmeasured
   // step or ramp disturbance) fitted per window in the AR fit and the whitened regression
   // (residual_regression.hpp), each kept only when its chi-square(2) score passes

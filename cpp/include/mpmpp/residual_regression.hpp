@@ -14,8 +14,11 @@
 //   dead time);
 //   laguerre_terms Laguerre filters of u_j from lag 1, with the channel's slowest pole
 //   (time constant and any other shape).
-// A(q) (order residual_ar_order, by default arx_order_a; with a level and a ramp for drifting
-// disturbances) and beta are estimated alternately (two passes). An unmeasured step or ramp
+// A(q) (order residual_ar_orders[output], else residual_ar_order, else arx_order_a; with a level
+// and a ramp for drifting disturbances) and beta are estimated alternately (two passes). Its
+// order must stay near the disturbance's: under feedback alone the inputs are filtered output
+// errors, so a long A(q) can predict dG u from v's past and absorb a process change into the
+// noise model (docs/detection.md "The whitening order"). An unmeasured step or ramp
 // disturbance inside the window is neither: the AR fit explains it with a root near 1, which
 // over-differences the rest of the disturbance, and the controller's moves against it are in
 // x_j, so beta is biased. Both fits therefore take up to residual_steps breaks, greedily: a

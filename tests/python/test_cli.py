@@ -55,6 +55,18 @@ def test_check_counts_missing_and_integrating_channel(tmp_path, capsys):
     assert "setpoints: y_sp" in out and "candidates for diagnose): x" in out
 
 
+def test_python_dash_m_runs_the_command_line(tmp_path):
+    model = tmp_path / "m.json"
+    mpmpp.save_model(mpmpp.Model("m", 1.0, ["u"], ["y"], {"y": {"u": mpmpp.TransferFunction([0.5], [1.0, -0.5], 1)}}),
+                     model)
+    env = {"PYTHONPATH": str(pathlib.Path(mpmpp.__file__).parents[1])}
+    ok = subprocess.run([sys.executable, "-m", "mpmpp", "check", str(model)], capture_output=True, text=True, env=env)
+    assert ok.returncode == 0 and "y <- u" in ok.stdout
+    bad = subprocess.run([sys.executable, "-m", "mpmpp", "check", str(tmp_path / "none.json")], capture_output=True,
+                         text=True, env=env)
+    assert bad.returncode == 2 and bad.stderr.startswith("mpmpp check: error:")
+
+
 def test_help_loads_no_engine_and_no_heavy_library():
     # What `mpmpp --help` costs: only argparse and the command table. A fresh interpreter,
     # since this test process has long imported everything.

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _core
-from .diagnose.whitening import has_noise_model
+from .diagnose.whitening import TREND_GRID, disturbance_steps, has_noise_model
 from .signals import longest_run
 
 MAX_ORDER = 30
@@ -94,9 +94,9 @@ def _settling_samples(row, length: int) -> int:
 
 
 def _training_error_ar(model, i: int, train: np.ndarray, u: np.ndarray, y: np.ndarray, cap: int):
-    """(p, A, rows): the BIC-chosen AR of output i's error y_i - G_i u on the longest complete
-    stretch of the training rows, after G's settling time; (None, None, rows) when fewer than
-    10 rows per coefficient remain."""
+    """(p, A, rows): the BIC-chosen AR of output i's error y_i - G_i u, less its step and ramp
+    disturbances, on the longest complete stretch of the training rows after G's settling
+    time; (None, None, rows) when fewer than 10 rows per coefficient remain."""
     name = model.outputs[i]
     row = [model.process(name, j) for j in model.inputs]
     used = [j for j, g in enumerate(row) if g is not None]
@@ -109,7 +109,15 @@ def _training_error_ar(model, i: int, train: np.ndarray, u: np.ndarray, y: np.nd
     du = u[a:b] - u[a:b].mean(axis=0)
     dy = y[a:b, i] - y[a:b, i].mean()
     v = np.asarray(_core.output_error(row, np.ascontiguousarray(dy), np.asfortranarray(du)), dtype=float).ravel()
-    order, poly = bic_ar(v, begin - a, b - a, cap)
+    # Unmeasured step and ramp disturbances out first: an AR takes them for a random walk and
+    # BIC then asks for 15-30 coefficients (tuning mpc_siso_1s, mpc_siso_disturbed), which
+    # absorb process changes as surely as the ARX order did; the windows' own fits take them
+    # as breaks (residual_regression.hpp).
+    fitted = np.zeros(len(v), bool)
+    fitted[begin - a:] = True
+    _, steps = disturbance_steps(v, fitted, _core.TransferFunction(), begin - a, TREND_GRID, begin - a + TREND_GRID,
+                                 math.log(b - begin))
+    order, poly = bic_ar(v - steps, begin - a, b - a, cap)
     return order, poly, b - begin
 
 
@@ -144,4 +152,5 @@ def describe(d: DisturbanceOrder, arx_order: int, whitening: int | None = None) 
     used = (f"the residual test whitens each window by an AR({whitening})" if whitening is not None
             else f"the ARX order n_a = {arx_order} covers it")
     return (f"{d.output}: the model has no noise model; its disturbance model was estimated from "
-            f"{d.rows} training rows as H = 1/A(q), A the BIC-chosen AR({d.order}) of y - G u; {used}")
+            f"{d.rows} training rows as H = 1/A(q), A the BIC-chosen AR({d.order}) of y - G u less its steps "
+            f"and ramps; {used}")

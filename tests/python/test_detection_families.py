@@ -100,12 +100,12 @@ def test_the_noise_alarm_check_names_no_process_change_in_noise_change_runs():
 
 def test_mimo_detects_held_out_missing_couplings():
     """A coupling that appears where the model has none alarms on its own channel (the presets'
-    absent channels, docs/detection.md "Absent channels"): 11 of 16 measured (multi_pi_2x2 7/8,
+    absent channels, docs/detection.md "Absent channels"): 10 of 16 measured (multi_pi_2x2 6/8,
     mpc_3x3_move_limits 4/8; seeds 0-7, 2026-11-29, with the whitening at the disturbance's
-    order; 10 of 16 with AR(18), 0 of 16 without absent channels). Bound: the 1 % quantile of
-    Binomial(16, 11/16); no MPM alarm before the change (measured 0)."""
+    order; 10 of 16 with AR(18) too, 7/8 and 3/8; 0 of 16 without absent channels). Bound: the
+    1 % quantile of Binomial(16, 10/16); no MPM alarm before the change (measured 0)."""
     runs = [run_family_seed(name, seed, configs={"mimo": "mimo"}, effect="missing_coupling")
             for name in ("multi_pi_2x2", "mpc_3x3_move_limits") for seed in range(8)]
     assert all(r["presets"]["mimo"]["refused"] is None for r in runs)
-    assert detected(runs, "mimo") >= 7
+    assert detected(runs, "mimo") >= 5
     assert false_mpm(runs, "mimo") <= 2

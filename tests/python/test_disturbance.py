@@ -121,7 +121,8 @@ def test_the_residual_test_whitens_by_the_training_error_order_at_least_the_floo
         config, _ = _cover_disturbance(make_config(given), claimed, t, u, y, 5000 * TS)
         assert config.residual_ar_orders == []
     _, notes = _cover_disturbance(make_config("siso"), model(), t, u, y, 5000 * TS)
-    assert notes[0].endswith("A the BIC-chosen AR(4) of y - G u; the residual test whitens each window by an AR(4)")
+    assert notes[0].endswith("A the BIC-chosen AR(4) of y - G u less its steps and ramps; the residual test whitens "
+                             "each window by an AR(4)")
     _, det = detect(model(), data, 3 * 3600.0, "siso", return_detector=True)
     assert det._core.config.residual_ar_orders == [4]
     path = tmp_path / "d.json"
@@ -137,6 +138,25 @@ def test_the_residual_test_whitens_by_the_training_error_order_at_least_the_floo
     old = _core.Detector.from_json(json.dumps(doc), "v10.json")
     assert old.config.residual_ar_orders == [] and old.config.arx_order_a == 9
     np.testing.assert_array_equal(Detector(old).monitor(data).scores, det.monitor(data).scores)
+
+
+def test_step_and_ramp_disturbances_do_not_raise_the_whitening_order():
+    """An unmeasured load step and a ramp that starts and stops during training: fitted as they
+    stand, they ask BIC for many more coefficients than the AR(2) disturbance has; the estimate
+    takes them out first (diagnose's step finder) and finds the AR(2) (15 as they stand)."""
+    data = loop_data()
+    n = len(data)
+    t = np.arange(n)
+    load = 1.5 * (t >= 1500) + np.clip(t - 3000, 0, 400) / 400 * -1.0   # a step, then a 400-sample ramp
+    data["y"] += load
+    tt, u, y = _arrays(model(), data)
+    (d,) = disturbance_orders(model(), tt, u, y, 5000 * TS, 1440)
+    rows = 5000
+    v = (y[:rows, 0] - y[:rows, 0].mean()) - lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN,
+                                                    u[:rows, 0] - u[:rows, 0].mean())
+    as_they_stand, _ = numpy_bic_ar(v, rows - d.rows, rows, min(30, 1440 // 24))
+    assert d.whitening == 2 and d.order == 2
+    assert as_they_stand > 2
 
 
 def test_too_few_training_rows_keep_the_config_order_and_say_so():

@@ -9,7 +9,8 @@ disturbance model's AR order:
   its first tap (the rule the FIR length uses for G, ``fir_length_to_one_percent``);
 * an output without one (H_i = 1 in the file, the normal case for hand-written models): H_i is
   estimated from the training rows as 1/A(q), A the least-squares AR(p) of the output error
-  v = y_i - G_i u (``_core.fit_ar``). The model equals the plant in training, so v is the
+  v = y_i - G_i u (``_core.fit_ar``) less its unmeasured step and ramp disturbances (an AR
+  would read them as a random walk). The model equals the plant in training, so v is the
   disturbance itself, not a closed-loop estimate. p is chosen by BIC (Schwarz): AR(p) of a
   finite ARMA is only an approximation, and AIC's lighter penalty keeps adding coefficients
   on thousands of rows, each a feature of the noise channel that its SVM must then learn.

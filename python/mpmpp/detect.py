@@ -288,10 +288,12 @@ def _cover_disturbance(config: DetectorConfig, model, time_s, u, y, train_end_s:
     to its disturbance's when the config leaves it open (``residual_ar_order`` 0), and a note per
     output whose disturbance model was estimated from the training rows because the model file
     has none."""
-    orders = disturbance_orders(model, time_s, u, y, train_end_s, config.window_samples(model.sample_time_s))
+    open_order = str(config.process_test) == "residual" and config.residual_ar_order == 0 and not config.residual_ar_orders
+    orders = disturbance_orders(model, time_s, u, y, train_end_s, config.window_samples(model.sample_time_s),
+                                whitening=open_order)
     needed = max([config.arx_order_a] + [d.order for d in orders])
     whitening = []
-    if str(config.process_test) == "residual" and config.residual_ar_order == 0 and not config.residual_ar_orders:
+    if open_order:
         whitening = [needed if d.whitening is None else max(WHITENING_FLOOR, d.whitening) for d in orders]
     if needed != config.arx_order_a or whitening:
         config = DetectorConfig.from_json(config.to_json())

@@ -123,17 +123,21 @@ def _training_error_ar(model, i: int, train: np.ndarray, u: np.ndarray, y: np.nd
 
 
 def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, train_end_s: float,
-                       window_samples: int) -> list[DisturbanceOrder]:
+                       window_samples: int, whitening: bool = True) -> list[DisturbanceOrder]:
     """Per output, the AR order of its disturbance model: from the model file's H, or estimated
     (BIC) on the longest complete stretch of the training rows; order 0 without a polynomial
-    when fewer than 10 rows per coefficient remain after settling. ``whitening`` is the
-    estimate's order for every output."""
+    when fewer than 10 rows per coefficient remain after settling. With ``whitening`` (the
+    residual test's orders are wanted) every output gets the estimate's order, else only those
+    the estimate is made for."""
     cap = max(1, min(MAX_ORDER, window_samples // WINDOW_ROWS_PER_COEFFICIENT))
     train = (time_s - time_s[0]) < train_end_s
     out = []
     for i, name in enumerate(model.outputs):
-        order, poly, rows = _training_error_ar(model, i, train, u, y, cap)
         h = model.noise(name)
+        if has_noise_model(h) and not whitening:
+            out.append(DisturbanceOrder(name, inverse_order(h, cap), estimated=False))
+            continue
+        order, poly, rows = _training_error_ar(model, i, train, u, y, cap)
         if has_noise_model(h):
             out.append(DisturbanceOrder(name, inverse_order(h, cap), estimated=False, rows=rows, whitening=order))
         else:  # the estimate; too short to estimate: order 0, the preset's order stands and the note says why

@@ -270,6 +270,19 @@ void DetectorConfig::validate() const {
   inspection_windows();
 }
 
+void DetectorConfig::check_residual_ar_orders(int num_outputs) const {
+  if (!residual_ar_orders.empty() && static_cast<int>(residual_ar_orders.size()) != num_outputs)
+    throw InputError("detector config: residual_ar_orders has " +
+                     std::to_string(residual_ar_orders.size()) + " entries; the model has " +
+                     std::to_string(num_outputs) + " outputs");
+}
+
+int DetectorConfig::whitening_order(int output, int num_outputs) const {
+  check_residual_ar_orders(num_outputs);
+  if (!residual_ar_orders.empty()) return residual_ar_orders[static_cast<std::size_t>(output)];
+  return residual_ar_order > 0 ? residual_ar_order : arx_order_a;
+}
+
 int DetectorConfig::window_samples(double sample_time_s) const {
   return whole_multiple(window_s, sample_time_s, "window_s", "samples");
 }

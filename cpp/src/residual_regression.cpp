@@ -212,9 +212,7 @@ std::vector<Eigen::Index> rows_clear_of_outliers(const Eigen::VectorXd& v,
 
 ResidualRegression::ResidualRegression(const Model& nominal, int output, std::vector<int> inputs,
                                        const DetectorConfig& config)
-    : ar_order_(!config.residual_ar_orders.empty() ? config.residual_ar_orders[output]
-                : config.residual_ar_order > 0     ? config.residual_ar_order
-                                                   : config.arx_order_a),
+    : ar_order_(config.whitening_order(output, nominal.num_outputs())),
       settle_(0),
       max_steps_(config.residual_steps),
       step_significance_(config.step_significance),

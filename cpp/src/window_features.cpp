@@ -68,11 +68,7 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       noise_wald_(is_wald(config.noise_test)),
       noise_from_residual_(config.noise_test == NoiseTest::Residual) {
   config.validate();
-  if (!config.residual_ar_orders.empty() &&
-      static_cast<int>(config.residual_ar_orders.size()) != num_outputs_)
-    throw InputError("detector config: residual_ar_orders has " +
-                     std::to_string(config.residual_ar_orders.size()) + " entries; the model has " +
-                     std::to_string(num_outputs_) + " outputs");
+  config.check_residual_ar_orders(num_outputs_);
   window_ = config.window_samples(nominal.sample_time_s);
   step_ = config.step_samples(nominal.sample_time_s);
   channels_ = monitored_channels(nominal, config);

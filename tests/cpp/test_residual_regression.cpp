@@ -46,6 +46,9 @@ TEST(ResidualRegression, RefusesAWindowTooShortAndAnInputWithoutAChannel) {
   const Model m = test_loops::small_siso_model(3);
   const DetectorConfig c = DetectorConfig::siso();
   EXPECT_THROW(ResidualRegression(m, 0, {1}, c), InputError);
+  DetectorConfig two_orders = c;  // one whitening order per output, not two on a 1x1 model
+  two_orders.residual_ar_orders = {3, 4};
+  EXPECT_THROW(ResidualRegression(m, 0, {0}, two_orders), InputError);
   const ResidualRegression r(m, 0, {0}, c);
   const test_loops::LoopSamples s = test_loops::random_step_samples(m, 60, 3);
   std::vector<Eigen::VectorXd> beta;

@@ -153,6 +153,11 @@ struct DetectorConfig {
 
   // InputError naming the first invalid field.
   void validate() const;
+  // InputError unless residual_ar_orders is empty or has one entry per output of the model.
+  void check_residual_ar_orders(int num_outputs) const;
+  // Residual: the whitening order of output `output` (of num_outputs): residual_ar_orders[output],
+  // else residual_ar_order, else arx_order_a.
+  int whitening_order(int output, int num_outputs) const;
   // Conversions at the model's sample time; InputError when not a whole number.
   int window_samples(double sample_time_s) const;
   int step_samples(double sample_time_s) const;

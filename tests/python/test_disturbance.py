@@ -51,6 +51,12 @@ def numpy_bic_ar(v, begin, end, cap):
     return best[1], best[2]
 
 
+def reference_output_error(u, y, rows):
+    """y - G u on the first ``rows`` rows' deviations, G filtering from rest at the first row."""
+    du, dy = u[:rows, 0] - u[:rows, 0].mean(), y[:rows, 0] - y[:rows, 0].mean()
+    return dy - lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, du)
+
+
 def test_estimate_matches_numpy_least_squares_and_bic():
     data, train_end_s, window = loop_data(), 5000 * TS, 1440
     t, u, y = _arrays(model(), data)
@@ -59,10 +65,8 @@ def test_estimate_matches_numpy_least_squares_and_bic():
     # training rows' deviations; rows from the settling time (G's impulse response below 1 %
     # of its peak) plus the largest order.
     rows = 5000
-    du, dy = u[:rows, 0] - u[:rows, 0].mean(), y[:rows, 0] - y[:rows, 0].mean()
-    b_full = np.r_[np.zeros(G_DELAY), G_NUM]
-    v = dy - lfilter(b_full, G_DEN, du)
-    impulse = np.abs(lfilter(b_full, G_DEN, np.r_[1.0, np.zeros(rows - 1)]))
+    v = reference_output_error(u, y, rows)
+    impulse = np.abs(lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, np.r_[1.0, np.zeros(rows - 1)]))
     settle = np.flatnonzero(impulse >= 0.01 * impulse.max())[-1] + 1
     cap = min(30, window // 24)
     p, poly = numpy_bic_ar(v, settle + cap, rows, cap)
@@ -111,9 +115,7 @@ def test_the_residual_test_whitens_by_the_training_error_order_at_least_the_floo
         claimed = model({"num": [1.0], "den": [1.0, -0.5]})   # 1/H = 1 - 0.5 q^-1: order 1
         (d,) = disturbance_orders(claimed, t, u, y, 5000 * TS, 1440)
         rows = 5000
-        v = (y[:rows, 0] - y[:rows, 0].mean()) - lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN,
-                                                        u[:rows, 0] - u[:rows, 0].mean())
-        p, _ = numpy_bic_ar(v, rows - d.rows, rows, min(30, 1440 // 24))
+        p, _ = numpy_bic_ar(reference_output_error(u, y, rows), rows - d.rows, rows, min(30, 1440 // 24))
         assert (d.order, d.whitening) == (1, p) and p == len(poly) - 1, label
         config, _ = _cover_disturbance(make_config("siso"), claimed, t, u, y, 5000 * TS)
         assert config.residual_ar_orders == [expected], label
@@ -152,9 +154,7 @@ def test_step_and_ramp_disturbances_do_not_raise_the_whitening_order():
     tt, u, y = _arrays(model(), data)
     (d,) = disturbance_orders(model(), tt, u, y, 5000 * TS, 1440)
     rows = 5000
-    v = (y[:rows, 0] - y[:rows, 0].mean()) - lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN,
-                                                    u[:rows, 0] - u[:rows, 0].mean())
-    as_they_stand, _ = numpy_bic_ar(v, rows - d.rows, rows, min(30, 1440 // 24))
+    as_they_stand, _ = numpy_bic_ar(reference_output_error(u, y, rows), rows - d.rows, rows, min(30, 1440 // 24))
     assert d.whitening == 2 and d.order == 2
     assert as_they_stand > 2
 

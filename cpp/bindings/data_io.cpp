@@ -20,6 +20,11 @@ void bind_data_io(py::module_& m) {
       .def_readonly("end_s", &DataRepairs::Gap::end_s)
       .def_readonly("missing_rows", &DataRepairs::Gap::missing_rows)
       .def_readonly("split", &DataRepairs::Gap::split);
+  py::class_<DataRepairs::StatusWords>(
+      m, "DataStatusWords", "A historian's status words in a numeric column, read as missing")
+      .def_readonly("column", &DataRepairs::StatusWords::column)
+      .def_readonly("cells", &DataRepairs::StatusWords::cells)
+      .def_readonly("first", &DataRepairs::StatusWords::first);
   py::class_<DataRepairs>(m, "DataRepairs", "What load_data repaired on the way to the sample grid")
       .def_readonly("jitter_snapped", &DataRepairs::jitter_snapped)
       .def_readonly("max_jitter_s", &DataRepairs::max_jitter_s)
@@ -27,6 +32,7 @@ void bind_data_io(py::module_& m) {
       .def_readonly("gaps", &DataRepairs::gaps)
       .def_readonly("bad_quality_rows", &DataRepairs::bad_quality_rows)
       .def_readonly("text_columns", &DataRepairs::text_columns)
+      .def_readonly("status_words", &DataRepairs::status_words)
       .def_readonly("resample_factor", &DataRepairs::resample_factor)
       .def_readonly("raw_sample_time_s", &DataRepairs::raw_sample_time_s);
   py::class_<DataTable>(m, "DataTable",

@@ -39,6 +39,17 @@ bool is_nan_word(const std::string& s) {
          (s[2] == 'n' || s[2] == 'N');
 }
 
+// A historian's word in place of a value ("Bad Input", "I/O Timeout"): a letter in it, and
+// not an infinity, which is a number out of range.
+bool is_status_word(const std::string& cell) {
+  double x = 0.0;
+  const char* first = cell.data() + (!cell.empty() && (cell[0] == '+' || cell[0] == '-'));
+  if (std::from_chars(first, cell.data() + cell.size(), x).ec == std::errc() && std::isinf(x))
+    return false;
+  return std::any_of(cell.begin(), cell.end(),
+                     [](unsigned char ch) { return std::isalpha(ch) != 0; });
+}
+
 // A decimal number (no hex, no words), optional leading '+'.
 std::optional<double> parse_number(const std::string& cell) {
   const char* first = cell.data();
@@ -409,9 +420,18 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
   const std::size_t width = d.columns.size();
   d.values.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(width));
   d.missing.assign(width, 0);
-  // A column is text while it holds no number: its cells are kept until a number
-  // turns up (then the first text cell is the error) or the file ends.
-  std::vector<std::size_t> numbers(width, 0), first_text_row(width, 0);
+  // A column is text while it holds no number: its cells are kept until a number turns up.
+  // In a column that has numbers, a cell with a letter in it is a status word a historian
+  // writes in place of a value ("Bad Input", "I/O Timeout", "Shutdown"): a missing value,
+  // counted in repairs.status_words, as long as the column has more numbers than such words
+  // (else it is not numeric, and its first word is the error). A cell that is no number and
+  // has no letter ("12,5", "1.2.3"), or is infinite, is a number written wrongly: an error,
+  // never read as missing.
+  struct CellCounts {
+    std::size_t numbers = 0, words = 0, first_word_row = 0, first_malformed_row = 0;
+    std::string first_word, first_malformed;
+  };
+  std::vector<CellCounts> counts(width);
   std::vector<std::vector<std::string>> text_cells(width);
   auto not_a_number = [&](std::size_t j, std::size_t row, const std::string& cell) {
     return InputError(where + row_name(row) + ", column " + detail::printable(d.columns[j]) + ": " +
@@ -432,32 +452,56 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
         continue;
       }
       double x = std::numeric_limits<double>::quiet_NaN();
-      const bool empty = fields[c].empty() || is_nan_word(fields[c]);
+      CellCounts& count = counts[j];
+      const std::string& cell = fields[c];
+      const bool empty = cell.empty() || is_nan_word(cell);
       if (empty) {
         ++d.missing[j];
-      } else if (const auto v = parse_number(fields[c])) {
-        if (first_text_row[j])
-          throw not_a_number(j, first_text_row[j], text_cells[j][first_text_row[j] - 2]);
-        ++numbers[j];
+      } else if (const auto v = parse_number(cell)) {
+        ++count.numbers;
         x = *v;
-      } else if (numbers[j]) {
-        throw not_a_number(j, row, fields[c]);
-      } else if (!first_text_row[j]) {
-        first_text_row[j] = row;
-        text_cells[j].resize(k);
+      } else if (is_status_word(cell)) {
+        if (!count.words++) {
+          count.first_word_row = row;
+          count.first_word = cell;
+        }
+      } else if (!count.first_malformed_row) {
+        count.first_malformed_row = row;
+        count.first_malformed = cell;
       }
-      if (first_text_row[j]) text_cells[j].push_back(fields[c]);
+      if (!count.numbers) {
+        text_cells[j].resize(k);
+        text_cells[j].push_back(cell);
+      } else if (!text_cells[j].empty()) {
+        text_cells[j] = {};  // a numeric column: its cells are not needed
+      }
       d.values(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j++)) = x;
     }
   }
   read_time(time_cells, source, d);
-  // Text columns leave the numeric table; the first text cell is kept for errors.
+  // Text columns leave the numeric table; their cells are kept for the quality column and
+  // for naming them in errors.
   std::vector<Eigen::Index> numeric;
   for (std::size_t j = 0; j < width; ++j) {
-    if (!first_text_row[j]) {
+    const CellCounts& count = counts[j];
+    if (count.numbers) {
+      if (count.first_malformed_row)
+        throw not_a_number(j, count.first_malformed_row, count.first_malformed);
+      if (count.words >= count.numbers)
+        throw not_a_number(j, count.first_word_row, count.first_word);
+      if (count.words) {
+        d.missing[j] += static_cast<int>(count.words);
+        d.repairs.status_words.push_back(
+            {d.columns[j], static_cast<int>(count.words), count.first_word});
+      }
       numeric.push_back(static_cast<Eigen::Index>(j));
       continue;
     }
+    if (!count.words && !count.first_malformed_row) {  // empty cells only: a numeric column
+      numeric.push_back(static_cast<Eigen::Index>(j));
+      continue;
+    }
+    text_cells[j].resize(n);
     d.text_columns.push_back(d.columns[j]);
     d.text_values.push_back(std::move(text_cells[j]));
   }

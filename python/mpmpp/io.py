@@ -100,6 +100,7 @@ def repairs_dict(repairs) -> dict:
                  for g in repairs.gaps],
         "bad_quality_rows": repairs.bad_quality_rows,
         "text_columns": list(repairs.text_columns),
+        "status_words": [{"column": w.column, "cells": w.cells, "first": w.first} for w in repairs.status_words],
         "resample_factor": repairs.resample_factor,
         "raw_sample_time_s": repairs.raw_sample_time_s or None,
     }

@@ -40,6 +40,29 @@ TEST(DataIo, IsoTimestampsAreSecondsSinceTheFirst) {
   EXPECT_DOUBLE_EQ(d.time_s[1], 5.0);
 }
 
+TEST(DataIo, HistorianStatusWordsInANumericColumnAreMissingAndCounted) {
+  const mpmpp::DataTable d = mpmpp::parse_csv(
+      "time,u,y\n0,1,2\n5,Bad Input,3\n10,2,I/O Timeout\n15,3,4\n20,Shutdown,5\n25,4,6\n", "d.csv");
+  ASSERT_EQ(d.columns, (std::vector<std::string>{"u", "y"}));
+  EXPECT_TRUE(std::isnan(d.values(1, 0)) && std::isnan(d.values(4, 0)) &&
+              std::isnan(d.values(2, 1)));
+  EXPECT_DOUBLE_EQ(d.values(5, 0), 4.0);
+  EXPECT_EQ(d.missing, (std::vector<int>{2, 1}));
+  ASSERT_EQ(d.repairs.status_words.size(), 2u);
+  EXPECT_EQ(d.repairs.status_words[0].column, "u");
+  EXPECT_EQ(d.repairs.status_words[0].cells, 2);
+  EXPECT_EQ(d.repairs.status_words[0].first, "Bad Input");
+  EXPECT_EQ(d.repairs.status_words[1].first, "I/O Timeout");
+  // As many words as numbers: not a numeric column; a number written wrongly or an infinity
+  // is an error however many numbers surround it.
+  EXPECT_EQ(error_of("time,u,y\n0,1,2\n5,Bad,2\n"),
+            "d.csv: row 3, column u: \"Bad\" is not a number");
+  EXPECT_EQ(error_of("time,u,y\n0,1,2\n5,2,2\n10,\"12,5\",2\n"),
+            "d.csv: row 4, column u: \"12,5\" is not a number");
+  EXPECT_EQ(error_of("time,u,y\n0,1,2\n5,2,2\n10,-inf,2\n"),
+            "d.csv: row 4, column u: \"-inf\" is not a number");
+}
+
 TEST(DataIo, ErrorsNameFileRowAndColumn) {
   EXPECT_EQ(error_of("time,u,y\n0,1,2\n5,x,2\n"), "d.csv: row 3, column u: \"x\" is not a number");
   EXPECT_EQ(error_of("time,u\n0,1\n"),

@@ -10,6 +10,7 @@ import pytest
 
 import mpmpp
 from mpmpp.clock import Clock, parse_duration
+from mpmpp.commands._pair import repair_lines
 
 TS = 5.0
 
@@ -209,3 +210,20 @@ def test_a_data_frame_with_rows_left_out_gets_a_segment_break_there():
     rng = np.random.default_rng(0)
     data = pd.DataFrame({"time": t, "u": rng.normal(size=600), "y": rng.normal(size=600)})
     assert extract(model, data, min_segment=50).segments == [(0, 300), (300, 600)]
+
+
+def test_status_words_in_a_numeric_column_are_missing_and_noted(tmp_path):
+    """A historian writes words in place of values ("Bad Input", "I/O Timeout"): they are
+    missing values, counted per column and named in the note every command prints."""
+    df = clean(40)
+    u = df["u"].map("{:.6g}".format).to_numpy(dtype=object)
+    u[[5, 17]] = ["Bad Input", "I/O Timeout"]
+    path = write(tmp_path / "d.csv", df.assign(u=u))
+    back = mpmpp.load_data(path, model())
+    assert back["u"].isna().to_numpy().nonzero()[0].tolist() == [5, 17]
+    np.testing.assert_allclose(back["y"], df["y"], rtol=1e-6)
+    assert back.attrs["repairs"]["status_words"] == [{"column": "u", "cells": 2, "first": "Bad Input"}]
+    assert repair_lines(back.attrs["repairs"]) == [
+        "column u: 2 status word(s) read as missing (the first 'Bad Input')"]
+    # read as written (identify, stiction): the same
+    assert mpmpp.load_data(path).attrs["repairs"]["status_words"][0]["cells"] == 2

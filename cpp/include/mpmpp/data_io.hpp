@@ -6,9 +6,10 @@
 // least kEpochThresholdS) or ISO-8601 timestamps ("2026-03-01T08:00:05",
 // optional fraction, "Z" or "+01:00"; a space may replace the "T"). Cells that
 // are empty or NaN are missing values: kept as NaN and counted, never
-// interpolated. A column with no number at all (a historian status or tag-name
-// column) is kept apart as text. Every problem is an InputError with one line
-// naming the file and the row and/or column, e.g.
+// interpolated; so are a historian's status words in a numeric column ("Bad
+// Input"; counted in repairs.status_words). A column with no number at all (a
+// historian status or tag-name column) is kept apart as text. Every problem is an InputError with
+// one line naming the file and the row and/or column, e.g.
 //   data.csv: row 7, column dry_weight: "abc" is not a number
 // Rows are numbered as in a spreadsheet: the header is row 1, the first sample row 2.
 #include <Eigen/Dense>
@@ -36,12 +37,20 @@ struct DataRepairs {
     int missing_rows = 0;           // rows added as missing (0 for a split)
     bool split = false;             // longer than the largest gap bridged: a new segment
   };
+  // A historian's status words in a numeric column ("Bad Input", "I/O Timeout"), read as
+  // missing values.
+  struct StatusWords {
+    std::string column;
+    int cells = 0;      // how many
+    std::string first;  // the first one, as written
+  };
   int jitter_snapped = 0;      // rows moved onto the grid
   double max_jitter_s = 0;     // the largest such move
   int duplicates_dropped = 0;  // repeated rows (same time, same values)
   std::vector<Gap> gaps;
   int bad_quality_rows = 0;               // rows masked by the quality column
   std::vector<std::string> text_columns;  // columns without numbers, not used as data
+  std::vector<StatusWords> status_words;  // per numeric column that has them, in file order
   int resample_factor = 1;                // raw samples averaged per sample (1: none)
   double raw_sample_time_s = 0;           // the file's own sample time when resampled
 };

@@ -70,10 +70,15 @@ def load_pair(args):
 
     model = load_model(args.model)
     data = load_data_for(model, args)
-    repairs = repair_lines(data.attrs["repairs"])
-    if repairs:
-        print(f"note: {args.data}: {'; '.join(repairs)} (details: mpmpp check)", file=sys.stderr)
+    note_repairs(args.data, data.attrs["repairs"], "(details: mpmpp check)")
     return model, data, Clock.of(data, model.sample_time_s)
+
+
+def note_repairs(path, repairs: dict, details: str = "") -> None:
+    """One ``note:`` line on stderr naming every repair of DATA (none: nothing printed)."""
+    lines = repair_lines(repairs)
+    if lines:
+        print(f"note: {path}: {'; '.join(lines)}{' ' + details if details else ''}", file=sys.stderr)
 
 
 def repair_lines(r: dict, shown_gaps: int = 0) -> list[str]:
@@ -101,6 +106,8 @@ def repair_lines(r: dict, shown_gaps: int = 0) -> list[str]:
         lines.append(f"{len(bridged)} {more}gap(s) filled with {sum(bridged)} missing row(s)")
     if len(rest) > len(bridged):
         lines.append(f"{len(rest) - len(bridged)} {more}gap(s) longer than --max-gap split the record")
+    for w in r["status_words"]:
+        lines.append(f"column {w['column']}: {w['cells']} status word(s) read as missing (the first {w['first']!r})")
     if r["text_columns"]:
         lines.append(f"text column(s) ignored (no numbers): {', '.join(r['text_columns'])}")
     return lines

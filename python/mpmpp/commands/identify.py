@@ -24,11 +24,13 @@ def run(args) -> int:
     import os
 
     from ..io import load_data
+    from ._pair import note_repairs
     from ..model_identification import CLASSES_BY_NAME, model_from_data
 
     if os.path.exists(args.output) and not args.force:
         raise ValueError(f"{args.output}: exists (add --force to replace it)")
     data = load_data(args.data)
+    note_repairs(args.data, data.attrs["repairs"])
     name = args.name or f"identified from {os.path.basename(args.data)}"
     result = model_from_data(data, args.inputs, args.outputs, setpoints=args.setpoints, name=name, max_dead_time_s=args.max_dead_time,
                              classes=CLASSES_BY_NAME[args.process])

@@ -47,9 +47,11 @@ def _plain(value):
 
 def run(args) -> int:
     from ..io import load_data
+    from ._pair import note_repairs
     from ..stiction import analyse_loop
 
     df = load_data(args.data)
+    note_repairs(args.data, df.attrs["repairs"])
     columns = [_column(df, c, args.data) for c in (args.op, args.pv, args.sp) if c]
     rows, skipped = _stretch(df, columns, args.data)
     op, pv, *sp = (c[rows] for c in columns)

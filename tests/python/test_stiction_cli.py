@@ -83,3 +83,15 @@ def test_a_step_that_is_no_whole_number_of_samples_is_an_error(tmp_path, capsys)
     assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV"]) == 2
     err = capsys.readouterr().err.strip()
     assert "not evenly spaced (step 13 s at row 400" in err and str(data) in err and len(err.splitlines()) == 1
+
+
+def test_a_saturated_valve_is_no_stiction_and_says_why(tmp_path, capsys):
+    """A valve that stops at an upper limit the OP passes in a fifth of the record: the best
+    fit is the static limit, and the line names it instead of a bare 'stiction confidence'."""
+    data = tmp_path / "loop.csv"
+    write_loop(data)
+    limit = float(np.quantile(pd.read_csv(data)["FIC101.OP"], 0.8))
+    write_loop(data, valve=ActuatorNonlinearity(max=limit))
+    assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV"]) == 0
+    out = capsys.readouterr().out
+    assert "mpmpp: no stiction: a static saturation_high" in out and "explains the data better" in out

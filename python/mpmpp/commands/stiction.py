@@ -7,6 +7,7 @@ import json
 import numpy as np
 
 from ..signals import longest_complete_stretch
+from ..stiction.hammerstein import HYSTERESIS_KINDS
 from ..timeaxis import seconds_of
 
 
@@ -79,9 +80,14 @@ def run(args) -> int:
           + (f", SP '{args.sp}'" if args.sp else ""))
     if h.verdict:
         print(f"mpmpp: STICTION ({h.kind}: {h.size_text()} in OP units), confidence {h.confidence:.2f}")
+    elif h.kind in HYSTERESIS_KINDS:
+        # a valve that fits, but on an OP held to its rate limit, which a sticking valve mimics
+        print(f"mpmpp: no stiction verdict: the best fit is {h.kind} ({h.size_text()}), but the OP is held to "
+              f"a rate limit in most of its moves (see the note); the fit alone would say {h.confidence:.2f}")
     elif h.kind != "linear":
-        print(f"mpmpp: no stiction; actuator nonlinearity {h.kind} ({h.size_text()}), "
-              f"stiction confidence {h.confidence:.2f}")
+        print(f"mpmpp: no stiction: a static {h.kind} ({h.size_text()}) explains the data better than a sticking "
+              f"valve" + (f" (the valve alone would say {h.confidence:.2f})" if h.confidence > 0.5
+                          else f"; stiction confidence {h.confidence:.2f}"))
     else:
         print(f"mpmpp: no actuator nonlinearity found, stiction confidence {h.confidence:.2f}")
     print(f"  held-out log-likelihood gain of the best stick-slip valve over a linear one: "

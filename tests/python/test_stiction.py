@@ -4,7 +4,7 @@ analytic results)."""
 import numpy as np
 import pytest
 from mpmpp._core import ActuatorNonlinearity, StictionLaw, actuator_positions
-from mpmpp.stiction import analyse_loop, fit_valve
+from mpmpp.stiction import analyse_loop, fit_valve, hammerstein
 from mpmpp.stiction.bicoherence import apparent_stiction, ngi_nli, squared_bicoherence
 from mpmpp.stiction.curve_fit import stiction_index
 from mpmpp.stiction.horch import horch_index
@@ -345,3 +345,30 @@ def test_a_load_disturbance_enters_through_the_level():
     load = np.diff(d - d0) / 0.05
     assert np.std(load) == pytest.approx(1.0, abs=0.03)
     assert np.corrcoef(load[1:], load[:-1])[0, 1] == pytest.approx(0.9, abs=0.02)
+
+
+def test_stretches_fit_each_piece_and_one_stretch_is_the_record():
+    """fit_valve over row ranges: one range covering the record is the record; two ranges are
+    two pieces, each with its own valve start and no lag across the cut, the same as scoring
+    the concatenation of their lagged rows by hand."""
+    rng = np.random.default_rng(5)
+    p = np.exp(-10 / 15)
+    rec = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p)), 0.7, 1.5, 600,
+                           valve=ActuatorNonlinearity(stiction_s=3.0, stiction_j=1.5),
+                           disturbance=coloured_noise(rng, 600, 0.3, 0.8))
+    op, pv = rec["op"], rec["pv"]
+    whole = fit_valve(op, pv)
+    same = fit_valve(op, pv, [(0, 600)])
+    assert [c.cv_sse for c in same.ranking] == [c.cv_sse for c in whole.ranking]
+    pieces = [(0, 280), (283, 600)]
+    cut = fit_valve(op, pv, pieces)
+    inside = np.r_[0:280, 283:600]
+    y = (pv - pv[inside].mean()) / pv[inside].std()
+    top = next(c for c in cut.ranking if c.kind == "stick_slip")
+    valve = ActuatorNonlinearity(stiction_s=top.params["S"], stiction_j=top.params["J"])
+    parts = [hammerstein._lagged(y[a:b], actuator_positions(op[a:b], valve, op[a]), None, hammerstein.N_U, a)
+             for a, b in pieces]
+    by_hand = hammerstein.held_out_losses(np.vstack([q for q, _ in parts]), np.concatenate([t for _, t in parts]))
+    assert top.cv_sse == pytest.approx(by_hand.sum(), rel=1e-12)
+    with pytest.raises(ValueError, match="too short"):
+        fit_valve(op, pv, [(0, 50), (60, 99)])

@@ -56,9 +56,10 @@ def test_stiction_command_errors(tmp_path, capsys, args, n, message):
     assert message in err and str(data) in err and len(err.splitlines()) == 1
 
 
-def test_a_historian_gap_or_missing_values_leave_the_longest_stretch_and_say_so(tmp_path, capsys):
-    """Rows left out (a step of 3 samples) and a missing PV: the fit runs on the longest stretch
-    of consecutive complete rows, the same fit as on that stretch alone."""
+def test_a_historian_gap_or_missing_values_split_the_fit_and_say_so(tmp_path, capsys):
+    """Rows left out (a step of 3 samples) and a missing PV: the valve fit runs over the three
+    stretches of consecutive complete rows; the baselines, which need one unbroken series, on
+    the longest, as on that stretch alone."""
     data, alone = tmp_path / "loop.csv", tmp_path / "alone.csv"
     write_loop(data, n=900, valve=ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
     df = pd.read_csv(data).drop(index=[100, 101])
@@ -69,9 +70,11 @@ def test_a_historian_gap_or_missing_values_leave_the_longest_stretch_and_say_so(
     doc = json.loads(capsys.readouterr().out)
     main(["stiction", str(alone), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
     ref = json.loads(capsys.readouterr().out)
-    assert doc["samples"] == ref["samples"] == 798
-    assert doc["notes"][0] == "100 rows skipped: analysed rows 100-897, the longest stretch without missing values or time gaps"
-    assert doc["mpmpp"] == ref["mpmpp"] and ref["notes"] == doc["notes"][1:]
+    assert doc["samples"] == 897 and ref["samples"] == 798
+    assert doc["notes"][0] == ("1 rows skipped (missing values, time gaps, stretches under 30 rows); the valve fit "
+                               "uses 3 stretch(es), 897 rows; the baselines the longest, rows 100-897")
+    assert doc["baselines"] == ref["baselines"] and ref["notes"] == doc["notes"][1:]
+    assert doc["mpmpp"]["stiction"] is ref["mpmpp"]["stiction"] is True
 
 
 def test_a_step_that_is_no_whole_number_of_samples_is_an_error(tmp_path, capsys):
@@ -95,3 +98,21 @@ def test_a_saturated_valve_is_no_stiction_and_says_why(tmp_path, capsys):
     assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV"]) == 0
     out = capsys.readouterr().out
     assert "mpmpp: no stiction: a static saturation_high" in out and "explains the data better" in out
+
+
+def test_missing_values_split_the_record_and_every_stretch_is_fitted(tmp_path, capsys):
+    """A historian's bad values in a 751-row record: the valve fit runs over every stretch
+    between them (the valve at rest at each stretch's start), not the longest alone, and finds
+    the sticking valve with the same size as on the complete record."""
+    data = tmp_path / "loop.csv"
+    write_loop(data, valve=ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
+    main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
+    complete = json.loads(capsys.readouterr().out)
+    df = pd.read_csv(data).astype({"FIC101.PV": object})
+    df.loc[[250, 251, 500], "FIC101.PV"] = "Bad Input"
+    df.to_csv(data, index=False)
+    main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["samples"] == 748 and doc["mpmpp"]["stiction"] is True
+    assert doc["mpmpp"]["size"]["S"] == pytest.approx(complete["mpmpp"]["size"]["S"], rel=0.35)
+    assert any("3 stretch(es), 748 rows" in note for note in doc["notes"])

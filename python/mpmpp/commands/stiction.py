@@ -6,9 +6,12 @@ import json
 
 import numpy as np
 
-from ..signals import longest_complete_stretch
+from ..signals import complete_runs
 from ..stiction.hammerstein import HYSTERESIS_KINDS
-from ..timeaxis import seconds_of
+from ..timeaxis import sample_grid, seconds_of
+
+# a stretch shorter than this adds a valve start from rest and little else
+MIN_STRETCH = 30
 
 
 def add_arguments(parser) -> None:
@@ -29,17 +32,24 @@ def _column(df, name: str, path: str) -> np.ndarray:
     return values
 
 
-def _stretch(df, columns: list[np.ndarray], path: str) -> tuple[slice, str | None]:
-    """The longest stretch of rows with every column present and no time gap inside (the fit
-    runs the valve through consecutive samples), and a note when rows were left out."""
+def _stretches(df, columns: list[np.ndarray], path: str) -> tuple[list, str | None]:
+    """The stretches of rows with every column present and no time gap inside (the fit runs the
+    valve through consecutive samples, restarting at each), and a note when rows were left out."""
+    values = np.column_stack(columns)
     try:
-        _, a, b = longest_complete_stretch(seconds_of(df), np.column_stack(columns))
+        _, starts = sample_grid(seconds_of(df))
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
-    if (a, b) == (0, len(df)):
-        return slice(0, len(df)), None
-    return slice(a, b), (f"{len(df) - (b - a)} rows skipped: analysed rows {a}-{b - 1}, the longest stretch "
-                         f"without missing values or time gaps")
+    runs = [(a, b) for a, b in complete_runs(np.all(np.isfinite(values), axis=1), starts) if b - a >= MIN_STRETCH]
+    if not runs:
+        raise ValueError(f"{path}: no stretch of {MIN_STRETCH} rows without missing values or time gaps")
+    used = sum(b - a for a, b in runs)
+    if used == len(df):
+        return runs, None
+    a, b = max(runs, key=lambda r: r[1] - r[0])
+    return runs, (f"{len(df) - used} rows skipped (missing values, time gaps, stretches under {MIN_STRETCH} rows); "
+                  f"the valve fit uses {len(runs)} stretch(es), {used} rows; the baselines the longest, rows "
+                  f"{a}-{b - 1}")
 
 
 def _plain(value):
@@ -54,11 +64,12 @@ def run(args) -> int:
     df = load_data(args.data)
     note_repairs(args.data, df.attrs["repairs"])
     columns = [_column(df, c, args.data) for c in (args.op, args.pv, args.sp) if c]
-    rows, skipped = _stretch(df, columns, args.data)
-    op, pv, *sp = (c[rows] for c in columns)
+    stretches, skipped = _stretches(df, columns, args.data)
+    op, pv, *sp = columns
     sp = sp[0] if sp else None
+    rows = sum(b - a for a, b in stretches)
     try:
-        report = analyse_loop(op, pv, sp, names=(f"OP '{args.op}'", f"PV '{args.pv}'"))
+        report = analyse_loop(op, pv, sp, names=(f"OP '{args.op}'", f"PV '{args.pv}'"), stretches=stretches)
     except ValueError as exc:
         raise ValueError(f"{args.data}: {exc}") from None
     if skipped:
@@ -66,7 +77,7 @@ def run(args) -> int:
     h = report.mpmpp
     if args.json:
         print(json.dumps({
-            "samples": len(op),
+            "samples": rows,
             "mpmpp": {"stiction": h.verdict, "kind": h.kind,
                       "size": {k: _plain(v) for k, v in h.params.items()},
                       "confidence": h.confidence, "gain_per_sample": h.gain_per_sample,
@@ -76,7 +87,7 @@ def run(args) -> int:
             "notes": report.notes,
         }, indent=2))
         return 0
-    print(f"{args.data}: {len(op)} samples, OP '{args.op}', PV '{args.pv}'"
+    print(f"{args.data}: {rows} samples, OP '{args.op}', PV '{args.pv}'"
           + (f", SP '{args.sp}'" if args.sp else ""))
     if h.verdict:
         print(f"mpmpp: STICTION ({h.kind}: {h.size_text()} in OP units), confidence {h.confidence:.2f}")

@@ -40,16 +40,16 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
         out, name = outputs[lp.output], sig.inputs[lp.input]
         if name in actuated:
             continue   # the model carries its valve already; sig.u is its position
-        a, b = max(sig.segments, key=lambda s: s[1] - s[0])
-        if b - a < MIN_LOOP_ROWS:
-            notes.append(f"{out.name} <- {name}: no stretch of {MIN_LOOP_ROWS} rows without a gap for the valve fit")
+        if sum(b - a for a, b in sig.segments) < MIN_LOOP_ROWS:
+            notes.append(f"{out.name} <- {name}: fewer than {MIN_LOOP_ROWS} rows without gaps for the valve fit")
             continue
-        op = sig.u[a:b, lp.input] + sig.operating_point[name]
-        pv = sig.y[a:b, lp.output] + sig.operating_point[out.name]
+        op = sig.u[:, lp.input] + sig.operating_point[name]
+        pv = sig.y[:, lp.output] + sig.operating_point[out.name]
         # a compressed or quantized record can hide or invent a valve fault: said as `stiction` says it
-        notes += record_notes({name: op, out.name: pv})
+        a, b = max(sig.segments, key=lambda s: s[1] - s[0])
+        notes += record_notes({name: op[a:b], out.name: pv[a:b]})
         try:
-            fit = fit_valve(op, pv)
+            fit = fit_valve(op, pv, sig.segments)
         except ValueError as exc:
             notes.append(f"{out.name} <- {name}: valve fit not possible ({exc})")
             continue

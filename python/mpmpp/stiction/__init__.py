@@ -31,12 +31,17 @@ class LoopReport:
     notes: list       # what the record's storage hides (record_quality)
 
 
-def analyse_loop(op, pv, sp=None, names: tuple[str, str] = ("OP", "PV")) -> LoopReport:
-    """mpmpp's fit, the baselines and the record's notes (``names``: OP's and PV's in them)."""
+def analyse_loop(op, pv, sp=None, names: tuple[str, str] = ("OP", "PV"), stretches=None) -> LoopReport:
+    """mpmpp's fit, the baselines and the record's notes (``names``: OP's and PV's in them).
+    ``stretches``: row ranges of consecutive complete samples (a record with missing values or
+    gaps; default the whole record): mpmpp's fit uses them all, the baselines and the notes,
+    which need one unbroken series, the longest."""
     op = np.asarray(op, float)
     pv = np.asarray(pv, float)
     sp = None if sp is None else np.asarray(sp, float)
-    result = fit_valve(op, pv)
+    result = fit_valve(op, pv, stretches)
+    rows = slice(*max(stretches, key=lambda r: r[1] - r[0])) if stretches else slice(None)
+    op, pv, sp = op[rows], pv[rows], None if sp is None else sp[rows]
     baselines = {}
     for name, test in BASELINES.items():
         verdict, details = test(op, pv, sp)

@@ -79,9 +79,10 @@ class HammersteinResult:
 
 
 def _lagged(y: np.ndarray, v: np.ndarray, frequency: float | None = None,
-            valve_lags: int = N_U) -> tuple[np.ndarray, np.ndarray]:
-    """ARX regressors (PV lags, valve lags 1..valve_lags, a constant) and targets; with
-    ``frequency`` (cycles per sample) also a sine and a cosine: an oscillating disturbance at the
+            valve_lags: int = N_U, first_row: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """ARX regressors (PV lags, valve lags 1..valve_lags, a constant) and targets of one stretch
+    of consecutive samples starting at record row ``first_row``; with ``frequency`` (cycles per
+    sample) also a sine and a cosine of the record's time: an oscillating disturbance at the
     output. Every structure predicts the same rows (from max(N_Y, N_U) on), so their held-out
     errors compare."""
     start = max(N_Y, N_U)
@@ -90,7 +91,7 @@ def _lagged(y: np.ndarray, v: np.ndarray, frequency: float | None = None,
     cols += [v[start - k:n - k] for k in range(1, valve_lags + 1)]
     cols.append(np.ones(n - start))
     if frequency is not None:
-        phase = 2 * np.pi * frequency * np.arange(start, n)
+        phase = 2 * np.pi * frequency * np.arange(first_row + start, first_row + n)
         cols += [np.sin(phase), np.cos(phase)]
     return np.column_stack(cols), y[start:]
 
@@ -150,36 +151,45 @@ def calibrated_confidence(gain: float) -> float:
     return 1.0 / (1.0 + exp(-z)) if z > -700 else 0.0
 
 
-def fit_valve(op, pv) -> HammersteinResult:
-    """Rank the valve candidates for one loop record (OP and PV, equal length, finite)."""
+def fit_valve(op, pv, stretches=None) -> HammersteinResult:
+    """Rank the valve candidates for one loop record (OP and PV, equal length). ``stretches``:
+    the row ranges [(a, b), ...] of consecutive samples to fit together, finite inside (a record
+    with missing values or time gaps); default the whole record. Stretches shorter than the
+    ARX's lags are left out."""
     u = np.asarray(op, dtype=float)
     y = np.asarray(pv, dtype=float)
     if u.shape != y.shape or u.ndim != 1:
         raise ValueError("OP and PV must be 1-D and of equal length")
-    if len(u) < 100:
-        raise ValueError(f"too short: {len(u)} rows; the valve fit needs at least 100")
-    if not (np.isfinite(u).all() and np.isfinite(y).all()):
+    lags = max(N_Y, N_U)
+    stretches = [(0, len(u))] if stretches is None else [(int(a), int(b)) for a, b in stretches if b - a > lags]
+    inside = np.concatenate([np.arange(a, b) for a, b in stretches]) if stretches else np.arange(0)
+    if len(inside) < 100:
+        raise ValueError(f"too short: {len(inside)} rows; the valve fit needs at least 100")
+    u_in, y_in = u[inside], y[inside]
+    if not (np.isfinite(u_in).all() and np.isfinite(y_in).all()):
         raise ValueError("OP and PV must not contain missing or infinite values")
-    if np.ptp(u) == 0 or np.ptp(y) == 0:
+    if np.ptp(u_in) == 0 or np.ptp(y_in) == 0:
         raise ValueError("OP or PV is constant: the record does not excite the valve")
-    scale = np.std(y)
-    y_s = (y - y.mean()) / scale
+    y_s = (y - y_in.mean()) / np.std(y_in)
+    longest = slice(*max(stretches, key=lambda r: r[1] - r[0]))
 
     def evaluate(kind, actuator, params, frequency=None, valve_lags=N_U):
-        # the valve is taken at rest at the first OP (what it did before the record is unknown)
-        v = actuator_positions(u, actuator, u[0])
-        phi, target = _lagged(y_s, v, frequency, valve_lags)
+        # the valve is taken at rest at each stretch's first OP (what it did before is unknown),
+        # and no lag reaches across a gap
+        parts = [_lagged(y_s[a:b], actuator_positions(u[a:b], actuator, u[a]), frequency, valve_lags, a)
+                 for a, b in stretches]
+        phi, target = np.vstack([p for p, _ in parts]), np.concatenate([t for _, t in parts])
         return Candidate(kind, params, float(held_out_losses(phi, target).sum()))
 
-    frequency = dominant_frequency(y_s)
+    frequency = dominant_frequency(y_s[longest])
     linears = [evaluate("linear", ActuatorNonlinearity(),
                         {"valve_lags": k} | ({"disturbance_period": 1.0 / f} if f else {}), f, k)
                for k in range(N_U + 1) for f in (None, frequency)]
     linear = min(linears, key=lambda c: c.cv_sse)
     with_sine = min((c for c in linears if "disturbance_period" in c.params), key=lambda c: c.cv_sse)
     without = min((c for c in linears if "disturbance_period" not in c.params), key=lambda c: c.cv_sse)
-    periodic = with_sine.cv_sse < without.cv_sse and is_oscillating(u)
-    ranking = [linear] + [evaluate(*c) for c in _candidate_grid(u)]
+    periodic = with_sine.cv_sse < without.cv_sse and is_oscillating(u[longest])
+    ranking = [linear] + [evaluate(*c) for c in _candidate_grid(u_in)]
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")
     # An OP that moves more per sample than the grid's largest valve leaves no hysteresis
@@ -191,7 +201,7 @@ def fit_valve(op, pv) -> HammersteinResult:
     # limit is no verdict either way: its limited moves fit a stick-slip band (tuning families
     # with clipped MPC moves, seeds 0-7: every valve verdict came on an OP at its limit in
     # 79-82 % of the moves, none of them a valve fault; record_quality says so in a note)
-    verdict = bool(confidence > 0.5 and best.kind in HYSTERESIS_KINDS and rate_limited_share(u) <= NOTABLE_SHARE)
+    verdict = bool(confidence > 0.5 and best.kind in HYSTERESIS_KINDS and rate_limited_share(u[longest]) <= NOTABLE_SHARE)
     best_gain = 0.5 * np.log(linear.cv_sse / best.cv_sse)
     nonlinear = calibrated_confidence(best_gain) > 0.5
     return HammersteinResult(

@@ -372,3 +372,6 @@ def test_stretches_fit_each_piece_and_one_stretch_is_the_record():
     assert top.cv_sse == pytest.approx(by_hand.sum(), rel=1e-12)
     with pytest.raises(ValueError, match="too short"):
         fit_valve(op, pv, [(0, 50), (60, 99)])
+    for bad in ([(0, 700)], [(300, 400), (350, 600)], [(10, 10)], [(400, 600), (0, 300)]):
+        with pytest.raises(ValueError, match="stretches: row ranges"):
+            fit_valve(op, pv, bad)

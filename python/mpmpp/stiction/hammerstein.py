@@ -161,7 +161,15 @@ def fit_valve(op, pv, stretches=None) -> HammersteinResult:
     if u.shape != y.shape or u.ndim != 1:
         raise ValueError("OP and PV must be 1-D and of equal length")
     lags = max(N_Y, N_U)
-    stretches = [(0, len(u))] if stretches is None else [(int(a), int(b)) for a, b in stretches if b - a > lags]
+    if stretches is None:
+        stretches = [(0, len(u))]
+    else:
+        stretches = [(int(a), int(b)) for a, b in stretches]
+        ends = [0] + [x for r in stretches for x in r] + [len(u)]
+        if any(x > y for x, y in zip(ends, ends[1:])) or any(a >= b for a, b in stretches):
+            raise ValueError(f"stretches: row ranges (a, b) in order, without overlap, within the record's "
+                             f"{len(u)} rows; got {stretches}")
+        stretches = [(a, b) for a, b in stretches if b - a > lags]
     inside = np.concatenate([np.arange(a, b) for a, b in stretches]) if stretches else np.arange(0)
     if len(inside) < 100:
         raise ValueError(f"too short: {len(inside)} rows; the valve fit needs at least 100")

@@ -470,8 +470,7 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
         count.first_malformed = cell;
       }
       if (!count.numbers) {
-        text_cells[j].resize(k);
-        text_cells[j].push_back(cell);
+        text_cells[j].push_back(cell);  // one per row while the column has no number
       } else if (!text_cells[j].empty()) {
         text_cells[j] = {};  // a numeric column: its cells are not needed
       }
@@ -501,7 +500,6 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
       numeric.push_back(static_cast<Eigen::Index>(j));
       continue;
     }
-    text_cells[j].resize(n);
     d.text_columns.push_back(d.columns[j]);
     d.text_values.push_back(std::move(text_cells[j]));
   }

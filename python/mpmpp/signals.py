@@ -66,7 +66,7 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     # rows a data frame leaves out (a historian gap: a step of two samples or more) end a
     # segment as a missing row would; load_data puts a file on the grid with missing rows
     gaps = np.flatnonzero(np.diff(time_s) > 1.5 * float(model.sample_time_s)) + 1
-    segments, skipped = _segments(valid, min_segment, gaps)
+    segments, skipped = complete_segments(valid, min_segment, gaps)
     raw_u = through_actuators(model, raw_u, segments)
     both = np.column_stack([raw_u, raw_y, raw_z])
     means = np.nanmean(both[ref], axis=0) if ref.any() else np.nanmean(both, axis=0)
@@ -96,7 +96,7 @@ def through_actuators(model, raw_u: np.ndarray, segments=None, inputs=None) -> n
     out = raw_u.copy()
     for j, name in enumerate(model.inputs if inputs is None else inputs):
         if name in actuators:
-            runs = segments if segments is not None else _segments(np.isfinite(raw_u[:, j]), 1)[0]
+            runs = segments if segments is not None else complete_segments(np.isfinite(raw_u[:, j]), 1)[0]
             out[:, j] = np.nan
             for a, b in runs:
                 out[a:b, j] = valve_position(actuators[name], raw_u[a:b, j])
@@ -115,9 +115,14 @@ def complete_runs(valid: np.ndarray, starts=()) -> list[tuple[int, int]]:
     return runs
 
 
+def longest(runs) -> tuple[int, int]:
+    """The longest of the row ranges ``runs`` [(a, b), ...] ((0, 0) when there is none)."""
+    return max(runs, key=lambda r: r[1] - r[0], default=(0, 0))
+
+
 def longest_run(valid: np.ndarray, starts=()) -> tuple[int, int]:
     """The longest of ``complete_runs`` ((0, 0) when there is none)."""
-    return max(complete_runs(valid, starts), key=lambda r: r[1] - r[0], default=(0, 0))
+    return longest(complete_runs(valid, starts))
 
 
 def longest_complete_stretch(time_s: np.ndarray, values: np.ndarray) -> tuple[float, int, int]:
@@ -129,7 +134,9 @@ def longest_complete_stretch(time_s: np.ndarray, values: np.ndarray) -> tuple[fl
     return ts, a, b
 
 
-def _segments(valid: np.ndarray, min_segment: int, starts=()) -> tuple[list[tuple[int, int]], int]:
+def complete_segments(valid: np.ndarray, min_segment: int, starts=()) -> tuple[list[tuple[int, int]], int]:
+    """(the ``complete_runs`` of at least ``min_segment`` rows, the number of rows outside them);
+    ValueError when there is none."""
     kept = [r for r in complete_runs(valid, starts) if r[1] - r[0] >= min_segment]
     if not kept:
         raise ValueError(f"data: no stretch of at least {min_segment} rows without missing values")

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from ..signals import complete_runs
+from ..signals import complete_segments, longest
 from ..stiction.hammerstein import HYSTERESIS_KINDS
 from ..timeaxis import sample_grid, seconds_of
 
@@ -35,21 +35,17 @@ def _column(df, name: str, path: str) -> np.ndarray:
 def _stretches(df, columns: list[np.ndarray], path: str) -> tuple[list, str | None]:
     """The stretches of rows with every column present and no time gap inside (the fit runs the
     valve through consecutive samples, restarting at each), and a note when rows were left out."""
-    values = np.column_stack(columns)
     try:
         _, starts = sample_grid(seconds_of(df))
+        runs, skipped = complete_segments(np.all(np.isfinite(np.column_stack(columns)), axis=1), MIN_STRETCH, starts)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
-    runs = [(a, b) for a, b in complete_runs(np.all(np.isfinite(values), axis=1), starts) if b - a >= MIN_STRETCH]
-    if not runs:
-        raise ValueError(f"{path}: no stretch of {MIN_STRETCH} rows without missing values or time gaps")
-    used = sum(b - a for a, b in runs)
-    if used == len(df):
+    if not skipped:
         return runs, None
-    a, b = max(runs, key=lambda r: r[1] - r[0])
-    return runs, (f"{len(df) - used} rows skipped (missing values, time gaps, stretches under {MIN_STRETCH} rows); "
-                  f"the valve fit uses {len(runs)} stretch(es), {used} rows; the baselines the longest, rows "
-                  f"{a}-{b - 1}")
+    a, b = longest(runs)
+    return runs, (f"{skipped} rows skipped (missing values, time gaps, stretches under {MIN_STRETCH} rows); "
+                  f"the valve fit uses {len(runs)} stretch(es), {len(df) - skipped} rows; the baselines the longest, "
+                  f"rows {a}-{b - 1}")
 
 
 def _plain(value):

@@ -15,7 +15,7 @@ import numpy as np
 import math
 
 from .._core import TransferFunction
-from ..signals import Signals, valve_input
+from ..signals import Signals, longest, valve_input
 from ..stiction import fit_valve
 from ..stiction.hammerstein import CAL_GAIN_AT_HALF, N_U, N_Y, held_out_losses
 from ..stiction.record_quality import record_notes
@@ -46,7 +46,7 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
         op = sig.u[:, lp.input] + sig.operating_point[name]
         pv = sig.y[:, lp.output] + sig.operating_point[out.name]
         # a compressed or quantized record can hide or invent a valve fault: said as `stiction` says it
-        a, b = max(sig.segments, key=lambda s: s[1] - s[0])
+        a, b = longest(sig.segments)
         notes += record_notes({name: op[a:b], out.name: pv[a:b]})
         try:
             fit = fit_valve(op, pv, sig.segments)

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..signals import longest
 from .bicoherence import bicoherence_test
 from .curve_fit import curve_fit_test
 from .hammerstein import HammersteinResult, fit_valve
@@ -40,7 +41,7 @@ def analyse_loop(op, pv, sp=None, names: tuple[str, str] = ("OP", "PV"), stretch
     pv = np.asarray(pv, float)
     sp = None if sp is None else np.asarray(sp, float)
     result = fit_valve(op, pv, stretches)
-    rows = slice(*max(stretches, key=lambda r: r[1] - r[0])) if stretches else slice(None)
+    rows = slice(*longest(stretches)) if stretches else slice(None)
     op, pv, sp = op[rows], pv[rows], None if sp is None else sp[rows]
     baselines = {}
     for name, test in BASELINES.items():

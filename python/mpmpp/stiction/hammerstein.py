@@ -35,6 +35,7 @@ from math import exp
 import numpy as np
 
 from .._core import ActuatorNonlinearity, StictionLaw, actuator_positions
+from ..signals import longest
 from .oscillation import is_oscillating
 from .record_quality import NOTABLE_SHARE, rate_limited_share
 
@@ -179,7 +180,7 @@ def fit_valve(op, pv, stretches=None) -> HammersteinResult:
     if np.ptp(u_in) == 0 or np.ptp(y_in) == 0:
         raise ValueError("OP or PV is constant: the record does not excite the valve")
     y_s = (y - y_in.mean()) / np.std(y_in)
-    longest = slice(*max(stretches, key=lambda r: r[1] - r[0]))
+    widest = slice(*longest(stretches))
 
     def evaluate(kind, actuator, params, frequency=None, valve_lags=N_U):
         # the valve is taken at rest at each stretch's first OP (what it did before is unknown),
@@ -189,14 +190,14 @@ def fit_valve(op, pv, stretches=None) -> HammersteinResult:
         phi, target = np.vstack([p for p, _ in parts]), np.concatenate([t for _, t in parts])
         return Candidate(kind, params, float(held_out_losses(phi, target).sum()))
 
-    frequency = dominant_frequency(y_s[longest])
+    frequency = dominant_frequency(y_s[widest])
     linears = [evaluate("linear", ActuatorNonlinearity(),
                         {"valve_lags": k} | ({"disturbance_period": 1.0 / f} if f else {}), f, k)
                for k in range(N_U + 1) for f in (None, frequency)]
     linear = min(linears, key=lambda c: c.cv_sse)
     with_sine = min((c for c in linears if "disturbance_period" in c.params), key=lambda c: c.cv_sse)
     without = min((c for c in linears if "disturbance_period" not in c.params), key=lambda c: c.cv_sse)
-    periodic = with_sine.cv_sse < without.cv_sse and is_oscillating(u[longest])
+    periodic = with_sine.cv_sse < without.cv_sse and is_oscillating(u[widest])
     ranking = [linear] + [evaluate(*c) for c in _candidate_grid(u_in)]
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")
@@ -209,7 +210,7 @@ def fit_valve(op, pv, stretches=None) -> HammersteinResult:
     # limit is no verdict either way: its limited moves fit a stick-slip band (tuning families
     # with clipped MPC moves, seeds 0-7: every valve verdict came on an OP at its limit in
     # 79-82 % of the moves, none of them a valve fault; record_quality says so in a note)
-    verdict = bool(confidence > 0.5 and best.kind in HYSTERESIS_KINDS and rate_limited_share(u[longest]) <= NOTABLE_SHARE)
+    verdict = bool(confidence > 0.5 and best.kind in HYSTERESIS_KINDS and rate_limited_share(u[widest]) <= NOTABLE_SHARE)
     best_gain = 0.5 * np.log(linear.cv_sse / best.cv_sse)
     nonlinear = calibrated_confidence(best_gain) > 0.5
     return HammersteinResult(

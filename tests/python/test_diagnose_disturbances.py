@@ -78,3 +78,32 @@ def test_nuisance_projection_is_the_joint_least_squares_fit():
     assert theta == pytest.approx(joint[0], rel=1e-10)
     # what is left is orthogonal to every nuisance column on the weighted rows
     assert np.abs(columns.T @ (weight * p_y)).max() < 1e-8
+
+
+def _process_findings(spec):
+    result = diagnose(nominal_model(spec), simulate(spec))
+    return [f for f in result.findings if f.effect not in ("output_drift", "noise_change")]
+
+
+def test_a_change_stays_when_a_later_ramp_raises_the_plain_error():
+    """mpc_siso_1s seed 15 (tuning): the time constant doubled at 9.0 h, an unmeasured step on
+    the output at 8.2 h and a ramp from 10.8 h. The right update raises the plain held-out
+    one-step error after its onset (the ramp dominates it); with the disturbances taken out of
+    both errors it lowers it, and the process part confirms (process._carried_beside_disturbances).
+    Before, the finding was dropped and only the drift reported."""
+    spec, expect = fam.family("mpc_siso_1s").draw(15, None, "time_constant")
+    assert expect["size"] == 2.0 and sum(ev["type"] == "drift" for ev in spec["events"]) >= 2
+    found = _process_findings(spec)
+    assert found and (found[0].effect, found[0].input) == ("time_constant", "u1")
+    assert 1.5 <= found[0].estimate["time_constant_ratio"] <= 2.5
+    assert found[0].error_after > found[0].error_before  # the plain comparison alone refuses it
+    assert found[0].process_error_after < found[0].process_error_before
+
+
+def test_a_drift_the_breakpoints_miss_does_not_pass_as_a_gain_change():
+    """mpc_siso_disturbed seed 11, a drift-only control (tuning): a gain change beside the
+    disturbances lowers the error with them taken out but raises the process part's, so it is
+    not reported."""
+    spec, expect = fam.family("mpc_siso_disturbed").draw(11, None, "output_drift")
+    assert expect["effect"] == "output_drift"
+    assert _process_findings(spec) == []

@@ -60,6 +60,7 @@ class OutputResidual:
     sigma: list[float] = field(repr=False)       # innovation RMS per piece
     r: np.ndarray = field(repr=False)            # whitened output error
     fold: list[np.ndarray] = field(repr=False)   # weights of the even / odd held-out blocks
+    block: int                                   # rows per held-out block
     n: int
     noise_estimated: bool = False                # H estimated from these data, not the model's
     disturbance_onsets: list[int] = field(default_factory=list)   # step + ramp breakpoints in e
@@ -129,7 +130,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
                          split_onset=split_onset, split_significant=split_significant, pieces=pieces,
                          ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
-                         n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets,
+                         block=block, n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets,
                          free=free, inputs=inputs)
     out.r = out.whiten(np.nan_to_num(v))
     return out
@@ -244,13 +245,16 @@ def disturbance_onsets(out: OutputResidual, e: np.ndarray, first_onset: int, gri
                              max(first_onset, 2 * SETTLE), math.log(len(e)))[0]
 
 
+def disturbance_drives(n: int, onsets: list[int], sample_time_s: float) -> list[np.ndarray]:
+    """The level and, from each onset on, a step and a ramp (per hour), as output errors."""
+    hour = 3600.0 / sample_time_s
+    t = np.arange(n, dtype=float)
+    return [np.ones(n)] + [np.where(t >= k, d, 0.0) for k in onsets for d in (np.ones(n), (t - k) / hour)]
+
+
 def disturbance_nuisance(out: OutputResidual, onsets: list[int]) -> Nuisance:
     """The output's level and steps + ramps from ``onsets`` on, whitened as its residual."""
-    n = len(out.e)
-    hour = 3600.0 / out.sig.sample_time_s
-    t = np.arange(n, dtype=float)
-    columns = [out.whiten(np.ones(n))] + [out.whiten(np.where(t >= k, d, 0.0)) for k in onsets
-                                          for d in (np.ones(n), (t - k) / hour)]
+    columns = [out.whiten(d) for d in disturbance_drives(len(out.e), onsets, out.sig.sample_time_s)]
     return Nuisance(list(onsets), np.column_stack(columns), out.weight)
 
 

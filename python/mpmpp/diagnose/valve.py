@@ -17,7 +17,7 @@ import math
 from .._core import TransferFunction
 from ..signals import Signals, longest, valve_input
 from ..stiction import fit_valve
-from ..stiction.hammerstein import CAL_GAIN_AT_HALF, N_U, N_Y, held_out_losses
+from ..stiction.hammerstein import CAL_GAIN_AT_HALF, MIN_VALVE_ROWS, N_U, N_Y, held_out_losses
 from ..stiction.record_quality import record_notes
 from ..stiction.valve import actuator_from_fit
 from .errors import held_out_error
@@ -26,7 +26,6 @@ from .result import Finding, ModelChange
 from .process import first_lag
 from .whitening import MIN_AR_ROWS_PER_COEFFICIENT, OutputResidual, stable
 
-MIN_LOOP_ROWS = 100   # fit_valve's minimum
 PARAMS = 3            # kind, S, J
 ROOT_LIMIT = 0.999    # largest pole magnitude of a written channel (simulated, and 1/A inverted)
 
@@ -40,8 +39,8 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
         out, name = outputs[lp.output], sig.inputs[lp.input]
         if name in actuated:
             continue   # the model carries its valve already; sig.u is its position
-        if sum(b - a for a, b in sig.segments) < MIN_LOOP_ROWS:
-            notes.append(f"{out.name} <- {name}: fewer than {MIN_LOOP_ROWS} rows without gaps for the valve fit")
+        if sum(b - a for a, b in sig.segments) < MIN_VALVE_ROWS:
+            notes.append(f"{out.name} <- {name}: fewer than {MIN_VALVE_ROWS} rows without gaps for the valve fit")
             continue
         op = sig.u[:, lp.input] + sig.operating_point[name]
         pv = sig.y[:, lp.output] + sig.operating_point[out.name]

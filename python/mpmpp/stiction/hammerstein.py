@@ -45,6 +45,7 @@ from .record_quality import NOTABLE_SHARE, rate_limited_share
 N_Y = 4
 N_U = 6
 N_FOLDS = 5
+MIN_VALVE_ROWS = 100   # rows the valve fit needs (inside its stretches)
 
 # Logistic calibration P(stiction | g) = 1 / (1 + exp(-CAL_SLOPE (max(g, 0) - CAL_GAIN_AT_HALF))),
 # fitted on the TUNING families of studies/stiction_benchmark.py (which prints the fit). A
@@ -172,8 +173,8 @@ def fit_valve(op, pv, stretches=None) -> HammersteinResult:
                              f"{len(u)} rows; got {stretches}")
         stretches = [(a, b) for a, b in stretches if b - a > lags]
     inside = np.concatenate([np.arange(a, b) for a, b in stretches]) if stretches else np.arange(0)
-    if len(inside) < 100:
-        raise ValueError(f"too short: {len(inside)} rows; the valve fit needs at least 100")
+    if len(inside) < MIN_VALVE_ROWS:
+        raise ValueError(f"too short: {len(inside)} rows; the valve fit needs at least {MIN_VALVE_ROWS}")
     u_in, y_in = u[inside], y[inside]
     if not (np.isfinite(u_in).all() and np.isfinite(y_in).all()):
         raise ValueError("OP and PV must not contain missing or infinite values")

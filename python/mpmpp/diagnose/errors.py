@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core
-from .._core import TransferFunction
 from ..signals import Signals, per_segment, valve_input
 from .result import HeldOutError, ModelChange
 from .whitening import OutputResidual, disturbance_drives
@@ -13,12 +12,6 @@ from .whitening import OutputResidual, disturbance_drives
 
 def one_step_errors(sig: Signals, i: int, changes: list[ModelChange]) -> np.ndarray:
     """One-step prediction errors of output i with the model after ``changes``."""
-    v, noise = output_errors(sig, i, changes)
-    return per_segment(sig, lambda vv: noise.inverse().filter(np.nan_to_num(vv)), v) * np.where(np.isfinite(v), 1.0, np.nan)
-
-
-def output_errors(sig: Signals, i: int, changes: list[ModelChange]) -> tuple[np.ndarray, TransferFunction]:
-    """(y_i - G_i u, H_i) with the model after ``changes`` (NaN where data are missing)."""
     name = sig.outputs[i]
     row = list(sig.rows[i])
     noise = sig.noise[i]
@@ -42,7 +35,7 @@ def output_errors(sig: Signals, i: int, changes: list[ModelChange]) -> tuple[np.
     for g, z in extra_cols:
         v = v - per_segment(sig, g.filter, np.nan_to_num(z))
         v[~np.isfinite(z)] = np.nan
-    return v, noise
+    return per_segment(sig, lambda vv: noise.inverse().filter(np.nan_to_num(vv)), v) * np.where(np.isfinite(v), 1.0, np.nan)
 
 
 def held_out_error(out: OutputResidual, onset: int, change: ModelChange) -> HeldOutError:

@@ -18,6 +18,7 @@ from .loops import single_loops
 from .noise import noise_finding
 from .process import SCALED_CHANNEL_EFFECTS, process_findings
 from .process_error import held_out_rms, process_parts
+from .reference_refit import refitted_before
 from .result import DiagnoseResult, Finding, InsufficientData
 from .valve import valve_findings
 from .whitening import (AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual,
@@ -233,8 +234,11 @@ def _with_later_changes(first: DiagnoseResult, model, data, train_end_s: float |
                         min_effect: float, actuator_search: bool | None) -> DiagnoseResult:
     """``first`` and, when linear channel findings of it stand from the record's start (or from
     ``train_end_s``), the findings of a second pass against the model with them applied whose
-    onset lies inside the record: the changes the standing error hid. Every finding keeps the
-    figures of its own pass; the second pass's errors before are those of the corrected model."""
+    onset lies inside the record: the changes the standing error hid. A linear channel change of
+    that pass must hold against the standing channels refitted in full on the rows before it
+    (reference_refit.py); where that refit can be had, the later findings are those of a pass
+    against it. Every finding keeps the figures of its own pass; the later findings' errors
+    before are those of the model they were found against."""
     start = first.start_s
     standing = [f for f in first.findings if f.effect in LINEAR_CHANNEL_EFFECTS and f.onset_s <= start]
     if not standing:
@@ -242,6 +246,12 @@ def _with_later_changes(first: DiagnoseResult, model, data, train_end_s: float |
     corrected = apply_changes(model, [c for f in standing for c in f.model_changes()])
     second = _one_pass(corrected, data, train_end_s, lengths, min_effect, actuator_search)
     later = [f for f in second.findings if f.onset_s > start]
+    dated = [f for f in later if f.effect in LINEAR_CHANNEL_EFFECTS]
+    refits = refitted_before(model, data, standing, dated[0].onset_s) if dated else None
+    if refits:
+        second = _one_pass(apply_changes(corrected, refits), data, train_end_s, lengths, min_effect,
+                           actuator_search)
+        later = [f for f in second.findings if f.onset_s > start]
     if not later:
         return first
     residuals_after, process_parts = {}, {}
@@ -253,8 +263,11 @@ def _with_later_changes(first: DiagnoseResult, model, data, train_end_s: float |
     for k, f in enumerate(found, start=1):
         f.id = f"F{k}"
     basis = ", ".join(f.id for f in standing)
+    against = (f"against {basis}'s channel refitted on the data before t={dated[0].onset_s / 3600:.1f} h (the "
+               "model as it was before the change)" if refits else
+               f"with {basis} applied (the model as it should have been from the start)")
     for f in later:
-        f.explanation = f"with {basis} applied (the model as it should have been from the start): {f.explanation}"
+        f.explanation = f"{against}: {f.explanation}"
     notes = first.notes + [n for n in second.notes if n not in first.notes]
     return dataclasses.replace(
         first, findings=found, notes=notes,

@@ -32,7 +32,7 @@ from ..signals import Signals, per_segment
 from ..step_response import step_response_deviation, step_response_error
 from .errors import held_out_error, held_out_error_beside
 from .noise import drift_finding
-from .process_error import held_out_rms, process_parts
+from .process_error import process_errors
 from .refine import refine
 from .result import Finding, InsufficientData, ModelChange
 from .scoring import ProfilePoint, ci_from_profile, confidence, theta_ci_from_profile
@@ -533,8 +533,7 @@ def _carried_beside_disturbances(out: OutputResidual, fit: Fit, finding: Finding
     err = held_out_error_beside(out, fit.onset, finding.change, onsets)
     if not err.after < err.before:
         return False
-    before, after = (held_out_rms(p, out.block)
-                     for p in process_parts(out.sig, out.i, [finding.change], fit.onset, out.block))
+    before, after = process_errors(out.sig, out.i, [finding.change], fit.onset, out.block)
     return after < before
 
 

@@ -139,7 +139,7 @@ def complete_segments(valid: np.ndarray, min_segment: int, starts=()) -> tuple[l
     ValueError when there is none."""
     kept = [r for r in complete_runs(valid, starts) if r[1] - r[0] >= min_segment]
     if not kept:
-        raise ValueError(f"data: no stretch of at least {min_segment} rows without missing values")
+        raise ValueError(f"data: no stretch of at least {min_segment} rows without missing values or time gaps")
     return kept, int(len(valid) - sum(b - a for a, b in kept))
 
 

@@ -94,26 +94,30 @@ void bind_identification(py::module_& m) {
   m.def(
       "arx",
       [](const ConstVec& y, const ConstMat& u, int na, std::vector<int> nb, std::vector<int> delays,
-         double delta, double rank_tolerance) {
+         double delta, double rank_tolerance, const std::vector<Eigen::Index>& stretch_starts) {
         return arx(y, u, ArxOrders{na, std::move(nb), std::move(delays)},
-                   ArxOptions{delta, rank_tolerance});
+                   ArxOptions{delta, rank_tolerance}, stretch_starts);
       },
       py::arg("y"), py::arg("u"), py::arg("na"), py::arg("nb"), py::arg("delays"),
       py::arg("delta") = ArxOptions{}.delta,
       py::arg("rank_tolerance") = ArxOptions{}.rank_tolerance,
+      py::arg("stretch_starts") = std::vector<Eigen::Index>{},
       py::call_guard<py::gil_scoped_release>());
 
   m.def(
       "oe",
       [](const ConstVec& y, const ConstMat& u, const std::vector<OeChannel>& channels,
-         Eigen::Index skip, int max_iterations, double max_pole_radius, int init_fir_length) {
+         Eigen::Index skip, int max_iterations, double max_pole_radius, int init_fir_length,
+         const std::vector<Eigen::Index>& stretch_starts) {
         return oe(y, u, channels, skip,
-                  make_oe_options(max_iterations, max_pole_radius, init_fir_length));
+                  make_oe_options(max_iterations, max_pole_radius, init_fir_length),
+                  stretch_starts);
       },
       py::arg("y"), py::arg("u"), py::arg("channels"), py::arg("skip") = 0,
       py::arg("max_iterations") = OeOptions{}.max_iterations,
       py::arg("max_pole_radius") = OeOptions{}.max_pole_radius,
       py::arg("init_fir_length") = OeOptions{}.init_fir_length,
+      py::arg("stretch_starts") = std::vector<Eigen::Index>{},
       py::call_guard<py::gil_scoped_release>());
 
   py::class_<ArxOeEstimator>(m, "ArxOeEstimator",
@@ -139,8 +143,10 @@ void bind_identification(py::module_& m) {
            py::arg("max_pole_radius") = OeOptions{}.max_pole_radius,
            py::arg("two_step_covariance") = false)
       .def("estimate",
-           py::overload_cast<const ConstVec&, const ConstMat&>(&ArxOeEstimator::estimate),
-           py::arg("y"), py::arg("u"), py::call_guard<py::gil_scoped_release>())
+           py::overload_cast<const ConstVec&, const ConstMat&, const std::vector<Eigen::Index>&>(
+               &ArxOeEstimator::estimate),
+           py::arg("y"), py::arg("u"), py::arg("stretch_starts") = std::vector<Eigen::Index>{},
+           py::call_guard<py::gil_scoped_release>())
       .def("estimate_windows", &ArxOeEstimator::estimate_windows, py::arg("y"), py::arg("u"),
            py::arg("window"), py::arg("step"), py::call_guard<py::gil_scoped_release>());
 

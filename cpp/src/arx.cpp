@@ -65,7 +65,8 @@ ArxEstimator::ArxEstimator(ArxOrders orders, ArxOptions options)
 }
 
 void ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                            const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out) {
+                            const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out,
+                            const std::vector<Eigen::Index>& stretch_starts) {
   const Eigen::Index N = y.size();
   const Eigen::Index m = static_cast<Eigen::Index>(orders_.nb.size());
   if (u.cols() != m)
@@ -74,11 +75,24 @@ void ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   if (u.rows() != N)
     throw InputError("u must have as many rows as y has samples (" + std::to_string(N) + "), got " +
                      std::to_string(u.rows()));
-  if (N < min_window())
+  detail::stretch_spans(N, stretch_starts, stretches_);
+  equations_.clear();
+  Eigen::Index n_eq = 0;
+  for (const auto& s : stretches_)
+    if (s.size() > t0_) {
+      equations_.push_back({s.begin + t0_, s.end});
+      n_eq += s.size() - t0_;
+    }
+  if (stretches_.size() == 1 && N < min_window())
     throw NumericalError("window too short for the ARX orders: " + std::to_string(N) +
                          " samples, need at least " + std::to_string(min_window()) + " (" +
                          std::to_string(p_) +
                          " parameters, first equation at t0 = " + std::to_string(t0_) + ")");
+  if (n_eq < 2 * p_)
+    throw NumericalError(
+        "stretches too short for the ARX orders: " + std::to_string(n_eq) + " equations in " +
+        std::to_string(stretches_.size()) + " stretches, need at least " + std::to_string(2 * p_) +
+        " (the first equation is t0 = " + std::to_string(t0_) + " rows into each stretch)");
   if (check_signals_) require_informative_window(y, u);
 
   // Regressor phi(t) = [-y(t-1) .. -y(t-na), u_j(t-d_j) .. u_j(t-d_j-nb_j+1) ...] (eq. 6).
@@ -88,8 +102,7 @@ void ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     for (int k = 0; k < orders_.nb[j]; ++k)
       columns_[c++] = {u.col(j).data(), orders_.delays[j] + k, 1.0};
 
-  const Eigen::Index n_eq = N - t0_;
-  detail::lagged_normal_equations(columns_, y.data(), t0_, n_eq, G_, h_);
+  detail::lagged_normal_equations(columns_, y.data(), equations_, G_, h_);
   const auto outcome = solver_.solve(G_, h_, options_.delta, options_.rank_tolerance, out.theta);
   using Status = detail::NormalEquationsSolver::Status;
   if (outcome.status == Status::ZeroColumn) {
@@ -111,7 +124,8 @@ void ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   // Residual sum of squares from the normal equations, no residual pass:
   // |y - Phi theta|^2 = y'y - 2 theta'h + theta'G theta (exact for the ridge solution
   // too). Cancellation costs ~eps y'y: negligible unless the fit is exact.
-  const double yy = y.segment(t0_, n_eq).squaredNorm();
+  double yy = 0.0;
+  for (const auto& e : equations_) yy += y.segment(e.begin, e.size()).squaredNorm();
   const double rss = std::max(0.0, yy - 2.0 * out.theta.dot(h_) + out.theta.dot(G_ * out.theta));
   out.equations = n_eq;
   out.noise_variance = rss / static_cast<double>(n_eq - p_);
@@ -131,16 +145,17 @@ void ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
 }
 
 ArxResult ArxEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                                 const Eigen::Ref<const Eigen::MatrixXd>& u) {
+                                 const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                 const std::vector<Eigen::Index>& stretch_starts) {
   ArxResult out;
-  estimate(y, u, out);
+  estimate(y, u, out, stretch_starts);
   return out;
 }
 
 ArxResult arx(const Eigen::Ref<const Eigen::VectorXd>& y,
               const Eigen::Ref<const Eigen::MatrixXd>& u, const ArxOrders& orders,
-              const ArxOptions& options) {
-  return ArxEstimator(orders, options).estimate(y, u);
+              const ArxOptions& options, const std::vector<Eigen::Index>& stretch_starts) {
+  return ArxEstimator(orders, options).estimate(y, u, stretch_starts);
 }
 
 }  // namespace mpmpp

@@ -62,11 +62,16 @@ ArxOeEstimator::ArxOeEstimator(ArxOeConfig config)
 }
 
 void ArxOeEstimator::estimate_arx(const Eigen::Ref<const Eigen::VectorXd>& y,
-                                  const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out) {
+                                  const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out,
+                                  const std::vector<Eigen::Index>& stretch_starts) {
   const Eigen::Index N = y.size(), m = static_cast<Eigen::Index>(config_.structures.size());
   if (u.cols() != m || u.rows() != N)
     throw InputError("u must be " + std::to_string(N) + " x " + std::to_string(m) + ", got " +
                      std::to_string(u.rows()) + " x " + std::to_string(u.cols()));
+  if (!stretch_starts.empty() && config_.detrend == Detrend::Linear)
+    throw InputError("detrend 'linear' needs one stretch (a line through a record with gaps)");
+  if (!stretch_starts.empty() && config_.two_step_covariance)
+    throw InputError("the two-step covariance needs one stretch");
   // Checked on the raw window: after mean removal a constant signal is rounding noise.
   require_informative_window(y, u);
 
@@ -86,21 +91,27 @@ void ArxOeEstimator::estimate_arx(const Eigen::Ref<const Eigen::VectorXd>& y,
     require_left(u.col(j), u_.col(j), "u[" + std::to_string(j) + "]");
 
   // 2. high-order ARX.
-  arx_.estimate(y_, u_, out);
+  arx_.estimate(y_, u_, out, stretch_starts);
 }
 
 void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                              const Eigen::Ref<const Eigen::MatrixXd>& u, ArxOeResult& out) {
-  estimate_arx(y, u, out.arx);
+                              const Eigen::Ref<const Eigen::MatrixXd>& u, ArxOeResult& out,
+                              const std::vector<Eigen::Index>& stretch_starts) {
+  estimate_arx(y, u, out.arx, stretch_starts);
   const Eigen::Index N = y.size(), m = static_cast<Eigen::Index>(config_.structures.size());
   const Eigen::VectorXd& a = out.arx.a;
   const int na = config_.arx.na;
 
-  // 3. A(q)-filtered data (A is FIR: numerator a, denominator 1).
+  // 3. A(q)-filtered data (A is FIR: numerator a, denominator 1), each stretch from rest.
   yf_.resize(N);
   uf_.resize(N, m);
-  filter_into(a, one_, 0, y_, yf_);
-  for (Eigen::Index j = 0; j < m; ++j) filter_into(a, one_, 0, u_.col(j), uf_.col(j));
+  detail::stretch_spans(N, stretch_starts, stretches_);
+  for (const detail::RowSpan& s : stretches_) {
+    filter_into(a, one_, 0, y_.segment(s.begin, s.size()), yf_.segment(s.begin, s.size()));
+    for (Eigen::Index j = 0; j < m; ++j)
+      filter_into(a, one_, 0, u_.col(j).segment(s.begin, s.size()),
+                  uf_.col(j).segment(s.begin, s.size()));
+  }
 
   // 4. OE started from the ARX estimate G_j = q^-d_j B_j / A (impulse after the delay).
   for (Eigen::Index j = 0; j < m; ++j) {
@@ -110,7 +121,7 @@ void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     start_impulse_[j].resize(L);
     filter_into(out.arx.b[j], a, 0, pulse_, start_impulse_[j]);
   }
-  oe_.estimate(yf_, uf_, na, out.oe, &start_impulse_);
+  oe_.estimate(yf_, uf_, na, out.oe, &start_impulse_, stretch_starts);
   if (config_.two_step_covariance)
     two_step_.compute(y_, u_, yf_, uf_, arx_, out.arx, config_.structures, out.oe,
                       out.two_step_covariance);
@@ -133,9 +144,10 @@ void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
 }
 
 ArxOeResult ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                                     const Eigen::Ref<const Eigen::MatrixXd>& u) {
+                                     const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                     const std::vector<Eigen::Index>& stretch_starts) {
   ArxOeResult out;
-  estimate(y, u, out);
+  estimate(y, u, out, stretch_starts);
   return out;
 }
 

@@ -1,6 +1,9 @@
 #include "mpmpp/detail/lagged_regression.hpp"
 
 #include <cmath>
+#include <string>
+
+#include "mpmpp/error.hpp"
 
 namespace mpmpp::detail {
 
@@ -11,6 +14,21 @@ ConstSegment column_segment(const LaggedColumn& c, Eigen::Index t0, Eigen::Index
   return ConstSegment(c.signal + (t0 - c.lag), n);
 }
 }  // namespace
+
+void stretch_spans(Eigen::Index N, const std::vector<Eigen::Index>& starts,
+                   std::vector<RowSpan>& spans) {
+  spans.clear();
+  Eigen::Index begin = 0;
+  for (const Eigen::Index s : starts) {
+    if (s <= begin || s >= N)
+      throw InputError("stretch_starts must be strictly increasing rows in (0, " +
+                       std::to_string(N) + "), got " + std::to_string(s) + " after " +
+                       std::to_string(begin));
+    spans.push_back({begin, s});
+    begin = s;
+  }
+  spans.push_back({begin, N});
+}
 
 void lagged_matrix(const std::vector<LaggedColumn>& columns, Eigen::Index t0, Eigen::Index n,
                    Eigen::MatrixXd& phi) {
@@ -184,6 +202,26 @@ void NormalEquationsSolver::covariance_factor(Eigen::MatrixXd& C) const {
       C(i, j) = C(j, i) = Li.col(i).tail(p - i).dot(Li.col(j).tail(p - i));
   if (shift_ > 0.0) C = (C * scaled_ * C).eval();
   C = scale_.asDiagonal() * C * scale_.asDiagonal();
+}
+
+void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const double* target,
+                             const std::vector<RowSpan>& spans, Eigen::MatrixXd& G,
+                             Eigen::VectorXd& h) {
+  if (spans.size() == 1) {  // one window: no sums to add (the detectors' hot path)
+    lagged_normal_equations(columns, target, spans[0].begin, spans[0].size(), G, h);
+    return;
+  }
+  const Eigen::Index p = static_cast<Eigen::Index>(columns.size());
+  thread_local Eigen::MatrixXd G_span;
+  thread_local Eigen::VectorXd h_span;
+  G.setZero(p, p);
+  h.setZero(p);
+  for (const RowSpan& s : spans) {
+    if (s.size() <= 0) continue;
+    lagged_normal_equations(columns, target, s.begin, s.size(), G_span, h_span);
+    G += G_span;
+    h += h_span;
+  }
 }
 
 }  // namespace mpmpp::detail

@@ -142,8 +142,7 @@ void OutputErrorEstimator::prony_start(std::size_t j, const Eigen::Ref<const Eig
 
 void OutputErrorEstimator::pole_grid_start(std::size_t j,
                                            const Eigen::Ref<const Eigen::MatrixXd>& u,
-                                           const double* y, Eigen::Index skip, Eigen::Index N,
-                                           OeResult& out) {
+                                           const double* y, Eigen::Index N, OeResult& out) {
   // A Prony fit to a noisy impulse response is pulled towards a pole at 0 (noise in the
   // taps inflates its denominator), and the OE cost has a poor valley between fast and
   // slow poles. For a first-order denominator the cost over the pole is one-dimensional
@@ -157,12 +156,12 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j,
   if (channels_.size() == 1) {
     residual_ = Eigen::Map<const Eigen::VectorXd>(y, N);
   } else {
-    simulate(u, y, skip, N, out);
+    simulate(u, y, N, out);
     residual_ = error_;
     for (Eigen::Index k = 0; k < nb; ++k)
       residual_ += out.b[j][k] * Eigen::Map<const Eigen::VectorXd>(w_[j].data() + pad_ - k, N);
   }
-  const double rr = residual_.tail(N - skip).squaredNorm();
+  const double rr = criterion_sum_of_squares(residual_);
 
   std::array<double, P> pole;
   pole[0] = -out.f[j][1];
@@ -171,16 +170,21 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j,
   // grid_v_ is v_g(t) for every g: independent recursions side by side vectorise, where
   // one filter at a time is a chain of dependent multiply-adds), then the
   // least-squares sums in b_j of all P poles together, again vectorised across poles:
-  //   G_g(k, l) = sum_{t >= skip} v_g(t - k) v_g(t - l),  h_g(k) = sum v_g(t - k) residual(t).
+  //   G_g(k, l) = sum_{equations} v_g(t - k) v_g(t - l),  h_g(k) = sum v_g(t - k) residual(t).
+  // Each stretch starts at rest: v_g = 0 in the nb rows before the first and in the
+  // pad_ >= nb rows between stretches.
   grid_v_.resize((nb + N) * P);
-  std::fill_n(grid_v_.data(), nb * P, 0.0);  // v_g(t < 0) = 0: zero initial state
+  std::fill_n(grid_v_.data(), nb * P, 0.0);
   double* v = grid_v_.data() + nb * P;
+  for (std::size_t k = 1; k < stretches_.size(); ++k)
+    std::fill(v + stretches_[k - 1].end * P, v + stretches_[k].begin * P, 0.0);
   const auto uj = u.col(static_cast<Eigen::Index>(j));
-  for (Eigen::Index t = 0; t < N; ++t) {
-    const double x = t >= ch.delay ? uj[t - ch.delay] : 0.0;
-    double* vt = v + t * P;
-    for (int g = 0; g < P; ++g) vt[g] = x + pole[g] * vt[g - P];
-  }
+  for (const detail::RowSpan& stretch : stretches_)
+    for (Eigen::Index t = stretch.begin; t < stretch.end; ++t) {
+      const double x = t - stretch.begin >= ch.delay ? uj[t - ch.delay] : 0.0;
+      double* vt = v + t * P;
+      for (int g = 0; g < P; ++g) vt[g] = x + pole[g] * vt[g - P];
+    }
   const int n_products = nb * (nb + 1) / 2;  // rows of grid_sums_: G_g(k, l), l <= k; h_g(k)
   grid_sums_.resize((n_products + nb) * P);
   const double* res = residual_.data();
@@ -188,12 +192,13 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j,
     for (int l = 0; l <= k; ++l) {  // one pass: G_g(k, l) and, on the diagonal, h_g(k)
       std::array<double, P> g_kl{}, h_k{};
       const bool diagonal = l == k;
-      for (Eigen::Index t = skip; t < N; ++t) {
-        const double *vk = v + (t - k) * P, *vl = v + (t - l) * P;
-        for (int g = 0; g < P; ++g) g_kl[g] += vk[g] * vl[g];
-        if (diagonal)
-          for (int g = 0; g < P; ++g) h_k[g] += vk[g] * res[t];
-      }
+      for (const detail::RowSpan& rows : equations_)
+        for (Eigen::Index t = rows.begin; t < rows.end; ++t) {
+          const double *vk = v + (t - k) * P, *vl = v + (t - l) * P;
+          for (int g = 0; g < P; ++g) g_kl[g] += vk[g] * vl[g];
+          if (diagonal)
+            for (int g = 0; g < P; ++g) h_k[g] += vk[g] * res[t];
+        }
       std::copy(g_kl.begin(), g_kl.end(), grid_sums_.data() + (k * (k + 1) / 2 + l) * P);
       if (diagonal) std::copy(h_k.begin(), h_k.end(), grid_sums_.data() + (n_products + k) * P);
     }
@@ -218,14 +223,28 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j,
   }
 }
 
+void OutputErrorEstimator::filter_stretches(const Eigen::VectorXd& num, const Eigen::VectorXd& den,
+                                            int delay, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                            Eigen::Ref<Eigen::VectorXd> out) const {
+  for (const detail::RowSpan& s : stretches_)
+    filter_into(num, den, delay, x.segment(s.begin, s.size()), out.segment(s.begin, s.size()));
+}
+
+double OutputErrorEstimator::criterion_sum_of_squares(const Eigen::VectorXd& x) const {
+  double sum = 0.0;
+  for (const detail::RowSpan& rows : equations_)
+    sum += x.segment(rows.begin, rows.size()).squaredNorm();
+  return sum;
+}
+
 double OutputErrorEstimator::simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
-                                      Eigen::Index skip, Eigen::Index N, const OeResult& par) {
+                                      Eigen::Index N, const OeResult& par) {
   using ConstSegment = Eigen::Map<const Eigen::VectorXd>;
   for (std::size_t j = 0; j < channels_.size(); ++j) {
     // w_j = q^-d_j / F_j u_j is both the b-sensitivity and, through yhat_j = B_j w_j,
     // the simulation: one recursive filter per channel instead of two. yhat_j is not
     // stored: e = y - sum_jk b_jk w_j(t - k) in one pass per term.
-    filter_into(unit_, par.f[j], channels_[j].delay, u.col(j), w_[j].segment(pad_, N));
+    filter_stretches(unit_, par.f[j], channels_[j].delay, u.col(j), w_[j].segment(pad_, N));
     const double* w = w_[j].data() + pad_;
     for (Eigen::Index k = 0; k < par.b[j].size(); ++k) {
       const ConstSegment w_k(w - k, N);  // pad_ >= nb - 1
@@ -235,7 +254,7 @@ double OutputErrorEstimator::simulate(const Eigen::Ref<const Eigen::MatrixXd>& u
         error_ -= par.b[j][k] * w_k;
     }
   }
-  return 0.5 * error_.tail(N - skip).squaredNorm();
+  return 0.5 * criterion_sum_of_squares(error_);
 }
 
 void OutputErrorEstimator::jacobian_columns(Eigen::Index N, const OeResult& par) {
@@ -248,13 +267,13 @@ void OutputErrorEstimator::jacobian_columns(Eigen::Index N, const OeResult& par)
     const OeChannel& ch = channels_[j];
     for (int k = 0; k < ch.nb; ++k) columns_[c++] = {w_[j].data() + pad_, k, 1.0};
     if (ch.nf == 0) continue;
-    filter_into(unit_, par.f[j], 0, w_[j].segment(pad_, N), s_[j].segment(pad_, N));
-    filter_into(par.b[j], unit_, 0, s_[j].segment(pad_, N), v_[j].segment(pad_, N));
+    filter_stretches(unit_, par.f[j], 0, w_[j].segment(pad_, N), s_[j].segment(pad_, N));
+    filter_stretches(par.b[j], unit_, 0, s_[j].segment(pad_, N), v_[j].segment(pad_, N));
     for (int i = 1; i <= ch.nf; ++i) columns_[c++] = {v_[j].data() + pad_, i, -1.0};
   }
 }
 
-void OutputErrorEstimator::newton_hessian(Eigen::Index skip, Eigen::Index N, const OeResult& par) {
+void OutputErrorEstimator::newton_hessian(Eigen::Index N, const OeResult& par) {
   // Newton's Hessian of sum(eps^2)/2: H = J'J - sum_t eps(t) d2yhat(t)/dtheta2, where per
   // channel (zero across channels and between two b's)
   //   d2yhat/db_k df_i = -q^-(k+i) s,  s = w / F = q^-d u / F^2,
@@ -264,16 +283,19 @@ void OutputErrorEstimator::newton_hessian(Eigen::Index skip, Eigen::Index N, con
   // not small, and on the paper's SISO windows it contracts the error by ~0.35 per
   // iteration (9 iterations per window on average, up to 17); Newton needs 4.9.
   H_ = G_;
-  const Eigen::Index n_eq = N - skip;
-  const Eigen::Map<const Eigen::VectorXd> eps(error_.data() + skip, n_eq);
   const auto correlation = [&](const Eigen::VectorXd& x, Eigen::Index lag) {
-    return eps.dot(Eigen::Map<const Eigen::VectorXd>(x.data() + pad_ + skip - lag, n_eq));
+    double sum = 0.0;
+    for (const detail::RowSpan& rows : equations_)
+      sum += Eigen::Map<const Eigen::VectorXd>(error_.data() + rows.begin, rows.size())
+                 .dot(Eigen::Map<const Eigen::VectorXd>(x.data() + pad_ + rows.begin - lag,
+                                                        rows.size()));
+    return sum;
   };
   Eigen::Index first = 0;  // index of channel j's b_j0 in theta
   for (std::size_t j = 0; j < channels_.size(); ++j) {
     const OeChannel& ch = channels_[j];
     if (ch.nf > 0) {
-      filter_into(unit_, par.f[j], 0, v_[j].segment(pad_, N), r_[j].segment(pad_, N));
+      filter_stretches(unit_, par.f[j], 0, v_[j].segment(pad_, N), r_[j].segment(pad_, N));
       const Eigen::Index f0 = first + ch.nb - 1;  // theta index of f_ji is f0 + i
       for (int i = 1; i <= ch.nf; ++i) {
         for (int k = 0; k < ch.nb; ++k) {
@@ -300,24 +322,26 @@ void OutputErrorEstimator::throw_if_not_informative(const detail::NormalEquation
 }
 
 void OutputErrorEstimator::fir_start(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
-                                     Eigen::Index skip, Eigen::Index N, OeResult& out) {
+                                     OeResult& out) {
   // Joint FIR least squares: channel j gets L_j taps on q^-d_j u_j (nb_j taps if linear).
   columns_.clear();
   for (std::size_t j = 0; j < channels_.size(); ++j) {
     const OeChannel& ch = channels_[j];
-    auto w = w_[j].segment(pad_, N);
-    const Eigen::Index d = std::min<Eigen::Index>(ch.delay, N);
-    w.head(d).setZero();
-    w.tail(N - d) = u.col(j).head(N - d);
-    const int L = init_fir_length(j, N - skip);
+    for (const detail::RowSpan& s : stretches_) {  // q^-d_j u_j, each stretch from rest
+      auto w = w_[j].segment(pad_ + s.begin, s.size());
+      const Eigen::Index d = std::min<Eigen::Index>(ch.delay, s.size());
+      w.head(d).setZero();
+      w.tail(s.size() - d) = u.col(j).segment(s.begin, s.size() - d);
+    }
+    const int L = init_fir_length(j, n_eq_);
     for (int k = 0; k < L; ++k) columns_.push_back({w_[j].data() + pad_, k, 1.0});
   }
-  detail::lagged_normal_equations(columns_, y, skip, N - skip, G_, h_);
+  detail::lagged_normal_equations(columns_, y, equations_, G_, h_);
   throw_if_not_informative(solver_.solve(G_, h_, 0.0, options_.rank_tolerance, theta_),
                            "the FIR start fit");
   Eigen::Index k = 0;
   for (std::size_t j = 0; j < channels_.size(); ++j) {
-    const int L = init_fir_length(j, N - skip);
+    const int L = init_fir_length(j, n_eq_);
     prony_start(j, theta_.segment(k, L), out.b[j], out.f[j]);
     k += L;
   }
@@ -326,64 +350,94 @@ void OutputErrorEstimator::fir_start(const Eigen::Ref<const Eigen::MatrixXd>& u,
 void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                                     const Eigen::Ref<const Eigen::MatrixXd>& u, Eigen::Index skip,
                                     OeResult& out,
-                                    const std::vector<Eigen::VectorXd>* initial_impulse) {
-  const Eigen::Index N = y.size();
+                                    const std::vector<Eigen::VectorXd>* initial_impulse,
+                                    const std::vector<Eigen::Index>& stretch_starts) {
   const std::size_t m = channels_.size();
   if (u.cols() != static_cast<Eigen::Index>(m))
     throw InputError("u must have one column per channel (" + std::to_string(m) + "), got " +
                      std::to_string(u.cols()));
-  if (u.rows() != N)
-    throw InputError("u must have as many rows as y has samples (" + std::to_string(N) + "), got " +
-                     std::to_string(u.rows()));
+  if (u.rows() != y.size())
+    throw InputError("u must have as many rows as y has samples (" + std::to_string(y.size()) +
+                     "), got " + std::to_string(u.rows()));
   if (skip < 0) throw InputError("skip must be >= 0");
   if (initial_impulse && initial_impulse->size() != m)
     throw InputError("initial_impulse must have one response per channel");
-  const Eigen::Index n_eq = N - skip;
-  if (n_eq < 2 * p_)
-    throw NumericalError("window too short for the OE structure: " + std::to_string(n_eq) +
+  detail::stretch_spans(y.size(), stretch_starts, record_);
+  const auto& record = record_;
+  n_eq_ = 0;
+  for (const auto& s : record) n_eq_ += std::max<Eigen::Index>(s.size() - skip, 0);
+  if (n_eq_ < 2 * p_)
+    throw NumericalError("window too short for the OE structure: " + std::to_string(n_eq_) +
                          " equations for " + std::to_string(p_) +
                          " parameters (need >= " + std::to_string(2 * p_) + ")");
   if (check_signals_) require_informative_window(y, u);
 
-  // History the lagged columns may reach before sample 0 (zero initial state).
+  // History the lagged columns may reach before a stretch's first row (zero initial state).
   pad_ = 0;
   for (std::size_t j = 0; j < m; ++j) {
-    const int L = (!initial_impulse || channels_[j].nf == 0) ? init_fir_length(j, n_eq) : 0;
+    const int L = (!initial_impulse || channels_[j].nf == 0) ? init_fir_length(j, n_eq_) : 0;
     if (channels_[j].nf > 0 && !initial_impulse && L < channels_[j].nb + channels_[j].nf)
-      throw NumericalError("window too short for the OE start fit: " + std::to_string(n_eq) +
+      throw NumericalError("window too short for the OE start fit: " + std::to_string(n_eq_) +
                            " equations");
     // Newton's second-order term reaches lags nb - 1 + nf and 2 nf (newton_hessian).
     pad_ = std::max<Eigen::Index>(
         pad_, std::max({channels_[j].nb - 1 + channels_[j].nf, 2 * channels_[j].nf, L - 1}));
   }
+  // Layout: the stretches one after another with pad_ zero rows between, so that a lagged
+  // column reaching before a stretch's first row reads the zeros of a start at rest.
+  stretches_.clear();
+  equations_.clear();
+  Eigen::Index at = 0;
+  for (const auto& s : record) {
+    stretches_.push_back({at, at + s.size()});
+    if (s.size() > skip) equations_.push_back({at + skip, at + s.size()});
+    at += s.size() + pad_;
+  }
+  const Eigen::Index N = stretches_.back().end;
+  if (record.size() > 1) {
+    y_laid_.setZero(N);
+    u_laid_.setZero(N, static_cast<Eigen::Index>(m));
+    for (std::size_t k = 0; k < record.size(); ++k) {
+      y_laid_.segment(stretches_[k].begin, record[k].size()) =
+          y.segment(record[k].begin, record[k].size());
+      u_laid_.middleRows(stretches_[k].begin, record[k].size()) =
+          u.middleRows(record[k].begin, record[k].size());
+    }
+  }
+  const double* yl = record.size() > 1 ? y_laid_.data() : y.data();
+  const Eigen::Ref<const Eigen::MatrixXd> ul =
+      record.size() > 1 ? Eigen::Ref<const Eigen::MatrixXd>(u_laid_) : u;
   for (std::size_t j = 0; j < m; ++j)
     for (auto* buf : {&w_[j], &v_[j], &s_[j], &r_[j]}) {
       buf->resize(pad_ + N);
-      buf->head(pad_).setZero();
+      if (record.size() > 1)
+        buf->setZero();  // the rows between stretches are never written
+      else
+        buf->head(pad_).setZero();
     }
   out.b.resize(m);
   out.f.resize(m);
   candidate_.b.resize(m);
   candidate_.f.resize(m);
-  out.equations = n_eq;
+  out.equations = n_eq_;
   out.iterations = 0;
 
   if (initial_impulse && !linear()) {
     for (std::size_t j = 0; j < m; ++j) prony_start(j, (*initial_impulse)[j], out.b[j], out.f[j]);
   } else {
-    fir_start(u, y.data(), skip, N, out);
+    fir_start(ul, yl, out);
   }
   for (std::size_t j = 0; j < m; ++j)
-    if (channels_[j].nf == 1) pole_grid_start(j, u, y.data(), skip, N, out);
+    if (channels_[j].nf == 1) pole_grid_start(j, ul, yl, N, out);
 
-  double cost = simulate(u, y.data(), skip, N, out);
+  double cost = simulate(ul, yl, N, out);
   out.converged = linear();  // the FIR least-squares start is then the optimum
   pack(out, theta_);
   double lambda = 1e-3;
   while (!out.converged && out.iterations < options_.max_iterations) {
     ++out.iterations;
     jacobian_columns(N, out);
-    detail::lagged_normal_equations(columns_, error_.data(), skip, n_eq, G_, h_);
+    detail::lagged_normal_equations(columns_, error_.data(), equations_, G_, h_);
     const double residual_norm = std::sqrt(2.0 * cost);
     bool stationary = true;  // every sensitivity is orthogonal to the residual
     for (Eigen::Index k = 0; k < p_ && stationary; ++k)
@@ -395,7 +449,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     }
     // Newton's curvature where it is positive definite (near the minimum), else
     // Gauss-Newton's J'J (always positive semi-definite: a descent direction).
-    newton_hessian(skip, N, out);
+    newton_hessian(N, out);
     ldlt_.compute(H_);
     const bool newton = ldlt_.info() == Eigen::Success && ldlt_.vectorD().minCoeff() > 0.0;
     const Eigen::MatrixXd& curvature = newton ? H_ : G_;
@@ -409,8 +463,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
       unpack(candidate_theta_, candidate_);
       for (std::size_t j = 0; j < m; ++j) stabilise(candidate_.f[j]);
       pack(candidate_, candidate_theta_);
-      const double candidate_cost =
-          delta_.allFinite() ? simulate(u, y.data(), skip, N, candidate_) : INFINITY;
+      const double candidate_cost = delta_.allFinite() ? simulate(ul, yl, N, candidate_) : INFINITY;
       // A small step only means convergence when it was (nearly) the undamped
       // (Newton or Gauss-Newton) step; a heavily damped step is small because of the damping.
       const bool nearly_undamped = lambda <= 1e-4;
@@ -432,7 +485,7 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
       } else if (lambda > 1e12) {
         // No descent direction left at any damping: theta is a (numerical) minimum.
         out.converged = true;
-        cost = simulate(u, y.data(), skip, N, out);  // restore w_/error_ at theta
+        cost = simulate(ul, yl, N, out);  // restore w_/error_ at theta
         break;
       } else {
         lambda *= 10.0;
@@ -442,27 +495,29 @@ void OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
 
   // Covariance sigma^2 (J'J)^-1 at the estimate; J'J also tells whether it is identified.
   jacobian_columns(N, out);
-  detail::lagged_normal_equations(columns_, error_.data(), skip, n_eq, G_, h_);
+  detail::lagged_normal_equations(columns_, error_.data(), equations_, G_, h_);
   throw_if_not_informative(solver_.solve(G_, h_, 0.0, options_.rank_tolerance, delta_),
                            "the OE Jacobian at the estimate");
   out.theta = theta_;
   out.cost = cost;
-  out.noise_variance = 2.0 * cost / static_cast<double>(n_eq - p_);
+  out.noise_variance = 2.0 * cost / static_cast<double>(n_eq_ - p_);
   solver_.covariance_factor(out.covariance);
   out.covariance *= out.noise_variance;
 }
 
 OeResult OutputErrorEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                                         const Eigen::Ref<const Eigen::MatrixXd>& u,
-                                        Eigen::Index skip) {
+                                        Eigen::Index skip,
+                                        const std::vector<Eigen::Index>& stretch_starts) {
   OeResult out;
-  estimate(y, u, skip, out);
+  estimate(y, u, skip, out, nullptr, stretch_starts);
   return out;
 }
 
 OeResult oe(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,
-            const std::vector<OeChannel>& channels, Eigen::Index skip, const OeOptions& options) {
-  return OutputErrorEstimator(channels, options).estimate(y, u, skip);
+            const std::vector<OeChannel>& channels, Eigen::Index skip, const OeOptions& options,
+            const std::vector<Eigen::Index>& stretch_starts) {
+  return OutputErrorEstimator(channels, options).estimate(y, u, skip, stretch_starts);
 }
 
 }  // namespace mpmpp

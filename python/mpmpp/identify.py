@@ -61,27 +61,30 @@ def channels(delays: IntOrList, structure: str = "foptd", nb: IntOrList = 1,
 
 
 def arx(y, u, na: int, nb: IntOrList, delays: IntOrList, *, delta: float = 1e-4,
-        rank_tolerance: float = 1e-10):
+        rank_tolerance: float = 1e-10, stretch_starts=()):
     """High-order ARX  A(q) y = sum_j q^-d_j B_j(q) u_j + e  by (regularised) least squares.
 
     nb counts the coefficients of each B_j (paper's order n = 9: na=9, nb=10). Returns
     an ``ArxResult`` (a, b, theta, covariance, noise_variance, equations, regularised).
-    The data are used as given (no mean removal)."""
+    The data are used as given (no mean removal). ``stretch_starts``: rows where a new
+    complete stretch begins (a record with gaps, laid end to end); no lag reaches across."""
     y, u = _as_signals(y, u)
     m = u.shape[1]
     return _core.arx(y, u, int(na), _per_input(nb, m, "nb"), _per_input(delays, m, "delays"),
-                     delta=delta, rank_tolerance=rank_tolerance)
+                     delta=delta, rank_tolerance=rank_tolerance, stretch_starts=list(stretch_starts))
 
 
 def oe(y, u, delays: IntOrList, structure: str = "foptd", nb: IntOrList = 1,
        nf: IntOrList = 1, *, skip: int = 0, max_iterations: int = 200,
-       max_pole_radius: float = 0.9999, init_fir_length: int = 0):
+       max_pole_radius: float = 0.9999, init_fir_length: int = 0, stretch_starts=()):
     """Output-error fit of all channels of one output jointly (criterion over t >= skip,
-    zero initial state). Returns an ``OeResult`` (b, f, theta, covariance, cost, ...)."""
+    zero initial state; with ``stretch_starts``, of every stretch from its start at rest,
+    over its rows from ``skip`` on). Returns an ``OeResult`` (b, f, theta, covariance, cost, ...)."""
     y, u = _as_signals(y, u)
     chans = channels(delays, structure, nb, nf, m=u.shape[1])
     return _core.oe(y, u, chans, skip=skip, max_iterations=max_iterations,
-                    max_pole_radius=max_pole_radius, init_fir_length=init_fir_length)
+                    max_pole_radius=max_pole_radius, init_fir_length=init_fir_length,
+                    stretch_starts=list(stretch_starts))
 
 
 # Per thread: estimate() releases the GIL and an estimator's workspace is not shareable.
@@ -121,8 +124,10 @@ def _estimator(m, na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend, 
 def arx_oe(y, u, na: int, nb: IntOrList, delays: IntOrList, *, structure: str = "foptd",
            oe_nb: IntOrList = 1, oe_nf: IntOrList = 1, fir_length: IntOrList = 60,
            detrend: str = "mean", delta: float = 1e-4, max_iterations: int = 200,
-           max_pole_radius: float = 0.9999, two_step_covariance: bool = False):
-    """ARX-OE estimate of one output from one window: detrend ('none', 'mean', 'linear'),
+           max_pole_radius: float = 0.9999, two_step_covariance: bool = False, stretch_starts=()):
+    """ARX-OE estimate of one output from one window (or from the complete stretches of a
+    record laid end to end, each new one starting at a row of ``stretch_starts``: every filter
+    starts at rest in each): detrend ('none', 'mean', 'linear'),
     ARX(na, nb, delays), filter by A(q), OE of the given structure. Returns an
     ``ArxOeResult``: channels[j] (b, f, delay, fir, gain), noise (a_1..a_na), arx, oe, and
     with ``two_step_covariance`` (FIR structure only) the covariance of oe.theta that
@@ -131,7 +136,7 @@ def arx_oe(y, u, na: int, nb: IntOrList, delays: IntOrList, *, structure: str = 
     y, u = _as_signals(y, u)
     est = _estimator(u.shape[1], na, nb, delays, structure, oe_nb, oe_nf, fir_length, detrend,
                      delta, max_iterations, max_pole_radius, two_step_covariance)
-    return est.estimate(y, u)
+    return est.estimate(y, u, list(stretch_starts))
 
 
 def arx_oe_windows(y, u, window: int, step: int, na: int, nb: IntOrList, delays: IntOrList,

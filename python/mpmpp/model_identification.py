@@ -59,8 +59,9 @@ from .compare import _finite
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import MIN_ROWS, require_rows
-from .signals import longest_complete_stretch
-from .timeaxis import seconds_of
+from .signals import complete_runs
+from .stretches import Stretches
+from .timeaxis import sample_grid, seconds_of
 
 NA_ORDERS = (1, 2, 3, 5, 8)      # ARX / noise orders searched
 NUMERATOR_LENGTHS = (1, 2)       # 2: dead time between samples
@@ -200,8 +201,8 @@ class IdentificationResult:
 
     def summary(self) -> str:
         lines = [f"identify: {self.rows_used} rows at {self.sample_time_s:g} s"
-                 + (f" ({self.skipped_rows} rows skipped: outside the longest stretch without missing values "
-                    f"or time gaps)" if self.skipped_rows else "")
+                 + (f" ({self.skipped_rows} rows skipped: missing values, time gaps or stretches between them "
+                    f"too short to fit)" if self.skipped_rows else "")
                  + f"; orders and dead times by {self.selection}"]
         for o in self.outputs:
             lines.append(f"  {o.output} ({o.process_class}): fit 1-step {o.fit_one_step:.1f} %,"
@@ -254,29 +255,35 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     for col in ["time", *inputs, *outputs, *[c for c in setpoints if c]]:
         if col not in data.columns:
             raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
-    time_s = seconds_of(data)
     raw = data[inputs + outputs].to_numpy(dtype=float)
-    ts, a, b = longest_complete_stretch(time_s, raw)
+    ts, gaps = sample_grid(seconds_of(data))
     require_rows(len(raw), ts)
-    if b - a < MIN_ROWS <= len(raw):
-        # the complete stretch is what is fitted: a long record with scattered missing values is
-        # not "too short", it has no stretch long enough
-        missing = ", ".join(f"{col} {n}" for col, n in zip(inputs + outputs, np.sum(~np.isfinite(raw), axis=0)) if n)
-        raise ValueError(f"data: no stretch of at least {MIN_ROWS} rows without missing values or time gaps "
-                         f"(the longest has {b - a} of {len(raw)} rows; missing values: {missing or 'none'})")
-    raw = raw[a:b]
+    runs = complete_runs(np.all(np.isfinite(raw), axis=1), gaps)
+    if max_dead_time_s is None:
+        max_dead_time_s = DEFAULT_MAX_DEAD_TIME_S
+    if not max_dead_time_s >= 0:
+        raise ValueError(f"max_dead_time_s must be >= 0, got {max_dead_time_s}")
+    max_delay = int(min(np.floor(max_dead_time_s / ts) + 1, sum(b - a for a, b in runs) // 10))
+    # Every complete stretch at least twice the criterion's start-up (t0 below) is fitted, each
+    # from rest (``Stretches``): at least half its rows enter the criterion, and the unknown
+    # state at its start (the filters start at rest) weighs on no more rows than it adds.
+    shortest = 2 * (max_delay + max(na_orders))
+    runs = [(a, b) for a, b in runs if b - a >= shortest]
+    n = sum(b - a for a, b in runs)
+    if n < MIN_ROWS:
+        # a long record (require_rows passed) with scattered missing values is not "too short"
+        missing = ", ".join(f"{col} {k}" for col, k in zip(inputs + outputs, np.sum(~np.isfinite(raw), axis=0)) if k)
+        raise ValueError(f"data: the stretches of at least {shortest} rows without missing values or time gaps "
+                         f"hold {n} of {len(raw)} rows, need {MIN_ROWS} (missing values: {missing or 'none'})")
+    rows = np.concatenate([np.arange(a, b) for a, b in runs])
+    st = Stretches([b - a for a, b in runs])
+    raw = raw[rows]
     dev = raw - raw.mean(axis=0)
     U, Y = dev[:, :len(inputs)], dev[:, len(inputs):]
     for j, col in enumerate(inputs):
         if not np.std(U[:, j]) > 1e-9 * max(1.0, float(np.abs(raw[:, j]).max())):
             raise NotIdentified(f"not identified: input {col!r} does not move (no excitation)")
-    n = len(dev)
-    if max_dead_time_s is None:
-        max_dead_time_s = DEFAULT_MAX_DEAD_TIME_S
-    max_delay = int(min(np.floor(max_dead_time_s / ts) + 1, n // 10))
-    if max_delay < 1:
-        raise ValueError(f"max_dead_time_s must be >= 0, got {max_dead_time_s}")
-    sp = {o: data[c].to_numpy(dtype=float)[a:b] if c else None for o, c in zip(outputs, setpoints)}
+    sp = {o: data[c].to_numpy(dtype=float)[rows] if c else None for o, c in zip(outputs, setpoints)}
     process, noise, summaries, fits = {}, {}, [], []
     workers = min(os.cpu_count() or 1, len(na_orders)) if workers is None else int(workers)
     with ThreadPoolExecutor(workers) if workers > 1 else nullcontext() as pool:
@@ -294,7 +301,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                     continue
                 try:
                     best, profile, n_fitted = _search(Y[:, i], U, cls, max(min_delay, 0), max_delay, na_orders,
-                                                      numerator_lengths, max_delay + max(na_orders), pool)
+                                                      numerator_lengths, max_delay + max(na_orders), pool, st)
                 except NotIdentified:
                     continue
                 count += n_fitted
@@ -304,7 +311,9 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
             cls, best, chans = _choose_class(fitted, n * ts, ts)
             for j, c in enumerate(chans):
-                c.unexcited = _controller_law_exact(U[:, j], raw[:, len(inputs) + i], sp[out])
+                c.unexcited = all(_controller_law_exact(U[a:b, j], raw[a:b, len(inputs) + i],
+                                                        None if sp[out] is None else sp[out][a:b])
+                                  for a, b in st.spans())
             try:
                 _check_verdict(out, chans, action)
             except NotIdentified as refusal:
@@ -313,8 +322,8 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
             process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.kept}
             noise[out] = _core.TransferFunction(np.ones(1), _stable_monic(a), 0)
             summaries += chans
-            e = _core.prediction_error(tf, noise[out], Y[:, i], U)
-            sim = _core.predict_output(tf, noise[out], Y[:, i], U, 0)
+            e = np.concatenate([_core.prediction_error(tf, noise[out], Y[a:b, i], U[a:b]) for a, b in st.spans()])
+            sim = np.concatenate([_core.predict_output(tf, noise[out], Y[a:b, i], U[a:b], 0) for a, b in st.spans()])
             fits.append(OutputFit(out, len(best.a), best.bic, float(_core.fit_percent(Y[:, i], Y[:, i] - e)),
                                   float(_core.fit_percent(Y[:, i], sim)), count,
                                   {1: "direct", -1: "reverse", 0: "none"}[action], cls.name))
@@ -419,20 +428,21 @@ def _output_domain(c: _Candidate, cls: ProcessClass):
             np.convolve(np.r_[1.0, c.a], [1.0, -1.0]) if cls.noise_integrates else np.r_[1.0, c.a])
 
 
-def _integrated(U: np.ndarray) -> np.ndarray:
-    """u / (1 - q^-1) per input (running sums of the deviations from the mean), mean removed: the
-    level the inflows alone would give, around y's mean."""
-    s = np.cumsum(U, axis=0)
-    return s - s.mean(axis=0)
+def _integrated(U: np.ndarray, st: Stretches) -> np.ndarray:
+    """u / (1 - q^-1) per input (running sums of the deviations from the mean), each stretch's
+    mean removed: the level the inflows alone would give, around y's mean in that stretch (what
+    flowed in during a gap is unknown)."""
+    return st.demeaned(st.cumsum(U))
 
 
-def _differenced(y: np.ndarray) -> np.ndarray:
-    """(1 - q^-1) y with mean removed, on y's rows (the first is 0 before the mean's removal)."""
-    dy = np.r_[0.0, np.diff(y)]
+def _differenced(y: np.ndarray, st: Stretches) -> np.ndarray:
+    """(1 - q^-1) y with mean removed, on y's rows (each stretch's first is 0 before the mean's
+    removal)."""
+    dy = st.differenced(y)
     return dy - dy.mean()
 
 
-def _sweep(y, U, cls: ProcessClass, na, min_delay, max_delay, numerator_lengths, t0):
+def _sweep(y, U, cls: ProcessClass, na, min_delay, max_delay, numerator_lengths, t0, st: Stretches):
     """Coordinate search at noise order na over each channel's (delay, numerator length) by
     ARX-OE: (the BIC-best candidate refined to the joint fit, or None when none could be fitted;
     every candidate fitted as (channel, candidate); the number of fits)."""
@@ -445,7 +455,7 @@ def _sweep(y, U, cls: ProcessClass, na, min_delay, max_delay, numerator_lengths,
                 for k in numerator_lengths:
                     trial_d, trial_nb = list(delays), list(nb)
                     trial_d[j], trial_nb[j] = d, k
-                    c = _fit(y, U, na, trial_d, trial_nb, cls, t0)
+                    c = _fit(y, U, na, trial_d, trial_nb, cls, t0, st)
                     count += 1
                     if c is None:
                         continue
@@ -454,24 +464,27 @@ def _sweep(y, U, cls: ProcessClass, na, min_delay, max_delay, numerator_lengths,
                         current = c
             if current is not None:
                 delays, nb = list(current.delays), list(current.nb)
-    return (None if current is None else _refine(y, U, current, cls, t0)), tried, count
+    return (None if current is None else _refine(y, U, current, cls, t0, st)), tried, count
 
 
-def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_lengths, t0, pool=None):
-    """``_sweep`` for every na, in cls's domain (y differenced for an integrating output), on
+def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_lengths, t0, pool=None,
+            st: Stretches | None = None):
+    """``_sweep`` for every na over the stretches ``st`` (default: the rows are one stretch), in
+    cls's domain (y differenced for an integrating output), on
     ``pool``'s threads when given (the ARX-OE fits release the GIL; each sweep is independent, so
     the result does not depend on the threads). The BIC-best na is kept; at that na every
     candidate not clearly worse (PRUNE) is refined too, and the BIC-best refined candidate
     returned with the profile {(channel, dead time in samples): refined cost, inf for pruned ones}
     and the number of candidates fitted."""
     m = U.shape[1]
+    st = st or Stretches([len(y)])
     if cls.integrating and cls.noise_integrates:
         # mean removed: a constant inflow imbalance (OP's mean is not the balancing flow)
-        y = _differenced(y)
+        y = _differenced(y, st)
     elif cls.integrating:
-        U = _integrated(U)
+        y, U = st.demeaned(y), _integrated(U, st)
     sweeps = list((pool.map if pool else map)(
-        lambda na: _sweep(y, U, cls, na, min_delay, max_delay, numerator_lengths, t0), na_orders))
+        lambda na: _sweep(y, U, cls, na, min_delay, max_delay, numerator_lengths, t0, st), na_orders))
     finalists = [s[0] for s in sweeps if s[0] is not None]
     tried = {na: s[1] for na, s in zip(na_orders, sweeps)}
     count = sum(s[2] for s in sweeps)
@@ -481,7 +494,7 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
     profile = {}
     for j, c in tried[len(best.a)]:
         if c.rows * np.log(c.cost / best.cost) <= PRUNE:
-            c = _refine(y, U, c, cls, t0)
+            c = _refine(y, U, c, cls, t0, st)
             if c.bic < best.bic:
                 best = c
             cost = c.cost
@@ -492,50 +505,51 @@ def _search(y, U, cls: ProcessClass, min_delay, max_delay, na_orders, numerator_
     for j in range(m):
         where = (j, _dead_time_samples(best, j, cls))
         profile[where] = min(profile.get(where, np.inf), best.cost)
-    best.covariance = _joint_covariance(y, U, best)
+    best.covariance = _joint_covariance(y, U, best, st)
     return best, profile, count
 
 
-def _joint_covariance(y, U, c: _Candidate) -> np.ndarray:
+def _joint_covariance(y, U, c: _Candidate, st: Stretches | None = None) -> np.ndarray:
     """sigma^2 (J'J)^-1 of all parameters [b_1 f_1 ... b_m f_m, a_1..a_na] of the joint fit,
     eps = A (y - sum_j B_j / F_j q^-d_j u_j) over t >= na. Under feedback the estimates of G
     and H are correlated, so the OE covariance (A held fixed) would understate G's spread.
     Sensitivities: d eps / d b_jk = -A q^-k w_j with w_j = q^-d_j u_j / F_j,
-    d eps / d f_j1 = A q^-1 x_j / F_j with x_j = G_j u_j, d eps / d a_i = q^-i v, v = y - sum x_j."""
+    d eps / d f_j1 = A q^-1 x_j / F_j with x_j = G_j u_j, d eps / d a_i = q^-i v, v = y - sum x_j.
+    Over the stretches ``st`` (default: one), each from rest."""
+    st = st or Stretches([len(y)])
     na = len(c.a)
     A = _core.TransferFunction(np.r_[1.0, c.a], np.ones(1), 0)
-    x = [np.asarray(g.filter(U[:, j])) for j, g in enumerate(c.tf)]
+    x = [st.filter(g, U[:, j]) for j, g in enumerate(c.tf)]
     v = y - sum(x)
     cols = []
     for j, g in enumerate(c.tf):
         inv_f = _core.TransferFunction(np.ones(1), np.asarray(g.den), 0)
-        w = np.asarray(_core.TransferFunction(np.ones(1), np.asarray(g.den), g.delay).filter(U[:, j]))
-        aw = np.asarray(A.filter(w))
-        cols += [-_lag(aw, k) for k in range(c.nb[j])]
+        w = st.filter(_core.TransferFunction(np.ones(1), np.asarray(g.den), g.delay), U[:, j])
+        aw = st.filter(A, w)
+        cols += [-st.lag(aw, k) for k in range(c.nb[j])]
         if c.nf:
-            cols.append(_lag(np.asarray(A.filter(inv_f.filter(x[j]))), 1))
-    cols += [_lag(v, i) for i in range(1, na + 1)]
-    J = np.column_stack(cols)[na:]
-    eps = np.asarray(A.filter(v))[na:]
+            cols.append(st.lag(st.filter(A, st.filter(inv_f, x[j])), 1))
+    cols += [st.lag(v, i) for i in range(1, na + 1)]
+    rows = st.after(na)
+    J = np.column_stack(cols)[rows]
+    eps = st.filter(A, v)[rows]
     sigma2 = eps @ eps / max(len(eps) - J.shape[1], 1)
     return sigma2 * np.linalg.pinv(J.T @ J)
 
 
-def _lag(x: np.ndarray, k: int) -> np.ndarray:
-    return np.r_[np.zeros(k), x[:len(x) - k]] if k else x
-
-
-def _fit(y, U, na, delays, nb, cls, t0):
-    """One candidate by ARX-OE, or None when it is not informative or not of cls's form."""
+def _fit(y, U, na, delays, nb, cls, t0, st: Stretches | None = None):
+    """One candidate by ARX-OE over the stretches ``st`` (default: one), or None when it is not
+    informative or not of cls's form."""
+    st = st or Stretches([len(y)])
     try:
         r = arx_oe(y, U, na, na + 1, delays, structure="oe", oe_nb=nb, oe_nf=cls.nf, fir_length=1,
-                   detrend="none")
+                   detrend="none", stretch_starts=st.starts)
     except RuntimeError:
         return None
-    return _candidate(y, U, np.asarray(r.noise), delays, nb, cls, r.oe, t0)
+    return _candidate(y, U, np.asarray(r.noise), delays, nb, cls, r.oe, t0, st)
 
 
-def _candidate(y, U, a, delays, nb, cls, oe_result, t0):
+def _candidate(y, U, a, delays, nb, cls, oe_result, t0, st: Stretches):
     tf = []
     for j, d in enumerate(delays):
         b, f = np.asarray(oe_result.b[j]), np.asarray(oe_result.f[j])
@@ -543,8 +557,8 @@ def _candidate(y, U, a, delays, nb, cls, oe_result, t0):
             return None
         tf.append(_core.TransferFunction(b, f, d))
     inverse_noise = _core.TransferFunction(np.r_[1.0, a], np.ones(1), 0)
-    e = y - sum(g.filter(U[:, j]) for j, g in enumerate(tf))
-    e = np.asarray(inverse_noise.filter(e))[t0:]
+    e = y - sum(st.filter(g, U[:, j]) for j, g in enumerate(tf))
+    e = st.filter(inverse_noise, e)[st.after(t0)]
     cost = float(np.mean(e**2))
     # per channel K, theta (and tau): the dead time is one continuous parameter whether it falls
     # on a sample (one numerator term) or between two (two terms, docs/formats.md's ZOH form);
@@ -555,26 +569,30 @@ def _candidate(y, U, a, delays, nb, cls, oe_result, t0):
                       np.asarray(oe_result.theta), n)
 
 
-def _refine(y, U, c: _Candidate, cls, t0, max_iterations=200, tolerance=1e-12):
+def _refine(y, U, c: _Candidate, cls, t0, st: Stretches | None = None, max_iterations=200, tolerance=1e-12):
     """The joint prediction-error fit of G and H = 1/A for c's structure, by alternating the two
     least-squares problems it splits into: A given G (an AR fit of v = y - G u) and G given A
     (the OE fit on A-filtered data), both over t >= na. Each step lowers sum (A (y - G u))^2,
     so the ARX step's A, biased when the ARX orders are low, no longer biases G. Stops when a
-    step lowers that sum by less than ``tolerance`` (relative) or fails."""
+    step lowers that sum by less than ``tolerance`` (relative) or fails. Over the stretches
+    ``st`` (default: one), each from rest."""
+    st = st or Stretches([len(y)])
     na = len(c.a)
+    rows = st.after(na)
     best, level = c, np.inf
     for _ in range(max_iterations):
-        v = y - sum(g.filter(U[:, j]) for j, g in enumerate(best.tf))
-        lagged = np.column_stack([-v[na - i - 1:len(v) - i - 1] for i in range(na)])
-        a = np.linalg.lstsq(lagged, v[na:], rcond=None)[0]
+        v = y - sum(st.filter(g, U[:, j]) for j, g in enumerate(best.tf))
+        lagged = np.column_stack([-st.lag(v, i + 1) for i in range(na)])
+        a = np.linalg.lstsq(lagged[rows], v[rows], rcond=None)[0]
         A = _core.TransferFunction(np.r_[1.0, a], np.ones(1), 0)
-        yf = np.asarray(A.filter(y))
-        uf = np.column_stack([A.filter(U[:, j]) for j in range(U.shape[1])])
+        yf = st.filter(A, y)
+        uf = np.column_stack([st.filter(A, U[:, j]) for j in range(U.shape[1])])
         try:
-            r = oe(yf, uf, best.delays, structure="oe", nb=best.nb, nf=cls.nf, skip=na)
+            r = oe(yf, uf, best.delays, structure="oe", nb=best.nb, nf=cls.nf, skip=na,
+                   stretch_starts=st.starts)
         except RuntimeError:
             return best
-        trial = _candidate(y, U, a, best.delays, best.nb, cls, r, t0)
+        trial = _candidate(y, U, a, best.delays, best.nb, cls, r, t0, st)
         if trial is None or not r.cost < level:
             return best
         best, done = trial, r.cost > level * (1 - tolerance)

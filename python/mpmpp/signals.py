@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .timeaxis import sample_grid, seconds_of
+from .timeaxis import seconds_of
 
 
 @dataclass
@@ -123,15 +123,6 @@ def longest(runs) -> tuple[int, int]:
 def longest_run(valid: np.ndarray, starts=()) -> tuple[int, int]:
     """The longest of ``complete_runs`` ((0, 0) when there is none)."""
     return longest(complete_runs(valid, starts))
-
-
-def longest_complete_stretch(time_s: np.ndarray, values: np.ndarray) -> tuple[float, int, int]:
-    """(ts, a, b): the time column's step and the longest stretch [a, b) of rows with every
-    column of ``values`` present and no time gap inside (``timeaxis.sample_grid``: a step that
-    is no whole number of samples is an error naming its row)."""
-    ts, starts = sample_grid(time_s)
-    a, b = longest_run(np.all(np.isfinite(values), axis=1), starts)
-    return ts, a, b
 
 
 def complete_segments(valid: np.ndarray, min_segment: int, starts=()) -> tuple[list[tuple[int, int]], int]:

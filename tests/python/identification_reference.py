@@ -246,35 +246,39 @@ def two_step_fir_covariance(y, u, na, nb, delays, fir, arx_theta, fir_theta):
     return ZZi @ (W.T @ W) @ ZZi * (N - na) / (N - na - Z.shape[1]), M21, Z
 
 
-def pem_ar_noise(y, u, na, nb, delay, detrend="constant", nf=1):
+def _pem_residual(y, u, na, nb, nf, delay, stretches):
+    """eps = A (y - G u) over t >= na of every stretch [a, b) (each filtered from rest), as a
+    function of x = [b, f_1..f_nf, a_1..a_na]."""
+    def residual(x):
+        out = []
+        for a, b in stretches:
+            v = y[a:b] - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], np.r_[1.0, x[nb:nb + nf]], u[a:b])
+            out.append(ss.lfilter(np.r_[1.0, x[nb + nf:]], [1.0], v)[na:])
+        return np.concatenate(out)
+    return residual
+
+
+def pem_ar_noise(y, u, na, nb, delay, detrend="constant", nf=1, stretches=None):
     """Joint prediction-error fit of y = q^-d B/F u + e / A (single input, F of order nf = 0 or
     1, A of order na): scipy least_squares on eps = A (y - G u) over t >= na, all of b, f, a at
-    once, started from this module's ARX-OE. Returns (b, f, a)."""
+    once, started from this module's ARX-OE. ``stretches``: rows [a, b) of a record with gaps
+    laid end to end, each its own experiment from rest (default: one). Returns (b, f, a)."""
     y = ss.detrend(y, type=detrend)
     u = ss.detrend(u, type=detrend)
     theta0, a0, _, _ = arx_oe(y, u[:, None], na, [na + 1], [delay], [(nb, nf, delay)], [1], detrend="constant")
-
-    def residual(x):
-        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], np.r_[1.0, x[nb:nb + nf]], u)
-        return ss.lfilter(np.r_[1.0, x[nb + nf:]], [1.0], v)[na:]
-
+    residual = _pem_residual(y, u, na, nb, nf, delay, stretches or [(0, len(y))])
     x = so.least_squares(residual, np.r_[theta0, a0[1:]], method="lm", xtol=1e-14, ftol=1e-14,
                          gtol=1e-14, max_nfev=5000).x
     return x[:nb], np.r_[1.0, x[nb:nb + nf]], np.r_[1.0, x[nb + nf:]]
 
 
-def pem_ar_noise_covariance(y, u, na, nb, delay, b, f, a, detrend="constant"):
+def pem_ar_noise_covariance(y, u, na, nb, delay, b, f, a, detrend="constant", stretches=None):
     """sigma^2 (J'J)^-1 of [b, f_1..f_nf, a_1..a_na] (nf = len(f) - 1, 0 or 1) with J the
     finite-difference Jacobian of the pem_ar_noise residual (scipy.optimize's approx_fprime-style
     central differences)."""
     y = ss.detrend(y, type=detrend)
     u = ss.detrend(u, type=detrend)
-    nf = len(f) - 1
-
-    def residual(x):
-        v = y - ss.lfilter(np.r_[np.zeros(delay), x[:nb]], np.r_[1.0, x[nb:nb + nf]], u)
-        return ss.lfilter(np.r_[1.0, x[nb + nf:]], [1.0], v)[na:]
-
+    residual = _pem_residual(y, u, na, nb, len(f) - 1, delay, stretches or [(0, len(y))])
     x0 = np.r_[b, f[1:], a[1:]]
     J = np.column_stack([(residual(x0 + h) - residual(x0 - h)) / (2 * h[i])
                          for i, h in enumerate(np.diag(1e-6 * np.maximum(np.abs(x0), 1e-3)))])

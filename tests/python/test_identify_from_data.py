@@ -18,6 +18,7 @@ import pi_loop
 from mpmpp import io
 from mpmpp.cli import main
 from mpmpp.identify import model_from_data
+from mpmpp.stretches import Stretches
 from mpmpp.model_identification import (SIGN_FLIP_Z, ChannelSummary, NotIdentified, _check_verdict,
                                         _profile_interval)
 
@@ -170,12 +171,74 @@ def test_cli_reads_the_controller_action_from_a_named_setpoint_column(tmp_path, 
     assert json.loads(capsys.readouterr().out)["outputs"][0]["feedback"] == "reverse"
 
 
-def test_missing_values_fit_the_longest_complete_stretch_and_say_so():
+def test_a_stretch_too_short_to_fit_is_left_out_and_said():
+    """Missing values at rows 100-104: the first 100 rows are shorter than twice the criterion's
+    start-up (2 x 69 rows), so they are left out with the missing ones."""
     df = pi_loop.simulate(pi_loop.PRESSURE, seed=8, setpoint_steps=True)
     df.loc[100:104, "PV"] = np.nan
     r = model_from_data(df, ["OP"], ["PV"])
     assert r.rows_used == 751 - 105 and r.skipped_rows == 105
-    assert "105 rows skipped: outside the longest stretch without missing values" in r.summary()
+    assert "105 rows skipped: missing values, time gaps or stretches between them too short to fit" in r.summary()
+
+
+def _with_gaps(df, rows):
+    """(df with PV missing at ``rows``, the complete stretches [a, b) of the rows left, laid end to end)."""
+    gapped = df.copy()
+    gapped.loc[rows, "PV"] = np.nan
+    kept = np.flatnonzero(gapped["PV"].notna())
+    breaks = np.flatnonzero(np.diff(kept) > 1) + 1
+    bounds = np.r_[0, breaks, len(kept)]
+    return gapped, kept, list(zip(bounds[:-1], bounds[1:]))
+
+
+def test_every_stretch_between_missing_values_is_fitted_as_scipy_does_it():
+    """Three stretches (PV missing at rows 200-204 and 480-482): the estimate is scipy's joint
+    prediction-error fit over the three, each filtered from rest, and its covariance the
+    finite-difference one of that criterion."""
+    import mpmpp.model_identification as mi
+
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=3, setpoint_steps=True)
+    gapped, kept, stretches = _with_gaps(df, [*range(200, 205), *range(480, 483)])
+    r = model_from_data(gapped, "OP", "PV")
+    assert r.rows_used == 751 - 8 and r.skipped_rows == 8
+    c = r.channels[0]
+    pv, op = df["PV"].to_numpy()[kept], df["OP"].to_numpy()[kept]
+    b, f, a = ref.pem_ar_noise(pv, op, r.outputs[0].noise_order, c.numerator_length, c.delay_samples,
+                               stretches=stretches)
+    g = r.model.process("PV", "OP")
+    assert np.allclose(g.num, b, rtol=1e-5, atol=1e-7)
+    assert np.allclose(g.den, f, rtol=1e-5, atol=1e-7)
+    assert np.allclose(r.model.noise("PV").den, a, rtol=1e-4, atol=1e-6)
+    # the same fit as one stretch is another fit: the gaps matter
+    b1, _, _ = ref.pem_ar_noise(pv, op, r.outputs[0].noise_order, c.numerator_length, c.delay_samples)
+    assert not np.allclose(b1, b, rtol=1e-3)
+
+    st = Stretches([q - p for p, q in stretches])
+    y, U = pv - pv.mean(), (op - op.mean())[:, None]
+    cls = mi.SELF_REGULATING
+    cand = mi._refine(y, U, mi._fit(y, U, 2, [4], [2], cls, 69, st), cls, 69, st)
+    cov = mi._joint_covariance(y, U, cand, st)
+    tf = cand.tf[0]
+    expected = ref.pem_ar_noise_covariance(pv, op, 2, 2, 4, np.asarray(tf.num), np.asarray(tf.den),
+                                           np.r_[1.0, cand.a], stretches=stretches)
+    assert np.allclose(cov, expected, rtol=1e-4, atol=1e-9 * np.abs(expected).max())
+
+
+def test_a_record_with_no_long_stretch_is_identified_from_its_many_short_ones():
+    """PV missing every 140th row of a 6 h record: no stretch reaches the 150 rows a record
+    needs, but 15 stretches of 139 rows hold 2,085 rows, and the loop is identified from them
+    (the longest stretch alone was refused)."""
+    df = pi_loop.simulate(pi_loop.PRESSURE, seed=12, rows=2160, setpoint_steps=True)
+    gapped, _, stretches = _with_gaps(df, list(range(139, 2160, 140)))
+    assert max(b - a for a, b in stretches) < 150
+    r = model_from_data(gapped, ["OP"], ["PV"])
+    c, = r.channels
+    loop = pi_loop.PRESSURE
+    assert r.rows_used == 15 * 139          # the last 60 rows are too short a stretch
+    assert abs(c.gain - loop.gain) < 4 * c.gain_sd and c.gain_sd < 0.15 * abs(loop.gain)
+    assert abs(c.time_constant_s - loop.time_constant_s) < 4 * c.time_constant_sd
+    lo, hi = c.dead_time_ci95
+    assert lo - 10.0 <= loop.dead_time_s <= hi + 10.0
 
 
 def test_scattered_missing_values_are_named_not_called_a_short_record(tmp_path, capsys):
@@ -188,8 +251,8 @@ def test_scattered_missing_values_are_named_not_called_a_short_record(tmp_path, 
     io.save_data(data, df)
     assert main(["identify", str(data), "--inputs", "OP", "--outputs", "PV", "-o", str(tmp_path / "m.json")]) == 2
     err = capsys.readouterr().err
-    assert ("data: no stretch of at least 150 rows without missing values or time gaps (the longest has "
-            "6 of 751 rows; missing values: PV 108)") in err
+    assert ("data: the stretches of at least 138 rows without missing values or time gaps hold 0 of 751 rows, "
+            "need 150 (missing values: PV 108)") in err
     assert err.count("\n") == 1 and "too short" not in err
     assert not (tmp_path / "m.json").exists()
 
@@ -464,7 +527,7 @@ def test_joint_covariance_of_an_integrating_channel_is_the_finite_difference_one
     import mpmpp.model_identification as mi
 
     df = pi_loop.simulate(pi_loop.TANK, seed=4, setpoint_steps=True, step_size=0.5)
-    dy = mi._differenced(df["PV"].to_numpy() - df["PV"].mean())
+    dy = mi._differenced(df["PV"].to_numpy() - df["PV"].mean(), Stretches([len(df)]))
     U = df[["OP"]].to_numpy() - df["OP"].mean()
     cls = mi.INTEGRATING
     c = mi._refine(dy, U, mi._fit(dy, U, 2, [2], [2], cls, 60), cls, 60)

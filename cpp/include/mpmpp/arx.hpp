@@ -54,10 +54,15 @@ class ArxEstimator {
   // InputError on shape/order mismatch; NumericalError when the window is not
   // informative (non-finite samples, too short for the orders, constant signal,
   // collinear regressors).
+  // stretch_starts: rows where a new complete stretch of the record begins (after a gap
+  // or a missing value); the equations then run over t0 .. of every stretch, so no lag
+  // reaches across a gap.
   void estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out);
+                const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out,
+                const std::vector<Eigen::Index>& stretch_starts = {});
   ArxResult estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                     const Eigen::Ref<const Eigen::MatrixXd>& u);
+                     const Eigen::Ref<const Eigen::MatrixXd>& u,
+                     const std::vector<Eigen::Index>& stretch_starts = {});
 
   const ArxOrders& orders() const { return orders_; }
   Eigen::Index first_equation() const { return t0_; }  // t0
@@ -68,9 +73,9 @@ class ArxEstimator {
   // After estimate(): B <- (Phi'Phi + ridge)^-1 B with the window's factorisation (the
   // ridge when ArxResult::regularised): how theta moves with Phi'y.
   void apply_sensitivity(Eigen::MatrixXd& B) const { solver_.apply_sensitivity(B); }
-  // After estimate(): that window's regressor matrix Phi (rows t0 .. t0 + equations - 1,
-  // `equations` = its ArxResult::equations). Reads the y and u given to estimate(), which
-  // must still be alive.
+  // After estimate() on one stretch: that window's regressor matrix Phi (rows t0 .. t0 +
+  // equations - 1, `equations` = its ArxResult::equations). Reads the y and u given to
+  // estimate(), which must still be alive.
   void regressors(Eigen::Index equations, Eigen::MatrixXd& phi) const {
     detail::lagged_matrix(columns_, t0_, equations, phi);
   }
@@ -83,6 +88,7 @@ class ArxEstimator {
   detail::NormalEquationsSolver solver_;
   Eigen::MatrixXd G_;
   Eigen::VectorXd h_;
+  std::vector<detail::RowSpan> stretches_, equations_;
   // ArxOeEstimator checks the raw window once and turns the per-call check off.
   bool check_signals_ = true;
   friend class ArxOeEstimator;
@@ -90,7 +96,7 @@ class ArxEstimator {
 
 ArxResult arx(const Eigen::Ref<const Eigen::VectorXd>& y,
               const Eigen::Ref<const Eigen::MatrixXd>& u, const ArxOrders& orders,
-              const ArxOptions& options = {});
+              const ArxOptions& options = {}, const std::vector<Eigen::Index>& stretch_starts = {});
 
 // Throws NumericalError naming the signal ("y", "u[j]") when the window has non-finite
 // samples or a signal that is constant up to rounding (range <= 1e-12 max|x|): such a

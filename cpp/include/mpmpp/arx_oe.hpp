@@ -69,15 +69,22 @@ class ArxOeEstimator {
   explicit ArxOeEstimator(ArxOeConfig config);
 
   // One window (views, e.g. y.segment(start, N), u.middleRows(start, N)). InputError on
-  // bad shapes, NumericalError when the window is not informative.
+  // bad shapes, NumericalError when the window is not informative. stretch_starts: rows
+  // where a new complete stretch of a record with gaps begins; every stretch's filters
+  // start at rest and its first rows only start them (ArxEstimator, OutputErrorEstimator).
+  // The mean is removed over all rows (one operating point); a linear trend or the
+  // two-step covariance needs one stretch.
   void estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                const Eigen::Ref<const Eigen::MatrixXd>& u, ArxOeResult& out);
+                const Eigen::Ref<const Eigen::MatrixXd>& u, ArxOeResult& out,
+                const std::vector<Eigen::Index>& stretch_starts = {});
   ArxOeResult estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                       const Eigen::Ref<const Eigen::MatrixXd>& u);
+                       const Eigen::Ref<const Eigen::MatrixXd>& u,
+                       const std::vector<Eigen::Index>& stretch_starts = {});
   // The first step alone (detrending and the high-order ARX): the noise model A(q) and its
   // covariance without the OE step. Same errors as estimate().
   void estimate_arx(const Eigen::Ref<const Eigen::VectorXd>& y,
-                    const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out);
+                    const Eigen::Ref<const Eigen::MatrixXd>& u, ArxResult& out,
+                    const std::vector<Eigen::Index>& stretch_starts = {});
   // Windows [s, s + window) for s = 0, step, 2 step, ... while s + window <= N.
   std::vector<WindowEstimate> estimate_windows(const Eigen::Ref<const Eigen::VectorXd>& y,
                                                const Eigen::Ref<const Eigen::MatrixXd>& u,
@@ -93,6 +100,7 @@ class ArxOeEstimator {
   Eigen::VectorXd y_, yf_, pulse_, one_ = Eigen::VectorXd::Ones(1);
   Eigen::MatrixXd u_, uf_;
   std::vector<Eigen::VectorXd> start_impulse_;
+  std::vector<detail::RowSpan> stretches_;
 };
 
 // Default FIR length: one past the last sample where |g(k)| >= 1% of the peak |g| of the

@@ -65,12 +65,17 @@ class OutputErrorEstimator {
 
   // y: N samples, u: N x m (column j feeds channel j); views, not copied. The optional
   // initial_impulse[j] is channel j's impulse response from the first sample after its
-  // delay. InputError on bad shapes; NumericalError when the data are not informative.
+  // delay. stretch_starts: rows where a new complete stretch of the record begins (after
+  // a gap); every stretch's simulation starts at rest and its first `skip` rows are not
+  // in the criterion (one stretch: the record is copied once, gaps of zeros between).
+  // InputError on bad shapes; NumericalError when the data are not informative.
   void estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
                 const Eigen::Ref<const Eigen::MatrixXd>& u, Eigen::Index skip, OeResult& out,
-                const std::vector<Eigen::VectorXd>* initial_impulse = nullptr);
+                const std::vector<Eigen::VectorXd>* initial_impulse = nullptr,
+                const std::vector<Eigen::Index>& stretch_starts = {});
   OeResult estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
-                    const Eigen::Ref<const Eigen::MatrixXd>& u, Eigen::Index skip = 0);
+                    const Eigen::Ref<const Eigen::MatrixXd>& u, Eigen::Index skip = 0,
+                    const std::vector<Eigen::Index>& stretch_starts = {});
 
   const std::vector<OeChannel>& channels() const { return channels_; }
   Eigen::Index num_parameters() const { return p_; }
@@ -81,20 +86,27 @@ class OutputErrorEstimator {
 
  private:
   bool linear() const { return nonlinear_channels_ == 0; }
-  void fir_start(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y, Eigen::Index skip,
-                 Eigen::Index N, OeResult& out);
+  // The private steps below work on the laid-out record (y, u of N rows: the stretches_
+  // with zero rows between) and sum the criterion over equations_.
+  void fir_start(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y, OeResult& out);
   void prony_start(std::size_t j, const Eigen::Ref<const Eigen::VectorXd>& g, Eigen::VectorXd& b,
                    Eigen::VectorXd& f) const;
   void pole_grid_start(std::size_t j, const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
-                       Eigen::Index skip, Eigen::Index N, OeResult& out);
+                       Eigen::Index N, OeResult& out);
   void stabilise(Eigen::VectorXd& f) const;
-  // w_j for the given polynomials and e = y - sum_j B_j w_j; returns sum(e^2)/2 over rows >= skip.
-  double simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y, Eigen::Index skip,
-                  Eigen::Index N, const OeResult& par);
+  // out = q^-delay num/den x, each stretch from rest (rows between stretches untouched).
+  void filter_stretches(const Eigen::VectorXd& num, const Eigen::VectorXd& den, int delay,
+                        const Eigen::Ref<const Eigen::VectorXd>& x,
+                        Eigen::Ref<Eigen::VectorXd> out) const;
+  double criterion_sum_of_squares(const Eigen::VectorXd& x) const;
+  // w_j for the given polynomials and e = y - sum_j B_j w_j; returns sum(e^2)/2 over the
+  // equations.
+  double simulate(const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y, Eigen::Index N,
+                  const OeResult& par);
   void jacobian_columns(Eigen::Index N, const OeResult& par);
   // H_ = G_ (J'J at the parameters jacobian_columns() last saw) minus the second-order
   // term, from the s_j and v_j jacobian_columns() left.
-  void newton_hessian(Eigen::Index skip, Eigen::Index N, const OeResult& par);
+  void newton_hessian(Eigen::Index N, const OeResult& par);
   void unpack(const Eigen::VectorXd& theta, OeResult& par) const;
   void pack(const OeResult& par, Eigen::VectorXd& theta) const;
   void throw_if_not_informative(const detail::NormalEquationsSolver::Outcome& o,
@@ -102,9 +114,12 @@ class OutputErrorEstimator {
 
   std::vector<OeChannel> channels_;
   OeOptions options_;
-  Eigen::Index p_ = 0, pad_ = 0;
+  Eigen::Index p_ = 0, pad_ = 0, n_eq_ = 0;
   int nonlinear_channels_ = 0;
   std::vector<detail::LaggedColumn> columns_;
+  std::vector<detail::RowSpan> record_, stretches_, equations_;  // record_: y's own rows
+  Eigen::VectorXd y_laid_;
+  Eigen::MatrixXd u_laid_;
   Eigen::Vector2d f1_;
   detail::NormalEquationsSolver solver_;
   Eigen::MatrixXd G_, H_, A_;
@@ -122,6 +137,6 @@ class OutputErrorEstimator {
 
 OeResult oe(const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u,
             const std::vector<OeChannel>& channels, Eigen::Index skip = 0,
-            const OeOptions& options = {});
+            const OeOptions& options = {}, const std::vector<Eigen::Index>& stretch_starts = {});
 
 }  // namespace mpmpp

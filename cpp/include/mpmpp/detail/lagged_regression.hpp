@@ -17,12 +17,30 @@ struct LaggedColumn {
   double sign;
 };
 
+// Rows [begin, end) of a record: a complete stretch (no missing value or time gap inside),
+// or the rows of a stretch that enter a criterion.
+struct RowSpan {
+  Eigen::Index begin = 0, end = 0;
+  Eigen::Index size() const { return end - begin; }
+};
+
+// spans = the complete stretches of an N-row record that starts a new stretch at each row
+// of `starts` (strictly increasing, each in (0, N); empty: one stretch). InputError
+// otherwise. Into the caller's vector: no allocation once it has the capacity.
+void stretch_spans(Eigen::Index N, const std::vector<Eigen::Index>& starts,
+                   std::vector<RowSpan>& spans);
+
 // Phi itself, rows t0 .. t0 + n - 1 (for the callers that need per-row products).
 void lagged_matrix(const std::vector<LaggedColumn>& columns, Eigen::Index t0, Eigen::Index n,
                    Eigen::MatrixXd& phi);
 // G = Phi^T Phi and h = Phi^T target[t0 .. t0 + n) (G, h resized only when p changes).
 void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const double* target,
                              Eigen::Index t0, Eigen::Index n, Eigen::MatrixXd& G,
+                             Eigen::VectorXd& h);
+// The same summed over the rows of every span (spans of a record of several stretches: a
+// column's lags must stay readable before each span's first row).
+void lagged_normal_equations(const std::vector<LaggedColumn>& columns, const double* target,
+                             const std::vector<RowSpan>& spans, Eigen::MatrixXd& G,
                              Eigen::VectorXd& h);
 
 // Solves the normal equations R theta = f with R = G / n, f = h / n, in the

@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
 PathLike = Union[str, "os.PathLike[str]"]
 
-__all__ = ["Model", "load_model", "save_model", "load_data", "save_data", "atomic_output"]
+__all__ = ["Model", "load_model", "save_model", "load_data", "load_loop_data", "save_data", "atomic_output"]
 
 
 def load_model(path: PathLike) -> Model:
@@ -88,6 +88,50 @@ def load_data(path: PathLike, model: Optional[Model] = None, *, max_gap_s: Optio
         repairs=repairs_dict(table.repairs),
     )
     return df
+
+
+def load_loop_data(path: PathLike, columns: Sequence[str], *, max_gap_s: Optional[float] = None,
+                   resample_s: Optional[float] = None, quality_column: Optional[str] = None,
+                   good_quality: Sequence[str] = ()) -> pd.DataFrame:
+    """A data file for the commands that have no model yet (``identify``, ``stiction``): put on
+    the grid of its own sample time (the median step as written; ``resample_s`` when given) with
+    ``load_data``'s historian repairs, ``columns`` required numeric. A timestamp's jitter, a gap
+    and a bad-quality row are then what they are for ``diagnose`` on the same file."""
+    rows = load_data(path)
+    present = set(rows.columns) | set(rows.attrs["text_columns"])
+    for name in columns:
+        if name not in present or name == "time":
+            raise ValueError(f"{os.fspath(path)}: no column {name!r} (columns: "
+                             f"{', '.join(c for c in rows.columns if c != 'time')})")
+    sample_time_s = float(resample_s) if resample_s else sample_time_of(rows["time"].to_numpy())
+    if not sample_time_s > 0:
+        raise ValueError(f"{os.fspath(path)}: needs at least 2 rows with increasing times")
+    columns = list(dict.fromkeys(columns))  # checked numeric by the grid "model": no channels, only names
+    grid = _core.Model("sample grid", sample_time_s, columns[:-1], columns[-1:], {}, {})
+    return load_data(path, grid, max_gap_s=max_gap_s, resample_s=resample_s, quality_column=quality_column,
+                     good_quality=good_quality)
+
+
+def sample_time_of(time_s: np.ndarray) -> float:
+    """The sample time of timestamps as a historian writes them: each step counted in whole
+    samples of the median step (a gap is several), the least-squares slope of the times over
+    those counts (the median of jittered steps can be off by a hundredth of a sample, which
+    drifts a 2 h record off its grid; the slope's error shrinks as jitter / N^1.5), then the
+    roundest value that keeps the drift over the record within 5 % of a sample or twice the
+    steps' own jitter (10 s, not 10.0004 s). 0 without two increasing times."""
+    time_s = np.asarray(time_s, dtype=float)
+    steps = np.diff(time_s)
+    if len(steps) == 0 or not np.median(steps) > 0:
+        return 0.0
+    median = float(np.median(steps))
+    counts = np.r_[0.0, np.cumsum(np.maximum(np.round(steps / median), 1.0))]
+    slope = float(np.polyfit(counts, time_s, 1)[0])
+    drift = max(0.05 * slope, 2 * 1.4826 * float(np.median(np.abs(steps - median))))
+    for digits in range(10):
+        nice = round(slope, digits - int(np.floor(np.log10(slope))))
+        if nice > 0 and abs(nice - slope) * counts[-1] <= drift:
+            return float(nice)
+    return slope
 
 
 def repairs_dict(repairs) -> dict:

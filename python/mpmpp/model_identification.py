@@ -234,29 +234,23 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     ``classes``: the ProcessClass candidates per output (BIC picks one). ``workers``: threads
     for the search (default: one per core, up to one per noise order; the result is the same).
     Raises ``NotIdentified`` when the data do not identify the loop, ``ValueError`` on bad
-    input."""
-    from .io import load_data
+    input. A data file is put on its own sample grid with the historian repairs
+    (``io.load_loop_data``; its splits are kept apart)."""
+    from .io import load_loop_data
 
+    inputs, outputs, setpoints = loop_columns(inputs, outputs, setpoints)
     if not hasattr(data, "columns"):
-        data = load_data(data)
-    inputs, outputs = _names(inputs, "inputs"), _names(outputs, "outputs")
+        data = load_loop_data(data, inputs + outputs + (setpoints or []))
     classes = tuple(classes)
     if not classes or not all(isinstance(c, ProcessClass) for c in classes):
         raise ValueError(f"classes: give one or more ProcessClass (e.g. PROCESS_CLASSES), got {classes!r}")
-    both = set(inputs) & set(outputs)
-    if both:
-        raise ValueError(f"column(s) {sorted(both)} given as both input and output")
     if setpoints is None:
         setpoints = [f"{o}_sp" if f"{o}_sp" in data.columns else None for o in outputs]
-    else:
-        setpoints = _names(setpoints, "setpoints")
-        if len(setpoints) != len(outputs):
-            raise ValueError(f"setpoints: give one per output ({len(outputs)}), got {len(setpoints)}")
     for col in ["time", *inputs, *outputs, *[c for c in setpoints if c]]:
         if col not in data.columns:
             raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
     raw = data[inputs + outputs].to_numpy(dtype=float)
-    ts, gaps = sample_grid(seconds_of(data))
+    ts, gaps = sample_grid(seconds_of(data), data.attrs.get("segment_starts", ()))
     require_rows(len(raw), ts)
     runs = complete_runs(np.all(np.isfinite(raw), axis=1), gaps)
     if max_dead_time_s is None:
@@ -288,7 +282,8 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     workers = min(os.cpu_count() or 1, len(na_orders)) if workers is None else int(workers)
     with ThreadPoolExecutor(workers) if workers > 1 else nullcontext() as pool:
         for i, out in enumerate(outputs):
-            actions = [_controller_action(U[:, j], raw[:, len(inputs) + i], sp[out]) for j in range(len(inputs))]
+            actions = [_controller_action(U[:, j], raw[:, len(inputs) + i], sp[out], st.starts)
+                       for j in range(len(inputs))]
             # the sign guard needs the loop's pairing, known only for a single input
             action = actions[0] if len(inputs) == 1 else 0
             if min_delay < 1 and any(actions):
@@ -739,17 +734,21 @@ def _against_controller(chans, action) -> bool:
     return bool(np.sign(c.gain) != action and abs(c.gain) < SIGN_FLIP_Z * c.gain_sd)
 
 
-def _controller_action(u, pv, sp) -> int:
+def _controller_action(u, pv, sp, starts=()) -> int:
     """The feedback sign the data show from pv to the input u: +1 when the input moves with the control error
     sp - pv (the controller needs a positive process gain), -1 against it, 0 when no feedback
     shows. From the velocity form of a PI controller, du(t) = kc de(t) + ki e(t) (lag 0
     included: that is where the controller acts), by least squares with a 99.9 % t test on
-    the proportional and integral terms together (they share the controller's sign)."""
+    the proportional and integral terms together (they share the controller's sign).
+    ``starts``: rows where a new stretch begins (rows laid end to end across gaps); the
+    differences across them are left out."""
     e = (np.nanmean(pv) if sp is None else sp) - pv
     if not np.all(np.isfinite(e)):
         e = np.where(np.isfinite(e), e, np.nanmean(e))
-    du, de = np.diff(u), np.diff(e)
-    X = np.column_stack([de, e[1:] - e[1:].mean(), np.ones(len(du))])
+    within = np.ones(len(u) - 1, dtype=bool)
+    within[np.asarray(starts, dtype=int) - 1] = False
+    du, de, e = np.diff(u)[within], np.diff(e)[within], e[1:][within]
+    X = np.column_stack([de, e - e.mean(), np.ones(len(du))])
     coef, *_ = np.linalg.lstsq(X, du, rcond=None)
     resid = du - X @ coef
     dof = max(len(du) - 3, 1)
@@ -791,6 +790,21 @@ def _stable_monic(den: np.ndarray) -> np.ndarray:
     roots = np.where(np.abs(roots) > 1.0, 1.0 / np.conj(roots), roots)
     roots = np.where(np.abs(roots) > 0.999, roots * 0.999 / np.abs(roots), roots)
     return np.real(np.poly(roots))
+
+
+def loop_columns(inputs, outputs, setpoints=None) -> tuple[list[str], list[str], list[str] | None]:
+    """The column names of ``inputs``, ``outputs`` and ``setpoints`` (one per output, or None)
+    as lists (each a list or a comma-separated text); ValueError on a name given twice, as both
+    input and output, or a setpoint count that does not match."""
+    inputs, outputs = _names(inputs, "inputs"), _names(outputs, "outputs")
+    both = set(inputs) & set(outputs)
+    if both:
+        raise ValueError(f"column(s) {sorted(both)} given as both input and output")
+    if setpoints is not None:
+        setpoints = _names(setpoints, "setpoints")
+        if len(setpoints) != len(outputs):
+            raise ValueError(f"setpoints: give one per output ({len(outputs)}), got {len(setpoints)}")
+    return inputs, outputs, setpoints
 
 
 def _names(names, what) -> list[str]:

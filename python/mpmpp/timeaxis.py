@@ -31,21 +31,26 @@ def seconds_of(data) -> np.ndarray:
         raise ValueError(f"data: column 'time' must be numbers of seconds, got {column.iloc[0]!r}") from None
 
 
-def sample_grid(time_s: np.ndarray) -> tuple[float, np.ndarray]:
+def sample_grid(time_s: np.ndarray, splits=()) -> tuple[float, np.ndarray]:
     """(ts, starts): the time column's typical step, and the rows that follow a gap (a whole
     number of samples missing: a historian export leaves such rows out). Historian exports round
-    timestamps: 0.1 % slack. A step that is no whole number of samples is an error naming it."""
+    timestamps: 0.1 % slack. A step that is no whole number of samples is an error naming it,
+    except around a split ``load_data`` made (``splits``: its ``segment_starts``; the missing row
+    before each marks the split, and the steps into it and out of it are free)."""
     if len(time_s) < 2 or not np.all(np.isfinite(time_s)):
         raise ValueError("data: the 'time' column needs at least 2 finite values")
     steps = np.diff(time_s)
-    ts = float(np.median(steps))
+    free = np.zeros(len(steps), dtype=bool)
+    for s in splits:   # step k leads into row k + 1
+        free[max(int(s) - 2, 0):int(s)] = True
+    ts = float(np.median(steps[~free])) if np.any(~free) else float(np.median(steps))
     whole = np.round(steps / ts) if ts > 0 else steps
-    bad = np.flatnonzero((whole < 1) | (np.abs(steps - whole * ts) > 1e-3 * ts))
+    bad = np.flatnonzero(~free & ((whole < 1) | (np.abs(steps - whole * ts) > 1e-3 * ts)))
     if ts <= 0 or len(bad):
         row = int(bad[0]) + 1 if len(bad) else 1
         raise ValueError(f"data: 'time' is not evenly spaced (step {steps[row - 1]:g} s at row {row}, "
                          f"typical {ts:g} s, and not a whole number of samples)")
-    return ts, np.flatnonzero(whole > 1) + 1
+    return ts, np.flatnonzero(free | (whole > 1)) + 1
 
 
 def origin_of(data_or_origin) -> Optional["np.datetime64"]:

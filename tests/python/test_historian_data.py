@@ -227,3 +227,54 @@ def test_status_words_in_a_numeric_column_are_missing_and_noted(tmp_path):
         "column u: 2 status word(s) read as missing (the first 'Bad Input')"]
     # read as written (identify, stiction): the same
     assert mpmpp.load_data(path).attrs["repairs"]["status_words"][0]["cells"] == 2
+
+
+@pytest.mark.parametrize("ts, jitter", [(10.0, 1.0), (1.0, 0.2), (0.5, 0.05), (15.0, 2.0), (7.3, 0.0)])
+def test_the_sample_time_of_jittered_timestamps_is_the_nominal_one(ts, jitter):
+    """Without a model the grid comes from the file: 2,000 timestamps jittered by up to a tenth
+    or a fifth of a sample, three rows left out. The median step can be off the nominal value
+    (a hundredth of a sample drifts the end of the record a whole sample off the grid); the
+    sample time is the nominal one."""
+    from mpmpp.io import sample_time_of
+
+    rng = np.random.default_rng(int(ts * 10))
+    t = np.delete(ts * np.arange(2000) + rng.uniform(-jitter, jitter, 2000), [100, 101, 102])
+    assert sample_time_of(t) == ts and sample_time_of(t[:1]) == 0.0
+
+
+def test_a_model_free_command_reads_a_historian_export_as_diagnose_does(tmp_path, capsys):
+    """identify on an export with jittered calendar timestamps, status words, a bad-quality row
+    and a hole longer than --max-gap: the rows go on the 10 s grid as diagnose puts them (noted
+    on stderr), and the model is the one identified from the clean frame with the same rows
+    missing."""
+    import sys
+
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    import pi_loop
+    from mpmpp.cli import main
+    from mpmpp.model_identification import model_from_data
+
+    df = pi_loop.simulate(pi_loop.FLOW, seed=5, rows=1500, setpoint_steps=True)
+    rng = np.random.default_rng(3)
+    start = datetime(2026, 3, 1, 6, 0, tzinfo=timezone.utc)
+    stamps = [(start + timedelta(seconds=float(s) + rng.uniform(-1.0, 1.0))).isoformat(timespec="milliseconds")
+              for s in df["time"]]
+    export = df.astype(object).assign(time=stamps, quality="Good")
+    export.loc[300, "PV"] = "Bad Input"
+    export.loc[700:711, "OP"] = "I/O Timeout"
+    export.loc[450, "quality"] = "Bad"
+    export = export.drop(index=range(1000, 1030))         # 5 min the historian left out
+    write(tmp_path / "loop.csv", export)
+    assert main(["identify", str(tmp_path / "loop.csv"), "--inputs", "OP", "--outputs", "PV", "--quality-column",
+                 "quality", "--max-gap", "2min", "-o", str(tmp_path / "m.json"), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert "timestamp(s) snapped to the sample grid" in err and "1 gap(s) longer than --max-gap split" in err
+    assert "1 row(s) of bad quality made missing" in err
+    doc = json.loads(out)
+    expected = df.copy()
+    expected.loc[[300, 450, *range(700, 712)], ["OP", "PV"]] = np.nan
+    expected = expected.drop(index=range(1000, 1030))
+    r = model_from_data(expected, ["OP"], ["PV"])
+    assert doc["rows_used"] == r.rows_used
+    assert doc["channels"][0]["gain"] == pytest.approx(r.channels[0].gain, rel=1e-9)
+    assert doc["channels"][0]["time_constant_s"] == pytest.approx(r.channels[0].time_constant_s, rel=1e-9)

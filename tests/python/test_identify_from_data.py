@@ -611,3 +611,21 @@ def test_an_input_only_its_controller_moves_is_flagged():
                           "SP": stepped["sp"] + 20.0})
     (c,) = model_from_data(frame, ["OP"], ["PV"], setpoints=["SP"]).channels
     assert not c.unexcited
+
+
+def test_the_controller_action_is_read_within_stretches_not_across_a_gap():
+    """A direct-acting PI law, du = 0.5 de + 0.01 e, in two stretches: across the gap the error
+    went from about +5 to -5 while the OP was moved up by hand. Laid end to end, that one
+    difference (de -10, du +100) outweighs 798 within the stretches and reverses the sign;
+    left out, the action is read right."""
+    from mpmpp.model_identification import _controller_action
+
+    rng = np.random.default_rng(2)
+    pieces = []
+    for level, bias in ((5.0, 0.0), (-5.0, 100.0)):
+        e = level + np.cumsum(rng.standard_normal(400)) * 0.05
+        u = bias + np.cumsum(np.r_[0.0, 0.5 * np.diff(e) + 0.01 * e[1:]])
+        pieces.append((u + 0.01 * rng.standard_normal(400), -e))   # pv = sp - e with sp = 0
+    u, pv = np.concatenate([p[0] for p in pieces]), np.concatenate([p[1] for p in pieces])
+    assert _controller_action(u, pv, np.zeros(800), starts=[400]) == 1
+    assert _controller_action(u, pv, np.zeros(800)) == -1

@@ -57,9 +57,9 @@ def test_stiction_command_errors(tmp_path, capsys, args, n, message):
 
 
 def test_a_historian_gap_or_missing_values_split_the_fit_and_say_so(tmp_path, capsys):
-    """Rows left out (a step of 3 samples) and a missing PV: the valve fit runs over the three
-    stretches of consecutive complete rows; the baselines, which need one unbroken series, on
-    the longest, as on that stretch alone."""
+    """Rows left out (a step of 3 samples: two missing rows on the grid) and a missing PV: the
+    valve fit runs over the three stretches of consecutive complete rows; the baselines, which
+    need one unbroken series, on the longest, as on that stretch alone."""
     data, alone = tmp_path / "loop.csv", tmp_path / "alone.csv"
     write_loop(data, n=900, valve=ActuatorNonlinearity(stiction_s=4.0, stiction_j=2.0))
     df = pd.read_csv(data).drop(index=[100, 101])
@@ -71,21 +71,24 @@ def test_a_historian_gap_or_missing_values_split_the_fit_and_say_so(tmp_path, ca
     main(["stiction", str(alone), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"])
     ref = json.loads(capsys.readouterr().out)
     assert doc["samples"] == 897 and ref["samples"] == 798
-    assert doc["notes"][0] == ("1 rows skipped (missing values, time gaps, stretches under 30 rows); the valve fit "
-                               "uses 3 stretch(es), 897 rows; the baselines the longest, rows 100-897")
+    assert doc["notes"][0] == ("3 rows skipped (missing values, time gaps, stretches under 30 rows); the valve fit "
+                               "uses 3 stretch(es), 897 rows; the baselines the longest, rows 102-899")
     assert doc["baselines"] == ref["baselines"] and ref["notes"] == doc["notes"][1:]
     assert doc["mpmpp"]["stiction"] is ref["mpmpp"]["stiction"] is True
 
 
-def test_a_step_that_is_no_whole_number_of_samples_is_an_error(tmp_path, capsys):
+def test_timestamps_off_the_sample_grid_are_an_error_naming_the_row(tmp_path, capsys):
+    """From row 400 on the file is sampled every 13 s for 100 rows: they drift off the 10 s grid,
+    beyond what snapping a historian's jitter (a quarter of a sample) may move them."""
     data = tmp_path / "loop.csv"
     write_loop(data)
-    df = pd.read_csv(data)
-    df.loc[400:, "time"] += 3.0
+    df = pd.read_csv(data).iloc[:500]
+    df.loc[400:, "time"] = df.loc[400, "time"] + 13.0 * np.arange(len(df) - 400)
     df.to_csv(data, index=False)
     assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV"]) == 2
     err = capsys.readouterr().err.strip()
-    assert "not evenly spaced (step 13 s at row 400" in err and str(data) in err and len(err.splitlines()) == 1
+    assert "column time:" in err and "s sample grid, more than the jitter tolerance" in err
+    assert str(data) in err and len(err.splitlines()) == 1
 
 
 def test_a_saturated_valve_is_no_stiction_and_says_why(tmp_path, capsys):

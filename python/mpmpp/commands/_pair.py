@@ -28,7 +28,8 @@ def add_data_arguments(parser) -> None:
                    help="gaps up to this long (time between the samples around them) become missing rows, "
                         "longer ones split the record into segments (default: 10 sample times)")
     g.add_argument("--resample", type=duration("--resample"), metavar="DURATION",
-                   help="block-average data sampled faster than the model to its sample time (e.g. 5s)")
+                   help="block-average data sampled faster than the model to its sample time (e.g. 5s; "
+                        "identify and stiction: to this sample time)")
     g.add_argument("--quality-column", metavar="COL",
                    help="status column: rows whose quality is not good become missing values")
     g.add_argument("--good-quality", metavar="CODE[,CODE...]",
@@ -52,15 +53,27 @@ def add_train_end_argument(parser, required: bool = False, help_text: str = "") 
                         "(2026-03-01T14:00:00+01:00)")
 
 
+def _historian_options(args) -> dict:
+    good = [c.strip() for c in args.good_quality.split(",") if c.strip()] if args.good_quality else []
+    if good and not args.quality_column:
+        raise ValueError("--good-quality needs --quality-column")
+    return {"max_gap_s": args.max_gap, "resample_s": args.resample, "quality_column": args.quality_column,
+            "good_quality": good}
+
+
 def load_data_for(model, args):
     """The data file of ``args`` on ``model``'s grid, with the historian options."""
     from ..io import load_data
 
-    good = [c.strip() for c in args.good_quality.split(",") if c.strip()] if args.good_quality else []
-    if good and not args.quality_column:
-        raise ValueError("--good-quality needs --quality-column")
-    return load_data(args.data, model, max_gap_s=args.max_gap, resample_s=args.resample,
-                     quality_column=args.quality_column, good_quality=good)
+    return load_data(args.data, model, **_historian_options(args))
+
+
+def load_loop_data_for(args, columns):
+    """The data file of ``args`` on its own sample grid (no model yet: ``identify``,
+    ``stiction``), with the historian options; ``columns`` must be numeric."""
+    from ..io import load_loop_data
+
+    return load_loop_data(args.data, columns, **_historian_options(args))
 
 
 def load_pair(args):

@@ -3,7 +3,9 @@ from __future__ import annotations
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("data", metavar="DATA", help="operating data (CSV with a time column, docs/formats.md)")
+    from ._pair import DATA_HELP, add_data_arguments
+
+    parser.add_argument("data", metavar="DATA", help=DATA_HELP)
     parser.add_argument("--inputs", required=True, metavar="COL[,COL...]", help="input columns (e.g. the OP)")
     parser.add_argument("--outputs", required=True, metavar="COL[,COL...]", help="output columns (e.g. the PV)")
     parser.add_argument("--setpoints", metavar="COL[,COL...]",
@@ -17,19 +19,20 @@ def add_arguments(parser) -> None:
                         help="model class of every channel: chosen by BIC (auto, the default), first order plus "
                              "dead time, or integrating (a level: with or without a lag)")
     parser.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+    add_data_arguments(parser)
 
 
 def run(args) -> int:
     import json
     import os
 
-    from ..io import load_data
-    from ._pair import note_repairs
-    from ..model_identification import CLASSES_BY_NAME, model_from_data
+    from ._pair import load_loop_data_for, note_repairs
+    from ..model_identification import CLASSES_BY_NAME, loop_columns, model_from_data
 
     if os.path.exists(args.output) and not args.force:
         raise ValueError(f"{args.output}: exists (add --force to replace it)")
-    data = load_data(args.data)
+    inputs, outputs, setpoints = loop_columns(args.inputs, args.outputs, args.setpoints)
+    data = load_loop_data_for(args, inputs + outputs + (setpoints or []))
     note_repairs(args.data, data.attrs["repairs"])
     name = args.name or f"identified from {os.path.basename(args.data)}"
     result = model_from_data(data, args.inputs, args.outputs, setpoints=args.setpoints, name=name, max_dead_time_s=args.max_dead_time,

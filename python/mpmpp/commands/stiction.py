@@ -15,11 +15,14 @@ MIN_STRETCH = 30
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("data", metavar="DATA", help="data file (CSV with a time column)")
+    from ._pair import DATA_HELP, add_data_arguments
+
+    parser.add_argument("data", metavar="DATA", help=DATA_HELP)
     parser.add_argument("--op", required=True, metavar="COL", help="controller output column")
     parser.add_argument("--pv", required=True, metavar="COL", help="process variable column")
     parser.add_argument("--sp", metavar="COL", help="setpoint column (optional)")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
+    add_data_arguments(parser)
 
 
 def _column(df, name: str, path: str) -> np.ndarray:
@@ -36,7 +39,7 @@ def _stretches(df, columns: list[np.ndarray], path: str) -> tuple[list, str | No
     """The stretches of rows with every column present and no time gap inside (the fit runs the
     valve through consecutive samples, restarting at each), and a note when rows were left out."""
     try:
-        _, starts = sample_grid(seconds_of(df))
+        _, starts = sample_grid(seconds_of(df), df.attrs.get("segment_starts", ()))
         runs, skipped = complete_segments(np.all(np.isfinite(np.column_stack(columns)), axis=1), MIN_STRETCH, starts)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
@@ -53,11 +56,10 @@ def _plain(value):
 
 
 def run(args) -> int:
-    from ..io import load_data
-    from ._pair import note_repairs
+    from ._pair import load_loop_data_for, note_repairs
     from ..stiction import analyse_loop
 
-    df = load_data(args.data)
+    df = load_loop_data_for(args, [c for c in (args.op, args.pv, args.sp) if c])
     note_repairs(args.data, df.attrs["repairs"])
     columns = [_column(df, c, args.data) for c in (args.op, args.pv, args.sp) if c]
     stretches, skipped = _stretches(df, columns, args.data)

@@ -34,5 +34,9 @@ def single_loops(sig: Signals, data) -> list[Loop]:
         ok = np.isfinite(u) & np.isfinite(y)
         if sp is not None:
             sp = (sp - sig.operating_point[name])[ok]   # deviations, like y
-        loops.append(Loop(i, j, _controller_action(u[ok], y[ok], sp)))
+        rows = np.flatnonzero(ok)
+        # the complete rows laid end to end: a new stretch after a missing row or a segment break
+        starts = np.union1d(np.flatnonzero(np.diff(rows) > 1) + 1,
+                            np.searchsorted(rows, [a for a, _ in sig.segments[1:]]))
+        loops.append(Loop(i, j, _controller_action(u[ok], y[ok], sp, starts[(starts > 0) & (starts < len(rows))])))
     return loops

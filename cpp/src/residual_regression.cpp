@@ -171,20 +171,21 @@ bool fit_with_breaks(Eigen::MatrixXd& Z, const Eigen::VectorXd& z, const Breaks&
   return true;
 }
 
-// The rows of a window's AR fit (row i reads v(i) .. v(i + na)) that read no outlier: v's
-// samples whose innovation in a first AR fit (with the trend) exceeds `sigmas` robust sigmas.
-// All rows when more than a tenth would go: heavy tails, not isolated outliers.
+// The rows of a window's AR fit (row i reads v(i) .. v(i + na)) among `usable` (those reading
+// no missing sample) that read no outlier: v's samples whose innovation in a first AR fit (with
+// the trend) exceeds `sigmas` robust sigmas. All usable rows when more than a tenth would go:
+// heavy tails, not isolated outliers.
 std::vector<Eigen::Index> rows_clear_of_outliers(const Eigen::VectorXd& v,
                                                  const Eigen::MatrixXd& trend, int na,
-                                                 double sigmas) {
-  const Eigen::Index rows = trend.rows();
-  std::vector<Eigen::Index> all(static_cast<size_t>(rows));
-  for (Eigen::Index i = 0; i < rows; ++i) all[static_cast<size_t>(i)] = i;
-  if (!(sigmas > 0)) return all;
-  const Eigen::MatrixXd R = lagged_with_trend(v, trend, na);
+                                                 double sigmas,
+                                                 const std::vector<Eigen::Index>& usable) {
+  const Eigen::Index rows = static_cast<Eigen::Index>(usable.size());
+  if (!(sigmas > 0)) return usable;
+  const Eigen::MatrixXd R = lagged_with_trend(v, trend, na)(usable, Eigen::all);
+  const Eigen::VectorXd target = v.tail(trend.rows())(usable);
   Eigen::VectorXd coef;
-  if (!truncated_least_squares(R, v.tail(rows), coef, nullptr)) return all;
-  const Eigen::VectorXd e = v.tail(rows) - R * coef;
+  if (!truncated_least_squares(R, target, coef, nullptr)) return usable;
+  const Eigen::VectorXd e = target - R * coef;
   std::vector<double> dev(e.data(), e.data() + rows);
   const auto mid = dev.begin() + rows / 2;
   std::nth_element(dev.begin(), mid, dev.end());
@@ -192,19 +193,19 @@ std::vector<Eigen::Index> rows_clear_of_outliers(const Eigen::VectorXd& v,
   for (auto& d : dev) d = std::abs(d - median);
   std::nth_element(dev.begin(), mid, dev.end());
   const double limit = sigmas * 1.4826 * *mid;
-  std::vector<bool> out(static_cast<size_t>(rows), false);
-  Eigen::Index dropped = 0;
-  for (Eigen::Index i = 0; i < rows; ++i) {
-    if (!(std::abs(e[i] - median) > limit)) continue;
-    for (Eigen::Index j = i; j <= std::min(rows - 1, i + na); ++j) {
-      dropped += out[static_cast<size_t>(j)] ? 0 : 1;
+  // An outlier at v's sample t reads in the rows whose window i .. i + na holds it.
+  std::vector<bool> out(static_cast<size_t>(trend.rows()), false);
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    if (!(std::abs(e[r] - median) > limit)) continue;
+    const Eigen::Index i = usable[static_cast<size_t>(r)];
+    for (Eigen::Index j = i; j <= std::min(trend.rows() - 1, i + na); ++j)
       out[static_cast<size_t>(j)] = true;
-    }
   }
-  if (dropped == 0 || dropped > rows / 10) return all;
   std::vector<Eigen::Index> kept;
-  for (Eigen::Index i = 0; i < rows; ++i)
+  for (const Eigen::Index i : usable)
     if (!out[static_cast<size_t>(i)]) kept.push_back(i);
+  const Eigen::Index dropped = rows - static_cast<Eigen::Index>(kept.size());
+  if (dropped == 0 || dropped > rows / 10) return usable;
   return kept;
 }
 
@@ -278,9 +279,15 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     if (reason) *reason = "window too short for the residual regression";
     return false;
   }
+  // Output samples a historian lost (NaN in y; the inputs are complete, their filters run
+  // through every sample): v is unknown there, so every row of the AR and whitened fits that
+  // reads one is left out, as an outlier's rows are. Nothing is interpolated. A window that
+  // would lose more than a tenth of its rows is skipped.
+  const Eigen::Array<bool, Eigen::Dynamic, 1> present = y.array().isFinite();
   // Deviations from the window's means: the filters start from rest at the operating point,
   // so their start-up transient is that of the deviations only (and settles within skip).
-  Eigen::VectorXd v = y.array() - y.mean();
+  const double level = present.select(y.array(), 0.0).sum() / std::max<double>(present.count(), 1);
+  Eigen::VectorXd v = present.select(y.array() - level, 0.0);
   Eigen::MatrixXd X(n, columns);
   Eigen::Index c = 0;
   for (int e = 0; e < ne; ++e) {
@@ -295,8 +302,16 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   Eigen::MatrixXd trend(rows, 2);
   trend.col(0).setOnes();
   trend.col(1) = Eigen::VectorXd::LinSpaced(rows, 0.0, 1.0);
+  std::vector<Eigen::Index> usable;
+  const auto vv_present = present.tail(m);
+  for (Eigen::Index i = 0; i < rows; ++i)
+    if (vv_present.segment(i, ar_order_ + 1).all()) usable.push_back(i);
+  if (static_cast<Eigen::Index>(usable.size()) < rows - rows / 10) {
+    if (reason) *reason = "missing values in the window";
+    return false;
+  }
   const std::vector<Eigen::Index> kept =
-      rows_clear_of_outliers(vv, trend, ar_order_, outlier_sigmas_);
+      rows_clear_of_outliers(vv, trend, ar_order_, outlier_sigmas_, usable);
   const Eigen::Index used = static_cast<Eigen::Index>(kept.size());
   Eigen::VectorXd b = Eigen::VectorXd::Zero(columns), coef;
   Eigen::MatrixXd cov;

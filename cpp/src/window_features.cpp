@@ -123,7 +123,9 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                      std::to_string(u.cols()) + ", y " + std::to_string(y.rows()) + "x" +
                      std::to_string(y.cols()));
   // A gap makes the window unusable: docs/formats.md forbids interpolating missing values.
-  if (!u.allFinite() || !y.allFinite()) {
+  // Only the residual regression alone (NoiseTest::Residual) can leave out the rows that read
+  // a lost output sample (ResidualRegression::estimate); an input's filters need every sample.
+  if (!u.allFinite() || (!noise_from_residual_ && !y.allFinite())) {
     if (skip_reason) *skip_reason = "missing values in the window";
     return false;
   }

@@ -3,7 +3,8 @@
 delay directions (Laguerre alone for a channel the model lacks) after whitening by A(q), with
 A(q) refitted from what beta leaves, twice;
 both fits with up to `breaks` step + hinge pairs chosen greedily by brute force (every
-position's two columns built and projected explicitly), on the rows that read no outlier."""
+position's two columns built and projected explicitly), on the rows that read no outlier and
+no missing output sample (NaN in y)."""
 import numpy as np
 from scipy.signal import lfilter
 
@@ -84,24 +85,28 @@ def _fit(Z, z, breaks, edge, threshold):
     return coef, cov
 
 
+def usable_rows(v, na):
+    """Rows of the AR fit (row i reads v[i .. i + na]) that read no missing sample."""
+    return np.array([i for i in range(len(v) - na) if np.all(np.isfinite(v[i:i + na + 1]))], dtype=int)
+
+
 def rows_clear_of_outliers(v, trend, na, sigmas):
-    """Rows of the AR fit (row i reads v[i .. i + na]) reading no sample whose innovation in a
-    first AR fit exceeds `sigmas` robust sigmas (1.4826 MAD); all rows when none is, or more
-    than a tenth of them would go."""
-    rows = len(trend)
-    everything = np.arange(rows)
+    """Rows of the AR fit (row i reads v[i .. i + na]) reading no missing sample and no sample
+    whose innovation in a first AR fit on those rows exceeds `sigmas` robust sigmas (1.4826
+    MAD); all of them when none is, or more than a tenth of them would go."""
+    usable = usable_rows(v, na)
     if sigmas <= 0:
-        return everything
-    R = np.column_stack([v[na - k:len(v) - k] for k in range(1, na + 1)] + [trend])
-    e = v[na:] - R @ _lstsq(R, v[na:])[0]
+        return usable
+    R = np.column_stack([v[na - k:len(v) - k] for k in range(1, na + 1)] + [trend])[usable]
+    e = v[na:][usable] - R @ _lstsq(R, v[na:][usable])[0]
     med = np.median(e)
     limit = sigmas * 1.4826 * np.median(np.abs(e - med))
-    out = np.zeros(rows, bool)
-    for i in np.flatnonzero(np.abs(e - med) > limit):
+    out = np.zeros(len(trend), bool)
+    for i in usable[np.abs(e - med) > limit]:
         out[i:i + na + 1] = True
-    if not out.any() or out.sum() > rows // 10:
-        return everything
-    return np.flatnonzero(~out)
+    if not out[usable].any() or out[usable].sum() > len(usable) // 10:
+        return usable
+    return usable[~out[usable]]
 
 
 def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01, outlier_sigmas=0.0):
@@ -117,7 +122,7 @@ def reference_window_miso(channels, y, U, na, terms, absent_terms, settle, break
     (its absent_terms Laguerre directions alone). Per input: beta_e and its covariance; then
     A(q)'s ar and covariance."""
     modelled = [g for g in channels if g is not None]
-    yc, Uc = y - y.mean(), U - U.mean(0)
+    yc, Uc = y - np.nanmean(y), U - U.mean(0)
     v = yc.copy()
     blocks = []
     for g, x in zip(channels, Uc.T):

@@ -55,9 +55,14 @@ def _window(pi_loop, sigmas=0.0, spikes=0.0):
     return model, y, data[["u1"]].to_numpy()[:1440]
 
 
-@pytest.mark.parametrize("sigmas,spikes", [(0.0, 0.0), (60.0, 0.0), (0.0, 20.0)])
-def test_one_window_matches_numpy(pi_loop, sigmas, spikes):
+@pytest.mark.parametrize("sigmas,spikes,lost", [(0.0, 0.0, False), (60.0, 0.0, False), (0.0, 20.0, False),
+                                                (0.0, 0.0, True), (0.0, 20.0, True)])
+def test_one_window_matches_numpy(pi_loop, sigmas, spikes, lost):
+    """``lost``: output samples a historian lost (NaN) at rows 200, 201, 705 and 1300, one
+    beside a spike: the rows that read them leave both fits, as the reference leaves them."""
     model, y, u = _window(pi_loop, sigmas, spikes)
+    if lost:
+        y[[200, 201, 705, 1300]] = np.nan
     config = make_config("siso", model)
     assert config.residual_steps > 0 and config.outlier_sigmas > 0
     beta, cov, settle = _core.residual_regression(model, 0, [0], config, y, u)
@@ -137,6 +142,15 @@ def test_null_distribution_is_chi_square(family, effect):
     assert 0.3 < np.mean(ratios) < 1.7, np.round(ratios, 2)
 
 
+def test_too_many_lost_output_samples_skip_the_window(pi_loop):
+    """One output sample in 20 lost: every AR row of a fifth order reads one, far beyond the
+    tenth the regression may lose; the window is skipped with its reason, not filled in."""
+    model, y, u = _window(pi_loop)
+    y[::20] = np.nan
+    with pytest.raises(RuntimeError, match="missing values in the window"):
+        _core.residual_regression(model, 0, [0], make_config("siso", model), y, u)
+
+
 def test_detect_alarms_on_a_gain_change_and_not_on_a_noise_change():
     spec, expect = fam.family("pi_siso").draw(1)
     assert expect["effect"] == "gain"
@@ -149,6 +163,26 @@ def test_detect_alarms_on_a_gain_change_and_not_on_a_noise_change():
     model = nominal_model(spec)
     result = detect(model, simulate(spec), config="siso")
     assert len(result.alarm_starts(0)) == 0
+
+
+def test_an_output_sample_lost_every_hour_costs_no_window_and_no_alarm_changes():
+    """The records of the test above with one output sample lost every hour (a historian's bad
+    value): every window is still scored (before, each lost sample skipped the two hours of
+    windows around it, and one per hour left no training window at all), the gain change
+    still alarms after its onset, the noise change still does not."""
+    for name, seed, effect in (("pi_siso", 1, "gain"), ("mpc_siso_controls", 4, "noise_change")):
+        spec, expect = fam.family(name).draw(seed)
+        assert expect["effect"] == effect
+        model = nominal_model(spec)
+        data = simulate(spec)
+        data.loc[data.index[17::int(3600 / model.sample_time_s)], "y1"] = np.nan
+        result = detect(model, data, config="siso")
+        assert not result.windows["skipped"].any()
+        starts = result.alarm_starts(0)
+        if effect == "gain":
+            assert len(starts) and starts[0] - result.windows["start_s"].iloc[0] > expect["onset_s"]
+        else:
+            assert len(starts) == 0
 
 
 def test_detector_file_round_trip(tmp_path, pi_loop):

@@ -5,8 +5,9 @@ and the batch `mpmpp detect --json` results the C++ streaming path must reproduc
     PYTHONPATH=python python scripts/make_stream_test_data.py [OUT_DIR]
 
 Files: model.json, data.csv (paper SISO scenario, seed 0, inputs/outputs only, 6 significant
-digits, two missing cells: one in the training period, one after the MPM onset, so skipped
-windows are exercised), detector.json (`mpmpp detect --save-detector`), batch.json (the
+digits, two missing cells: one in the training period, one after the MPM onset, which the
+windows do without, and 20 minutes of missing output at 12 h, more than the tenth of a window
+a window may lose, so skipped windows are exercised), detector.json (`mpmpp detect --save-detector`), batch.json (the
 `mpmpp detect --json` document), expected_alarms.csv and expected_scores.csv (batch alarms
 from the saved detector reloaded and monitoring the whole data set, in the stream_csv
 example's CSV layout).
@@ -36,6 +37,7 @@ def write_dataset(out_dir: str) -> tuple[str, str]:
     ts = model.sample_time_s
     data.loc[int(100 / ts), model.inputs[0]] = math.nan  # in the first (training) window only
     data.loc[int(14.0 * 3600 / ts), model.outputs[0]] = math.nan  # while monitoring
+    data.loc[int(12.0 * 3600 / ts):int(12.0 * 3600 / ts) + int(1200 / ts) - 1, model.outputs[0]] = math.nan
     model_path, data_path = os.path.join(out_dir, "model.json"), os.path.join(out_dir, "data.csv")
     mpmpp.save_model(model, model_path)
     data.to_csv(data_path, index=False, float_format="%.6g", na_rep="")

@@ -66,7 +66,8 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       process_covariances_(config.resampling == Resampling::Estimator ||
                            config.process_test == ProcessTest::Residual),
       noise_wald_(is_wald(config.noise_test)),
-      noise_from_residual_(config.noise_test == NoiseTest::Residual) {
+      noise_from_residual_(config.noise_test == NoiseTest::Residual),
+      arx_oe_stretches_(!process_covariances_ && !noise_wald_ && !noise_from_residual_) {
   config.validate();
   config.check_residual_ar_orders(num_outputs_);
   window_ = config.window_samples(nominal.sample_time_s);
@@ -122,12 +123,29 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                      " outputs, got u " + std::to_string(u.rows()) + "x" +
                      std::to_string(u.cols()) + ", y " + std::to_string(y.rows()) + "x" +
                      std::to_string(y.cols()));
-  // A gap makes the window unusable: docs/formats.md forbids interpolating missing values.
-  // Only the residual regression alone (NoiseTest::Residual) can leave out the rows that read
-  // a lost output sample (ResidualRegression::estimate); an input's filters need every sample.
-  if (!u.allFinite() || (!noise_from_residual_ && !y.allFinite())) {
-    if (skip_reason) *skip_reason = "missing values in the window";
-    return false;
+  // docs/formats.md forbids interpolating missing values. The residual regression alone
+  // (NoiseTest::Residual) leaves out the rows that read a lost output sample
+  // (ResidualRegression::estimate; an input's filters need every sample); the plain ARX-OE
+  // fits the complete rows as stretches while at most a tenth of the window is missing.
+  // Otherwise a gap makes the window unusable.
+  complete_rows_.clear();
+  stretch_starts_.clear();
+  if (!u.allFinite() || !y.allFinite()) {
+    if (arx_oe_stretches_) {
+      for (Eigen::Index t = 0; t < window_; ++t) {
+        if (!u.row(t).allFinite() || !y.row(t).allFinite()) continue;
+        if (!complete_rows_.empty() && complete_rows_.back() != t - 1)
+          stretch_starts_.push_back(static_cast<Eigen::Index>(complete_rows_.size()));
+        complete_rows_.push_back(t);
+      }
+    }
+    const bool output_losses_only = noise_from_residual_ && u.allFinite();
+    const bool stretches = arx_oe_stretches_ && static_cast<Eigen::Index>(complete_rows_.size()) >=
+                                                    window_ - window_ / 10;
+    if (!output_losses_only && !stretches) {
+      if (skip_reason) *skip_reason = "missing values in the window";
+      return false;
+    }
   }
   features.resize(channels_.size());
   const bool want_covariances = has_covariances() && covariances != nullptr;
@@ -140,10 +158,15 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
     if (!noise_from_residual_) {
       for (size_t e = 0; e < p.arx_inputs.size(); ++e) p.u_arx.col(e) = u.col(p.arx_inputs[e]);
       try {
-        if (p.residual && noise_wald_)
+        if (p.residual && noise_wald_) {
           p.estimator.estimate_arx(y.col(i), p.u_arx, result_.arx);
-        else
+        } else if (complete_rows_.empty()) {
           p.estimator.estimate(y.col(i), p.u_arx, result_);
+        } else {
+          y_rows_ = y.col(i)(complete_rows_);
+          u_rows_ = p.u_arx(complete_rows_, Eigen::all);
+          p.estimator.estimate(y_rows_, u_rows_, result_, stretch_starts_);
+        }
       } catch (const NumericalError& err) {
         if (skip_reason) *skip_reason = err.what();
         return false;

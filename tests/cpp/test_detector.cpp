@@ -343,10 +343,14 @@ TEST(Detector, ScoreWindowEqualsBatchMonitor) {
     }
   }
   EXPECT_EQ(scored, 2 * 28);  // windows ending after 3 h: 41 - 13
-  // A window with a gap is skipped with a reason.
+  // A window does without a lost sample (fitted on its complete rows); a gap of more than a
+  // tenth of it is skipped with a reason.
   y[100] = std::nan("");
   std::string reason;
   Eigen::VectorXd h = d.score_window(features, u.head(1440), y.head(1440), &reason);
+  EXPECT_TRUE(h.allFinite()) << reason;
+  y.segment(200, 150).setConstant(std::nan(""));
+  h = d.score_window(features, u.head(1440), y.head(1440), &reason);
   EXPECT_TRUE(std::isnan(h[0]) && std::isnan(h[1]));
   EXPECT_NE(reason.find("missing"), std::string::npos);
 }

@@ -9,6 +9,8 @@
 
 #include "mpmpp/arx_oe.hpp"
 #include "mpmpp/error.hpp"
+#include "mpmpp/window_features.hpp"
+#include "small_loop.hpp"
 
 namespace {
 
@@ -143,6 +145,46 @@ TEST(RecordStretches, BadStretchesAreRefusedWithTheirReason) {
   c.fir_length = {20};
   c.detrend = mpmpp::Detrend::Linear;
   EXPECT_THROW(mpmpp::ArxOeEstimator(c).estimate(y, u, {150}), mpmpp::InputError);
+}
+
+// The paper's per-window ARX-OE (no residual regression, no covariances) with a few rows
+// missing: the window's features are the ARX-OE of its complete rows laid end to end, a new
+// stretch after each gap; beyond a tenth of the window missing, the window is skipped.
+TEST(RecordStretches, APaperWindowWithMissingRowsIsFittedOnItsCompleteRows) {
+  const mpmpp::Model model = mpmpp::test_loops::small_siso_model(3);
+  const mpmpp::DetectorConfig config = mpmpp::test_loops::short_window_config(600.0);
+  mpmpp::WindowFeatures features(model, config);
+  const Index W = features.window_samples();
+  Eigen::MatrixXd u = white(W, 1, 9);
+  Eigen::MatrixXd y(W, 1);
+  y.col(0) = model.process[0][0]->filter(u.col(0)) + 0.1 * white(W, 1, 10).col(0);
+  y(40, 0) = y(41, 0) = NAN;  // two output samples lost
+  u(90, 0) = NAN;             // and one input sample
+  std::vector<Eigen::VectorXd> f;
+  std::string reason;
+  ASSERT_TRUE(features.extract(u, y, f, &reason)) << reason;
+
+  std::vector<Index> rows;
+  for (Index t = 0; t < W; ++t)
+    if (t != 40 && t != 41 && t != 90) rows.push_back(t);
+  mpmpp::ArxOeConfig c;
+  c.arx = {config.arx_order_a, {config.arx_order_b + 1}, {3}};
+  c.arx_options.delta = config.arx_regularisation;
+  c.structures = {mpmpp::OeChannel::fir(config.fir_length, 3)};
+  c.fir_length = {3 + config.fir_length};
+  const Eigen::VectorXd y_rows = y.col(0)(rows);
+  const Eigen::MatrixXd u_rows = u(rows, Eigen::all);
+  const auto r = mpmpp::ArxOeEstimator(c).estimate(y_rows, u_rows, {40, 88});
+  for (std::size_t k = 0; k < features.channels().size(); ++k) {
+    const Eigen::VectorXd expected =
+        features.channels()[k].kind == mpmpp::MonitoredChannel::Kind::Process
+            ? Eigen::VectorXd(r.channels[0].fir.tail(config.fir_length))
+            : Eigen::VectorXd(r.noise);
+    EXPECT_LT((f[k] - expected).cwiseAbs().maxCoeff(), 1e-12);
+  }
+  for (Index t = 0; t < W / 10 - 2; ++t) y(2 * t + 1, 0) = NAN;  // now more than a tenth
+  EXPECT_FALSE(features.extract(u, y, f, &reason));
+  EXPECT_EQ(reason, "missing values in the window");
 }
 
 }  // namespace

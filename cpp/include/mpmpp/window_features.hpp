@@ -58,7 +58,10 @@ class WindowFeatures {
   // One window: u (window_samples x inputs), y (window_samples x outputs), columns in the
   // model's order. Fills features[k] for every channel k and returns true, or returns false
   // with the reason when the window holds a NaN or is not informative (NumericalError of
-  // ARX-OE); InputError on wrong shapes.
+  // ARX-OE); InputError on wrong shapes. Missing values that a window can do without (a
+  // tenth of its rows at most): lost output samples under NoiseTest::Residual (the residual
+  // regression leaves out the rows that read them), and any missing row under the plain
+  // ARX-OE of the paper's presets (fitted on the complete rows, each stretch from rest).
   // With Resampling::Estimator, `covariances` (when given) receives per channel the OE
   // covariance sigma^2 (J'J)^-1 of features[k] (process channels; the FIR structure makes the
   // OE parameters the features themselves) and a 0 x 0 matrix for noise channels. With
@@ -109,6 +112,12 @@ class WindowFeatures {
   bool process_covariances_;  // Resampling::Estimator (the OE step's) or ProcessTest::Residual
   bool noise_wald_;           // NoiseTest::Wald: a_1..a_na with their covariance
   bool noise_from_residual_;  // NoiseTest::Residual: A(q) from the residual regression
+  // ARX-OE alone (the paper's presets: no residual regression, no covariances): a window with
+  // a few missing rows is fitted on its complete rows as stretches, each from rest.
+  bool arx_oe_stretches_;
+  std::vector<Eigen::Index> complete_rows_, stretch_starts_;  // of the current window
+  Eigen::VectorXd y_rows_;
+  Eigen::MatrixXd u_rows_;
   std::vector<MonitoredChannel> channels_;
   std::vector<int> feature_length_;
   std::vector<OutputProblem> problems_;

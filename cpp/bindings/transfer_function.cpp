@@ -2,8 +2,10 @@
 
 #include <pybind11/eigen.h>
 #include <pybind11/operators.h>
+#include <pybind11/stl.h>
 
 #include "bindings.hpp"
+#include "mpmpp/detail/lagged_regression.hpp"
 
 namespace py = pybind11;
 
@@ -20,7 +22,23 @@ void bind_transfer_function(py::module_& m) {
       .def_property_readonly("num", &TransferFunction::num)
       .def_property_readonly("den", &TransferFunction::den)
       .def_property_readonly("delay", &TransferFunction::delay)
-      .def("filter", &TransferFunction::filter, py::arg("x"))
+      .def(
+          "filter",
+          [](const TransferFunction& g, const Eigen::Ref<const Eigen::VectorXd>& x,
+             const std::vector<Eigen::Index>& stretch_starts) {
+            if (stretch_starts.empty()) return g.filter(x);
+            // A record of several stretches laid end to end: each filtered from rest.
+            std::vector<detail::RowSpan> spans;
+            detail::stretch_spans(x.size(), stretch_starts, spans);
+            Eigen::VectorXd out(x.size());
+            for (const auto& s : spans)
+              filter_into(g.num(), g.den(), g.delay(), x.segment(s.begin, s.size()),
+                          out.segment(s.begin, s.size()));
+            return out;
+          },
+          py::arg("x"), py::arg("stretch_starts") = std::vector<Eigen::Index>{},
+          "G x from rest; with stretch_starts (rows where a new stretch of a record with gaps "
+          "begins) each stretch from rest")
       .def("impulse", &TransferFunction::impulse, py::arg("n"))
       .def("step", &TransferFunction::step, py::arg("n"))
       .def("dc_gain", &TransferFunction::dc_gain)

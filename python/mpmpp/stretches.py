@@ -33,8 +33,8 @@ class Stretches:
         return zip(self.bounds[:-1].tolist(), self.bounds[1:].tolist())
 
     def filter(self, tf, x: np.ndarray) -> np.ndarray:
-        """tf applied to x (one column), each stretch from rest."""
-        return np.concatenate([np.asarray(tf.filter(x[a:b])) for a, b in self.spans()])
+        """tf (a ``TransferFunction``) applied to x (one column), each stretch from rest."""
+        return np.asarray(tf.filter(np.ascontiguousarray(x, dtype=float), stretch_starts=self.starts))
 
     def lag(self, x: np.ndarray, k: int) -> np.ndarray:
         """x delayed by k rows in every stretch, zeros before each stretch's first row."""

@@ -5,7 +5,6 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "mpmpp/detail/lagged_regression.hpp"
 
 namespace py = pybind11;
 
@@ -31,9 +30,7 @@ void bind_transfer_function(py::module_& m) {
             std::vector<detail::RowSpan> spans;
             detail::stretch_spans(x.size(), stretch_starts, spans);
             Eigen::VectorXd out(x.size());
-            for (const auto& s : spans)
-              filter_into(g.num(), g.den(), g.delay(), x.segment(s.begin, s.size()),
-                          out.segment(s.begin, s.size()));
+            filter_into(g.num(), g.den(), g.delay(), spans, x, out);
             return out;
           },
           py::arg("x"), py::arg("stretch_starts") = std::vector<Eigen::Index>{},

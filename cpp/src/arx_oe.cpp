@@ -106,12 +106,8 @@ void ArxOeEstimator::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   yf_.resize(N);
   uf_.resize(N, m);
   detail::stretch_spans(N, stretch_starts, stretches_);
-  for (const detail::RowSpan& s : stretches_) {
-    filter_into(a, one_, 0, y_.segment(s.begin, s.size()), yf_.segment(s.begin, s.size()));
-    for (Eigen::Index j = 0; j < m; ++j)
-      filter_into(a, one_, 0, u_.col(j).segment(s.begin, s.size()),
-                  uf_.col(j).segment(s.begin, s.size()));
-  }
+  filter_into(a, one_, 0, stretches_, y_, yf_);
+  for (Eigen::Index j = 0; j < m; ++j) filter_into(a, one_, 0, stretches_, u_.col(j), uf_.col(j));
 
   // 4. OE started from the ARX estimate G_j = q^-d_j B_j / A (impulse after the delay).
   for (Eigen::Index j = 0; j < m; ++j) {

@@ -1,9 +1,6 @@
 #include "mpmpp/detail/lagged_regression.hpp"
 
 #include <cmath>
-#include <string>
-
-#include "mpmpp/error.hpp"
 
 namespace mpmpp::detail {
 
@@ -14,21 +11,6 @@ ConstSegment column_segment(const LaggedColumn& c, Eigen::Index t0, Eigen::Index
   return ConstSegment(c.signal + (t0 - c.lag), n);
 }
 }  // namespace
-
-void stretch_spans(Eigen::Index N, const std::vector<Eigen::Index>& starts,
-                   std::vector<RowSpan>& spans) {
-  spans.clear();
-  Eigen::Index begin = 0;
-  for (const Eigen::Index s : starts) {
-    if (s <= begin || s >= N)
-      throw InputError("stretch_starts must be strictly increasing rows in (0, " +
-                       std::to_string(N) + "), got " + std::to_string(s) + " after " +
-                       std::to_string(begin));
-    spans.push_back({begin, s});
-    begin = s;
-  }
-  spans.push_back({begin, N});
-}
 
 void lagged_matrix(const std::vector<LaggedColumn>& columns, Eigen::Index t0, Eigen::Index n,
                    Eigen::MatrixXd& phi) {

@@ -223,13 +223,6 @@ void OutputErrorEstimator::pole_grid_start(std::size_t j,
   }
 }
 
-void OutputErrorEstimator::filter_stretches(const Eigen::VectorXd& num, const Eigen::VectorXd& den,
-                                            int delay, const Eigen::Ref<const Eigen::VectorXd>& x,
-                                            Eigen::Ref<Eigen::VectorXd> out) const {
-  for (const detail::RowSpan& s : stretches_)
-    filter_into(num, den, delay, x.segment(s.begin, s.size()), out.segment(s.begin, s.size()));
-}
-
 double OutputErrorEstimator::criterion_sum_of_squares(const Eigen::VectorXd& x) const {
   double sum = 0.0;
   for (const detail::RowSpan& rows : equations_)
@@ -244,7 +237,7 @@ double OutputErrorEstimator::simulate(const Eigen::Ref<const Eigen::MatrixXd>& u
     // w_j = q^-d_j / F_j u_j is both the b-sensitivity and, through yhat_j = B_j w_j,
     // the simulation: one recursive filter per channel instead of two. yhat_j is not
     // stored: e = y - sum_jk b_jk w_j(t - k) in one pass per term.
-    filter_stretches(unit_, par.f[j], channels_[j].delay, u.col(j), w_[j].segment(pad_, N));
+    filter_into(unit_, par.f[j], channels_[j].delay, stretches_, u.col(j), w_[j].segment(pad_, N));
     const double* w = w_[j].data() + pad_;
     for (Eigen::Index k = 0; k < par.b[j].size(); ++k) {
       const ConstSegment w_k(w - k, N);  // pad_ >= nb - 1
@@ -267,8 +260,8 @@ void OutputErrorEstimator::jacobian_columns(Eigen::Index N, const OeResult& par)
     const OeChannel& ch = channels_[j];
     for (int k = 0; k < ch.nb; ++k) columns_[c++] = {w_[j].data() + pad_, k, 1.0};
     if (ch.nf == 0) continue;
-    filter_stretches(unit_, par.f[j], 0, w_[j].segment(pad_, N), s_[j].segment(pad_, N));
-    filter_stretches(par.b[j], unit_, 0, s_[j].segment(pad_, N), v_[j].segment(pad_, N));
+    filter_into(unit_, par.f[j], 0, stretches_, w_[j].segment(pad_, N), s_[j].segment(pad_, N));
+    filter_into(par.b[j], unit_, 0, stretches_, s_[j].segment(pad_, N), v_[j].segment(pad_, N));
     for (int i = 1; i <= ch.nf; ++i) columns_[c++] = {v_[j].data() + pad_, i, -1.0};
   }
 }
@@ -295,7 +288,7 @@ void OutputErrorEstimator::newton_hessian(Eigen::Index N, const OeResult& par) {
   for (std::size_t j = 0; j < channels_.size(); ++j) {
     const OeChannel& ch = channels_[j];
     if (ch.nf > 0) {
-      filter_stretches(unit_, par.f[j], 0, v_[j].segment(pad_, N), r_[j].segment(pad_, N));
+      filter_into(unit_, par.f[j], 0, stretches_, v_[j].segment(pad_, N), r_[j].segment(pad_, N));
       const Eigen::Index f0 = first + ch.nb - 1;  // theta index of f_ji is f0 + i
       for (int i = 1; i <= ch.nf; ++i) {
         for (int k = 0; k < ch.nb; ++k) {

@@ -184,6 +184,14 @@ void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
   }
 }
 
+void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
+                 const Eigen::Ref<const Eigen::VectorXd>& den, int delay,
+                 const std::vector<detail::RowSpan>& spans,
+                 const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> out) {
+  for (const detail::RowSpan& s : spans)
+    filter_into(num, den, delay, x.segment(s.begin, s.size()), out.segment(s.begin, s.size()));
+}
+
 Eigen::VectorXd TransferFunction::filter(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   Eigen::VectorXd y(x.size());
   filter_into(num_, den_, delay_, x, y);

@@ -94,7 +94,7 @@ def load_loop_data(path: PathLike, columns: Sequence[str], *, max_gap_s: Optiona
                    resample_s: Optional[float] = None, quality_column: Optional[str] = None,
                    good_quality: Sequence[str] = ()) -> pd.DataFrame:
     """A data file for the commands that have no model yet (``identify``, ``stiction``): put on
-    the grid of its own sample time (the median step as written; ``resample_s`` when given) with
+    the grid of its own sample time (``sample_time_of`` the times as written; ``resample_s`` when given) with
     ``load_data``'s historian repairs, ``columns`` required numeric. A timestamp's jitter, a gap
     and a bad-quality row are then what they are for ``diagnose`` on the same file."""
     rows = load_data(path)

@@ -94,10 +94,6 @@ class OutputErrorEstimator {
   void pole_grid_start(std::size_t j, const Eigen::Ref<const Eigen::MatrixXd>& u, const double* y,
                        Eigen::Index N, OeResult& out);
   void stabilise(Eigen::VectorXd& f) const;
-  // out = q^-delay num/den x, each stretch from rest (rows between stretches untouched).
-  void filter_stretches(const Eigen::VectorXd& num, const Eigen::VectorXd& den, int delay,
-                        const Eigen::Ref<const Eigen::VectorXd>& x,
-                        Eigen::Ref<Eigen::VectorXd> out) const;
   double criterion_sum_of_squares(const Eigen::VectorXd& x) const;
   // w_j for the given polynomials and e = y - sum_j B_j w_j; returns sum(e^2)/2 over the
   // equations.

@@ -4,6 +4,9 @@
 // The denominator is normalised so that den[0] == 1 on construction.
 #include <Eigen/Dense>
 #include <string>
+#include <vector>
+
+#include "mpmpp/detail/row_spans.hpp"
 
 namespace mpmpp {
 
@@ -59,6 +62,12 @@ std::string to_string(const TransferFunction& g);
 // thousands of windows.
 void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
                  const Eigen::Ref<const Eigen::VectorXd>& den, int delay,
+                 const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> out);
+// The same on each of `spans` of x (a record of stretches laid end to end, detail/row_spans.hpp),
+// each from rest; the rows outside the spans are not written.
+void filter_into(const Eigen::Ref<const Eigen::VectorXd>& num,
+                 const Eigen::Ref<const Eigen::VectorXd>& den, int delay,
+                 const std::vector<detail::RowSpan>& spans,
                  const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> out);
 
 // Polynomial product in q^-1 (coefficient convolution).

@@ -8,7 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model_identification import _controller_action
-from ..signals import Signals
+from ..signals import Signals, complete_runs
+from ..stretches import Stretches
 
 
 @dataclass(frozen=True)
@@ -34,9 +35,8 @@ def single_loops(sig: Signals, data) -> list[Loop]:
         ok = np.isfinite(u) & np.isfinite(y)
         if sp is not None:
             sp = (sp - sig.operating_point[name])[ok]   # deviations, like y
-        rows = np.flatnonzero(ok)
         # the complete rows laid end to end: a new stretch after a missing row or a segment break
-        starts = np.union1d(np.flatnonzero(np.diff(rows) > 1) + 1,
-                            np.searchsorted(rows, [a for a, _ in sig.segments[1:]]))
-        loops.append(Loop(i, j, _controller_action(u[ok], y[ok], sp, starts[(starts > 0) & (starts < len(rows))])))
+        runs = complete_runs(ok, [a for a, _ in sig.segments[1:]])
+        starts = Stretches([b - a for a, b in runs]).starts
+        loops.append(Loop(i, j, _controller_action(u[ok], y[ok], sp, starts)))
     return loops

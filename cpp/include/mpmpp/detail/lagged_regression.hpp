@@ -6,6 +6,8 @@
 #include <Eigen/Dense>
 #include <vector>
 
+#include "mpmpp/detail/row_spans.hpp"
+
 namespace mpmpp::detail {
 
 // Column k of Phi: Phi(t, k) = sign * signal[t - lag] for rows t in [t0, t0 + n).
@@ -16,19 +18,6 @@ struct LaggedColumn {
   Eigen::Index lag;
   double sign;
 };
-
-// Rows [begin, end) of a record: a complete stretch (no missing value or time gap inside),
-// or the rows of a stretch that enter a criterion.
-struct RowSpan {
-  Eigen::Index begin = 0, end = 0;
-  Eigen::Index size() const { return end - begin; }
-};
-
-// spans = the complete stretches of an N-row record that starts a new stretch at each row
-// of `starts` (strictly increasing, each in (0, N); empty: one stretch). InputError
-// otherwise. Into the caller's vector: no allocation once it has the capacity.
-void stretch_spans(Eigen::Index N, const std::vector<Eigen::Index>& starts,
-                   std::vector<RowSpan>& spans);
 
 // Phi itself, rows t0 .. t0 + n - 1 (for the callers that need per-row products).
 void lagged_matrix(const std::vector<LaggedColumn>& columns, Eigen::Index t0, Eigen::Index n,

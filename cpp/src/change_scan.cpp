@@ -401,13 +401,24 @@ CrossValidatedOnset ProjectedOnsetScan::fit(const Eigen::Ref<const Eigen::Vector
 }
 
 Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,
-                       Eigen::Index end) {
+                       Eigen::Index end, int span) {
   if (order < 1) throw InputError("AR order must be >= 1");
-  begin = std::max<Eigen::Index>(begin, order);
+  span = std::max(span, order);
+  begin = std::max<Eigen::Index>(begin, span);
   if (end > e.size() || end - begin <= 2 * order)
     throw InputError("too few samples for an AR(" + std::to_string(order) + ") fit");
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(order + 1, order + 1);
-  for (Eigen::Index t = begin; t < end; ++t) gram += lag_gram(e, order, t);
+  Eigen::Index rows = 0;
+  // missing[t]: missing values among e(0) .. e(t - 1), so a row's count is a difference.
+  std::vector<Eigen::Index> missing(static_cast<size_t>(end) + 1, 0);
+  for (Eigen::Index t = 0; t < end; ++t) missing[t + 1] = missing[t] + !std::isfinite(e[t]);
+  for (Eigen::Index t = begin; t < end; ++t) {
+    if (missing[t + 1] != missing[t - span]) continue;
+    gram += lag_gram(e, order, t);
+    ++rows;
+  }
+  if (rows <= 2 * order)
+    throw InputError("too few samples for an AR(" + std::to_string(order) + ") fit");
   const Eigen::VectorXd a =
       gram.bottomRightCorner(order, order).ldlt().solve(gram.col(0).tail(order));
   Eigen::VectorXd poly(order + 1);

@@ -22,6 +22,10 @@ std::vector<MonitoredChannel> monitored_channels(const Model& model, const Detec
 
 namespace {
 
+// A time step this many sample times away from one is a break in the record (a split, or rows
+// left out): jitter of a timestamp is not, the data reader snaps it (data_io.cpp).
+constexpr double kBreakStep = 0.5;
+
 // Symmetrised bit for bit, so that batch (row-major copy) and streaming scores agree.
 Eigen::MatrixXd symmetrised(const Eigen::Ref<const Eigen::MatrixXd>& m) {
   return 0.5 * (m + m.transpose());
@@ -124,10 +128,10 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                      std::to_string(u.cols()) + ", y " + std::to_string(y.rows()) + "x" +
                      std::to_string(y.cols()));
   // docs/formats.md forbids interpolating missing values. The residual regression alone
-  // (NoiseTest::Residual) leaves out the rows that read a lost output sample
-  // (ResidualRegression::estimate; an input's filters need every sample); the plain ARX-OE
-  // fits the complete rows as stretches while at most a tenth of the window is missing.
-  // Otherwise a gap makes the window unusable.
+  // (NoiseTest::Residual) leaves out the rows that read a lost output sample and carries a lost
+  // input sample as an unknown move (ResidualRegression::estimate); the plain ARX-OE fits the
+  // complete rows as stretches while at most a tenth of the window is missing. Otherwise a gap
+  // makes the window unusable.
   complete_rows_.clear();
   stretch_starts_.clear();
   if (!u.allFinite() || !y.allFinite()) {
@@ -139,10 +143,9 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
         complete_rows_.push_back(t);
       }
     }
-    const bool output_losses_only = noise_from_residual_ && u.allFinite();
     const bool stretches = arx_oe_stretches_ && static_cast<Eigen::Index>(complete_rows_.size()) >=
                                                     window_ - window_ / 10;
-    if (!output_losses_only && !stretches) {
+    if (!noise_from_residual_ && !stretches) {
       if (skip_reason) *skip_reason = "missing values in the window";
       return false;
     }
@@ -230,6 +233,13 @@ WindowFeatures::Series WindowFeatures::extract_series(
       s.covariances.emplace_back(count, covariance ? feature_length_[k] * feature_length_[k] : 0);
     }
   }
+  // breaks[t]: time steps up to row t that are not one sample time. load_data marks a split of
+  // the record with one missing row and starts the next segment on a grid of its own; the
+  // missing row alone reads as a lost sample, the step after it tells the break.
+  std::vector<int> breaks(static_cast<size_t>(n), 0);
+  for (Eigen::Index t = 1; t < n; ++t)
+    breaks[t] = breaks[t - 1] + (std::abs(time_s[t] - time_s[t - 1] - sample_time_s_) >
+                                 kBreakStep * sample_time_s_);
   std::vector<Eigen::VectorXd> f;
   std::vector<Eigen::MatrixXd> c;
   for (int w = 0; w < count; ++w) {
@@ -237,8 +247,13 @@ WindowFeatures::Series WindowFeatures::extract_series(
     win.first = w * step_;
     win.start_s = time_s[win.first];
     win.end_s = time_s[win.first + window_ - 1] + sample_time_s_;
-    win.skipped = !extract(u.middleRows(win.first, window_), y.middleRows(win.first, window_), f,
-                           &win.skip_reason, &c);
+    if (breaks[win.first + window_ - 1] != breaks[win.first]) {
+      win.skipped = true;
+      win.skip_reason = "a break between segments in the window";
+    } else {
+      win.skipped = !extract(u.middleRows(win.first, window_), y.middleRows(win.first, window_), f,
+                             &win.skip_reason, &c);
+    }
     for (size_t k = 0; k < channels_.size(); ++k) {
       if (win.skipped) {
         s.features[k].row(w).setConstant(std::numeric_limits<double>::quiet_NaN());

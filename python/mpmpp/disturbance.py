@@ -37,7 +37,7 @@ import numpy as np
 
 from . import _core
 from .diagnose.whitening import TREND_GRID, disturbance_steps, has_noise_model
-from .signals import longest_run
+from .signals import complete_runs
 
 MAX_ORDER = 30
 WINDOW_ROWS_PER_COEFFICIENT = 24
@@ -69,12 +69,17 @@ def inverse_order(h, cap: int) -> int:
 
 def bic_ar(v: np.ndarray, begin: int, end: int, max_order: int) -> tuple[int, np.ndarray]:
     """(p, A) minimising N log s2_p + p log N over p = 0..max_order, every order fitted on the
-    same rows [begin, end) (lags reach before begin, so begin >= max_order)."""
-    n = end - begin
-    best = (n * math.log(float(np.mean(v[begin:end] ** 2))), 0, np.array([1.0]))
+    same rows of [begin, end): those whose v(t - max_order) .. v(t) are all present (v is NaN
+    where it is not known: a lost sample, a stretch's start-up), so begin >= max_order."""
+    present = np.isfinite(v)
+    missing = np.concatenate([[0], np.cumsum(~present)])
+    t = np.arange(begin, end)
+    rows = t[missing[t + 1] == missing[t - max_order]]
+    n = len(rows)
+    best = (n * math.log(float(np.mean(v[rows] ** 2))), 0, np.array([1.0]))
     for p in range(1, max_order + 1):
-        poly = np.asarray(_core.fit_ar(v, p, begin, end), dtype=float).ravel()
-        residual = np.convolve(v[begin - p:end], poly, mode="valid")
+        poly = np.asarray(_core.fit_ar(v, p, begin, end, max_order), dtype=float).ravel()
+        residual = np.convolve(v[begin - p:end], poly, mode="valid")[rows - begin]
         bic = n * math.log(float(np.mean(residual**2))) + p * math.log(n)
         if bic < best[0]:
             best = (bic, p, poly)
@@ -96,36 +101,48 @@ def _settling_samples(row, length: int) -> int:
 
 def _training_error_ar(model, i: int, train: np.ndarray, u: np.ndarray, y: np.ndarray, cap: int):
     """(p, A, rows): the BIC-chosen AR of output i's error y_i - G_i u, less its step and ramp
-    disturbances, on the longest complete stretch of the training rows after G's settling
+    disturbances, on every complete stretch of the training rows (each filtered from rest, its
+    first rows, G's settling time plus the largest order, left out of the fit) in the rows'
     time; (None, None, rows) when fewer than 10 rows per coefficient remain."""
     name = model.outputs[i]
     row = [model.process(name, j) for j in model.inputs]
     used = [j for j, g in enumerate(row) if g is not None]
     ok = train & np.isfinite(y[:, i]) & np.isfinite(u[:, used]).all(axis=1)
-    a, b = longest_run(ok)
-    begin = a + _settling_samples(row, b - a) + cap
-    if b - begin < 10 * cap:
-        return None, None, max(b - begin, 0)
-    # Deviations from the training operating point; G filters them from rest at row a.
-    du = u[a:b] - u[a:b].mean(axis=0)
-    dy = y[a:b, i] - y[a:b, i].mean()
-    v = np.asarray(_core.output_error(row, np.ascontiguousarray(dy), np.asfortranarray(du)), dtype=float).ravel()
+    runs = complete_runs(ok)
+    if not runs:
+        return None, None, 0
+    first, last = runs[0][0], runs[-1][1]
+    # Deviations from the training operating point; G filters them from rest at each stretch's
+    # first row, so v is unknown (NaN) until G has settled.
+    u0, y0 = u[ok].mean(axis=0), y[ok, i].mean()
+    v = np.full(last - first, np.nan)
+    fitted = np.zeros(last - first, bool)
+    for a, b in runs:
+        settle = _settling_samples(row, b - a)
+        if b - a <= settle + cap:
+            continue
+        du, dy = u[a:b] - u0, y[a:b, i] - y0
+        v[a + settle - first:b - first] = np.asarray(
+            _core.output_error(row, np.ascontiguousarray(dy), np.asfortranarray(du)), dtype=float).ravel()[settle:]
+        fitted[a + settle + cap - first:b - first] = True
+    rows = int(fitted.sum())
+    if rows < 10 * cap:
+        return None, None, rows
+    begin = int(np.argmax(fitted))
     # Unmeasured step and ramp disturbances out first: an AR takes them for a random walk and
     # BIC then asks for 15-30 coefficients (tuning mpc_siso_1s, mpc_siso_disturbed), which
     # absorb process changes as surely as the ARX order did; the windows' own fits take them
     # as breaks (residual_regression.hpp).
-    fitted = np.zeros(len(v), bool)
-    fitted[begin - a:] = True
-    _, steps = disturbance_steps(v, fitted, _core.TransferFunction(), begin - a, TREND_GRID, begin - a + TREND_GRID,
-                                 math.log(b - begin))
-    order, poly = bic_ar(v - steps, begin - a, b - a, cap)
-    return order, poly, b - begin
+    _, steps = disturbance_steps(np.where(fitted, v, 0.0), fitted, _core.TransferFunction(), begin, TREND_GRID,
+                                 begin + TREND_GRID, math.log(rows))
+    order, poly = bic_ar(v - steps, begin, last - first, cap)
+    return order, poly, rows
 
 
 def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, train_end_s: float,
                        window_samples: int, whitening: bool = True) -> list[DisturbanceOrder]:
     """Per output, the AR order of its disturbance model: from the model file's H, or estimated
-    (BIC) on the longest complete stretch of the training rows; order 0 without a polynomial
+    (BIC) on the complete stretches of the training rows; order 0 without a polynomial
     when fewer than 10 rows per coefficient remain after settling. With ``whitening`` (the
     residual test's orders are wanted) every output gets the estimate's order, else only those
     the estimate is made for."""

@@ -5,9 +5,11 @@
 // where one copy puts it and doubles the criterion.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #include "mpmpp/arx_oe.hpp"
+#include "mpmpp/change_scan.hpp"
 #include "mpmpp/error.hpp"
 #include "mpmpp/window_features.hpp"
 #include "small_loop.hpp"
@@ -185,6 +187,37 @@ TEST(RecordStretches, APaperWindowWithMissingRowsIsFittedOnItsCompleteRows) {
   for (Index t = 0; t < W / 10 - 2; ++t) y(2 * t + 1, 0) = NAN;  // now more than a tenth
   EXPECT_FALSE(features.extract(u, y, f, &reason));
   EXPECT_EQ(reason, "missing values in the window");
+}
+
+// fit_ar over a series with lost samples (NaN): rows whose lags reach one are left out. An
+// AR(2) recursion restarted after each gap is fitted exactly; with span 5 the rows are those
+// whose five lags are present, as a plain least-squares sum over them gives.
+TEST(RecordStretches, ArFitLeavesOutTheRowsThatReadALostSample) {
+  const Index n = 600;
+  const Eigen::MatrixXd w = white(n, 1, 7);
+  Eigen::VectorXd e(n);
+  for (Index t = 0; t < n; ++t) {
+    const bool restart = t < 2 || t % 97 < 2;  // a gap at every 97th row, the recursion anew
+    e[t] = restart ? w(t, 0) : 1.2 * e[t - 1] - 0.5 * e[t - 2];
+  }
+  for (Index t = 97; t < n; t += 97) e[t - 1] = std::numeric_limits<double>::quiet_NaN();
+  const Eigen::VectorXd exact = mpmpp::fit_ar(e, 2, 0, n);
+  EXPECT_NEAR(exact[1], -1.2, 1e-10);
+  EXPECT_NEAR(exact[2], 0.5, 1e-10);
+
+  Eigen::VectorXd noisy = e + 0.1 * white(n, 1, 8).col(0);
+  Eigen::Matrix2d gram = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+  for (Index t = 5; t < n; ++t) {
+    if (!noisy.segment(t - 5, 6).allFinite()) continue;
+    const Eigen::Vector2d lag(noisy[t - 1], noisy[t - 2]);
+    gram += lag * lag.transpose();
+    rhs += lag * noisy[t];
+  }
+  const Eigen::Vector2d a = gram.ldlt().solve(rhs);
+  const Eigen::VectorXd fit = mpmpp::fit_ar(noisy, 2, 0, n, 5);
+  EXPECT_NEAR(fit[1], -a[0], 1e-12);
+  EXPECT_NEAR(fit[2], -a[1], 1e-12);
 }
 
 }  // namespace

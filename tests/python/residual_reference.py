@@ -4,7 +4,8 @@ delay directions (Laguerre alone for a channel the model lacks) after whitening 
 A(q) refitted from what beta leaves, twice;
 both fits with up to `breaks` step + hinge pairs chosen greedily by brute force (every
 position's two columns built and projected explicitly), on the rows that read no outlier and
-no missing output sample (NaN in y)."""
+no missing output sample (NaN in y); a missing input sample held at the last value present (the
+first one after it at the start)."""
 import numpy as np
 from scipy.signal import lfilter
 
@@ -109,6 +110,17 @@ def rows_clear_of_outliers(v, trend, na, sigmas):
     return usable[~out[usable]]
 
 
+def held(U):
+    """U with each missing sample held at the last value present (the first after it at the start)."""
+    U = U.copy()
+    for e in range(U.shape[1]):
+        present = np.flatnonzero(np.isfinite(U[:, e]))
+        for t in np.flatnonzero(~np.isfinite(U[:, e])):
+            before = present[present < t]
+            U[t, e] = U[before[-1], e] if len(before) else U[present[0], e]
+    return U
+
+
 def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01, outlier_sigmas=0.0):
     """One channel g (a TransferFunction) of input u: (beta, its covariance, A(q)'s ar, theirs)."""
     b, cov, ar, ar_cov = reference_window_miso([g], y, u[:, None], na, terms, 0, settle, breaks,
@@ -122,6 +134,7 @@ def reference_window_miso(channels, y, U, na, terms, absent_terms, settle, break
     (its absent_terms Laguerre directions alone). Per input: beta_e and its covariance; then
     A(q)'s ar and covariance."""
     modelled = [g for g in channels if g is not None]
+    U = held(U)
     yc, Uc = y - np.nanmean(y), U - U.mean(0)
     v = yc.copy()
     blocks = []

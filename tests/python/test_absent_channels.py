@@ -43,15 +43,21 @@ def test_presets_monitor_absent_channels():
         assert sum(k == "process" for k, _, _ in _core.WindowFeatures(model, c).channels) == len(model.channels())
 
 
-def test_window_matches_numpy(coupling_run):
+@pytest.mark.parametrize("lost_rows", [False, True])
+def test_window_matches_numpy(coupling_run, lost_rows):
     """One 2 h window of an output that lacks a channel: beta and its covariance of the modelled
-    and the absent channel against reference_window_miso (breaks and outlier rows included)."""
+    and the absent channel against reference_window_miso (breaks and outlier rows included);
+    with ``lost_rows``, three rows a historian lost (every column missing)."""
     _, _, model, data = coupling_run
     i, inputs = _absent_output(model)
     config = make_config("mimo", model)
     n = config.window_samples(model.sample_time_s)
-    y = data[model.outputs[i]].to_numpy()[:n]
-    u = data[list(model.inputs)].to_numpy()[:n]
+    y = data[model.outputs[i]].to_numpy()[:n].copy()
+    u = data[list(model.inputs)].to_numpy()[:n].copy()
+    if lost_rows:
+        rows = [n // 5, n // 2, n // 2 + 1]
+        y[rows] = np.nan
+        u[rows] = np.nan
     beta, cov, settle = _core.residual_regression(model, i, inputs, config, y, u)
     channels = [model.process(model.outputs[i], model.inputs[j]) if (model.outputs[i], model.inputs[j])
                 in model.channels() else None for j in inputs]

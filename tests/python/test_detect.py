@@ -127,6 +127,26 @@ def test_nan_windows_are_skipped_and_reported(trained):
     assert len(r.to_dict()["skipped_windows"]) == expect.sum()
 
 
+def test_a_break_in_the_time_axis_skips_the_windows_across_it(trained):
+    """Ten rows left out of the record (its time jumps 11 samples) is a break, not lost samples:
+    exactly the windows that span the jump are skipped, with that reason; the same rows kept as
+    missing values on the regular grid are lost samples, and a jittered time axis is no break."""
+    model, data, _, detector = trained
+    ts = model.sample_time_s
+    jumped = data.drop(index=range(5000, 5010)).reset_index(drop=True)
+    r = detector.monitor(jumped)
+    first = r.windows["first"].to_numpy()
+    across = (first < 5000) & (first + 1440 > 5000)
+    np.testing.assert_array_equal(r.windows["skipped"].to_numpy(), across)
+    assert set(r.windows["skip_reason"][across]) == {"a break between segments in the window"}
+    lost = data.copy()
+    lost.loc[5000:5009, [c for c in data.columns if c != "time"]] = np.nan
+    assert not detector.monitor(lost).windows["skipped"].any()
+    jittered = data.copy()
+    jittered["time"] += np.random.default_rng(0).uniform(-0.2, 0.2, len(data)) * ts
+    assert not detector.monitor(jittered).windows["skipped"].any()
+
+
 def test_json_writer_carries_the_result_tables(trained, tmp_path):
     """The C++ writer (detector_io) against the Python tables it formats: every kept window's
     times, scores and indicator, every skipped window with its reason, every alarm."""

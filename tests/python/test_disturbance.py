@@ -51,6 +51,19 @@ def numpy_bic_ar(v, begin, end, cap):
     return best[1], best[2]
 
 
+def numpy_bic_ar_rows(v, rows, cap):
+    """numpy_bic_ar on the given rows only (their lags all present)."""
+    n = len(rows)
+    best = (n * math.log(np.mean(v[rows] ** 2)), 0, np.array([1.0]))
+    for p in range(1, cap + 1):
+        lags = np.column_stack([v[rows - k] for k in range(1, p + 1)])
+        a, *_ = np.linalg.lstsq(lags, v[rows], rcond=None)
+        bic = n * math.log(np.mean((v[rows] - lags @ a) ** 2)) + p * math.log(n)
+        if bic < best[0]:
+            best = (bic, p, np.r_[1.0, -a])
+    return best[1], best[2]
+
+
 def reference_output_error(u, y, rows):
     """y - G u on the first ``rows`` rows' deviations, G filtering from rest at the first row."""
     du, dy = u[:rows, 0] - u[:rows, 0].mean(), y[:rows, 0] - y[:rows, 0].mean()
@@ -76,6 +89,35 @@ def test_estimate_matches_numpy_least_squares_and_bic():
     # and the truth: AR(2), coefficients within 4 standard errors (~0.013 on ~4900 rows)
     assert p == 2
     np.testing.assert_allclose(poly, AR_TRUE, atol=0.06)
+
+
+def test_estimate_uses_every_complete_stretch_of_the_training():
+    """A row lost every 500 (u and y missing, as a timestamp the historian missed): the estimate
+    is fitted on every stretch, each filtered from rest at its first row and its first rows (G's
+    settling plus the largest order) left out, as a plain NumPy least-squares fit on those rows
+    gives it (no step or ramp is found in these data); before, the longest stretch alone (499
+    rows) left too few rows to estimate."""
+    data, train_end_s, window = loop_data(), 5000 * TS, 1440
+    lost = np.arange(250, 6000, 500)
+    data.loc[lost, ["u", "y"]] = np.nan
+    t, u, y = _arrays(model(), data)
+    (d,) = disturbance_orders(model(), t, u, y, train_end_s, window)
+    impulse = np.abs(lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, np.r_[1.0, np.zeros(499)]))
+    settle = np.flatnonzero(impulse >= 0.01 * impulse.max())[-1] + 1
+    cap = min(30, window // 24)
+    train = np.arange(5000)
+    ok = np.isin(train, lost, invert=True)
+    u0, y0 = u[:5000][ok, 0].mean(), y[:5000][ok, 0].mean()
+    v = np.full(5000, np.nan)
+    fitted = []
+    for a, b in zip(np.r_[0, lost[lost < 5000] + 1], np.r_[lost[lost < 5000], 5000]):
+        e = (y[a:b, 0] - y0) - lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, u[a:b, 0] - u0)
+        v[a + settle:b] = e[settle:]
+        fitted += list(range(a + settle + cap, b))
+    p, poly = numpy_bic_ar_rows(v, np.array(fitted), cap)
+    assert d.estimated and d.rows == len(fitted) > 4000
+    assert d.order == p == 2
+    np.testing.assert_allclose(d.polynomial, poly, rtol=1e-9, atol=1e-12)
 
 
 def test_order_of_a_given_noise_model_is_its_inverse_impulse_length():

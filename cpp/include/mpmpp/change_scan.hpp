@@ -99,8 +99,10 @@ OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
 
 // Least-squares AR(order) fit e(t) + a1 e(t-1) + ... + an e(t-n) = w(t) on rows
 // [begin, end) (lags may reach before begin). Returns the monic polynomial [1, a1, ..., an].
+// Rows t whose e(t - span) .. e(t) hold a missing value (NaN: a lost sample, or a stretch's
+// start-up) are left out; span (at least order) lets fits of several orders use the same rows.
 Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,
-                       Eigen::Index end);
+                       Eigen::Index end, int span = 0);
 
 // Two-segment AR split of e: for each candidate onset k (step apart, both segments at least
 // min_segment long) the Gaussian log-likelihood gain

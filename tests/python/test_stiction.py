@@ -109,6 +109,12 @@ def test_bicoherence_of_quadratic_phase_coupling():
         assert bic_h[f1, f2] == pytest.approx(bicoherence_reference(coupled, nfft, f1, f2), rel=1e-9)
 
 
+@pytest.mark.parametrize("n", [10, 64, 127])
+def test_bicoherence_of_a_short_series_is_a_clear_error(n):
+    with pytest.raises(ValueError, match=f"too short for bicoherence: {n} samples \\(need >= 128\\)"):
+        squared_bicoherence(np.random.default_rng(0).standard_normal(n), nfft=64)
+
+
 def test_nonlinearity_indices_separate_gaussian_and_coupled_signals():
     rng = np.random.default_rng(1)
     gaussian = lfilter([1], [1, -0.6], rng.standard_normal(4000))

@@ -77,6 +77,25 @@ def test_a_historian_gap_or_missing_values_split_the_fit_and_say_so(tmp_path, ca
     assert doc["mpmpp"]["stiction"] is ref["mpmpp"]["stiction"] is True
 
 
+def test_stretches_too_short_for_the_literature_tests_leave_them_out_and_say_why(tmp_path, capsys):
+    """PV lost every 37th row of a 2 h record: the valve fit runs on the 36-row stretches, the
+    baselines, which need one unbroken series of 128 samples, are not run (their verdict null
+    with the reason) instead of failing the command (a NumPy broadcasting error before)."""
+    data = tmp_path / "loop.csv"
+    write_loop(data)
+    df = pd.read_csv(data)
+    df.loc[df.index[::37], "FIC101.PV"] = np.nan
+    df.to_csv(data, index=False)
+    assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["samples"] == 720
+    for name in ("horch", "bicoherence", "kano", "curve_fit"):
+        assert doc["baselines"][name] == {
+            "stiction": None, "not_run": "the longest unbroken stretch holds 36 samples; the literature tests need 128"}
+    assert main(["stiction", str(data), "--op", "FIC101.OP", "--pv", "FIC101.PV"]) == 0
+    assert "  kano         not run: the longest unbroken stretch holds 36 samples" in capsys.readouterr().out
+
+
 def test_timestamps_off_the_sample_grid_are_an_error_naming_the_row(tmp_path, capsys):
     """From row 400 on the file is sampled every 13 s for 100 rows: they drift off the 10 s grid,
     beyond what snapping a historian's jitter (a quarter of a sample) may move them."""

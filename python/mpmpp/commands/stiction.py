@@ -108,6 +108,9 @@ def run(args) -> int:
         print(f"note: {note}")
     print("baselines:")
     for name, (verdict, details) in report.baselines.items():
+        if verdict is None:
+            print(f"  {name:12s} not run: {details['not_run']}")
+            continue
         text = ", ".join(f"{k} {v:.3g}" for k, v in details.items())
         print(f"  {name:12s} {'stiction' if verdict else 'no':9s} {text}")
     return 0

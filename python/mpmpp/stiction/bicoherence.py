@@ -27,14 +27,14 @@ def squared_bicoherence(x, nfft: int = 64, overlap: float = 0.5, eps: float = 0.
     """Return (bic2 over the principal domain as an (nfft/2, nfft/2) array with NaN outside,
     number of segments K)."""
     x = np.asarray(x, float)
+    if len(x) < 2 * nfft:
+        raise ValueError(f"too short for bicoherence: {len(x)} samples (need >= {2 * nfft})")
     x = x - x.mean()
     step = max(1, int(nfft * (1 - overlap)))
     starts = range(0, len(x) - nfft + 1, step)
     window = np.hanning(nfft)
     segs = np.array([x[s:s + nfft] - x[s:s + nfft].mean() for s in starts]) * window
     k = len(segs)
-    if k < 2:
-        raise ValueError(f"too short for bicoherence: {len(x)} samples (need >= {2 * nfft})")
     spec = np.fft.fft(segs, axis=1)
     half = nfft // 2
     f1, f2 = np.meshgrid(np.arange(half), np.arange(half), indexing="ij")

@@ -128,10 +128,10 @@ bool WindowFeatures::extract(const Eigen::Ref<const Eigen::MatrixXd>& u,
                      std::to_string(u.cols()) + ", y " + std::to_string(y.rows()) + "x" +
                      std::to_string(y.cols()));
   // docs/formats.md forbids interpolating missing values. The residual regression alone
-  // (NoiseTest::Residual) leaves out the rows that read a lost output sample and carries a lost
-  // input sample as an unknown move (ResidualRegression::estimate); the plain ARX-OE fits the
-  // complete rows as stretches while at most a tenth of the window is missing. Otherwise a gap
-  // makes the window unusable.
+  // (NoiseTest::Residual) leaves out the rows that read a lost output sample and holds a lost
+  // input sample at the last value present (ResidualRegression::estimate, within its limits);
+  // the plain ARX-OE fits the complete rows as stretches while at most a tenth of the window is
+  // missing. Otherwise a gap makes the window unusable.
   complete_rows_.clear();
   stretch_starts_.clear();
   if (!u.allFinite() || !y.allFinite()) {

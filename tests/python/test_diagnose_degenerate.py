@@ -205,3 +205,45 @@ def test_valid_pi_loop_record_gives_an_answer():
     res = diagnose(model, data)
     assert not any(f.effect == "noise_change" and f.onset_s == 0.0 for f in res.findings)
     assert any("no noise model" in n for n in res.notes)
+
+
+# ---- records cut by lost samples -------------------------------------------------------------
+
+def test_a_record_cut_by_lost_samples_is_diagnosed_not_a_singular_matrix():
+    """A day-long MPC record (tuning family mpc_siso_controls, seed 2, no change) with the PV lost
+    every 250 rows: the step + ramp scan met an onset whose columns the mask leaves collinear
+    with the level and raised "Singular matrix"; now it is scored by the minimum-norm solution
+    and the record gets its answer, no process finding."""
+    from mpmpp import families as fam
+    from mpmpp.evaluate import nominal_model
+    from mpmpp.simulate import simulate
+    spec, _ = fam.family("mpc_siso_controls").draw(2, None, "none")
+    model = nominal_model(spec)
+    data = simulate(spec)
+    data.loc[data.index[125::250], list(model.outputs)] = np.nan
+    res = diagnose(model, data)
+    assert not any(f.effect in PROCESS_EFFECTS for f in res.findings)
+
+
+def test_the_noise_correction_is_one_per_disturbance_regime_over_the_data_segments():
+    """Lost samples cut one disturbance regime into data segments: one AR correction is fitted
+    over all of them (rows from SETTLE into each), as a plain least-squares AR beside the input
+    basis on those rows gives it, and each segment whitens by it; with a cut (the noise split)
+    the segments after it get their own."""
+    from mpmpp.diagnose.whitening import AR_ORDER, SETTLE, _corrections
+    rng = np.random.default_rng(3)
+    n = 1200
+    free = lfilter([1.0], [1.0, -1.1, 0.3], rng.standard_normal(n))
+    inputs = rng.standard_normal((n, 2))
+    pieces = [(0, 290), (291, 600), (601, 900), (901, 1200)]
+    ar, sigma = _corrections(free, pieces, inputs)
+    rows = np.concatenate([np.arange(a + SETTLE, b) for a, b in pieces])
+    lagged = free[rows[:, None] - np.arange(1, AR_ORDER + 1)]
+    ref = np.linalg.lstsq(np.column_stack([lagged, inputs[rows]]), free[rows], rcond=None)[0]
+    for poly in ar:
+        np.testing.assert_allclose(poly, np.r_[1.0, -ref[:AR_ORDER]], atol=1e-10)
+    innovations = np.concatenate([lfilter(ar[0], [1.0], free[a:b])[SETTLE:] for a, b in pieces])
+    assert sigma == [pytest.approx(np.sqrt(np.mean(innovations**2)), rel=1e-12)] * 4
+    split, _ = _corrections(free, pieces, inputs, cuts=[601])
+    assert np.array_equal(split[0], split[1]) and np.array_equal(split[2], split[3])
+    assert not np.allclose(split[0], split[2])

@@ -71,7 +71,14 @@ class TrendScan:
         es, er = self._lagged(we, self._sr)
         gram = self.gram
         rhs = np.stack([np.full(len(self.onsets), we.sum()), es, er], axis=1)
-        coef = np.linalg.solve(gram + RIDGE * np.eye(3), rhs[:, :, None])[:, :, 0]
+        normal = gram + RIDGE * np.eye(3)
+        try:
+            coef = np.linalg.solve(normal, rhs[:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:
+            # An onset whose step and ramp the mask leaves (numerically) collinear with the level:
+            # a record cut by many lost samples (the PV lost every 250 rows of a day-long record
+            # raised "Singular matrix"). The minimum-norm solution scores it; the others are as solved.
+            coef = np.einsum("kij,kj->ki", np.linalg.pinv(normal, hermitian=True), rhs)
         # residual sum of squares e'e - 2 c'X'e + c'X'X c
         rss = np.sum(we * e) - 2.0 * np.sum(coef * rhs, axis=1) + np.einsum("ki,kij,kj->k", coef, gram, coef)
         drop = rss0 - rss

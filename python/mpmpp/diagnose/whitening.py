@@ -114,7 +114,8 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     split_onset = first_onset + split.onset if split.statistic > 0 else None
     # The split is kept when it beats its parameters (AR coefficients, variance, onset).
     split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
-    pieces = _pieces(sig.segments, [split_onset] if split_significant else [])
+    cuts = [split_onset] if split_significant else []
+    pieces = _pieces(sig.segments, cuts)
     # The corrections and levels are those of the disturbance less its steps and ramps: fitted
     # with them in, the AR gets roots near 1 (A(1) 0.5 on a ramped test loop, 1.2 without),
     # and whitening with it differences the record, so the controller's reaction to the noise
@@ -125,7 +126,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
                                       max(first_onset, 2 * SETTLE), math.log(n))
     free = e0 - steps
     inputs = input_basis(sig, i, noise.inverse())
-    ar, sigma = _corrections(free, pieces, inputs)
+    ar, sigma = _corrections(free, pieces, inputs, cuts)
     parity = (np.arange(n) // block) % 2
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
                          split_onset=split_onset, split_significant=split_significant, pieces=pieces,
@@ -146,17 +147,27 @@ def without_split(out: OutputResidual) -> OutputResidual:
     return flat
 
 
-def _corrections(free: np.ndarray, pieces: list[tuple[int, int]], inputs: np.ndarray) -> tuple[list[np.ndarray], list[float]]:
+def _corrections(free: np.ndarray, pieces: list[tuple[int, int]], inputs: np.ndarray,
+                 cuts=()) -> tuple[list[np.ndarray], list[float]]:
     """The AR correction A_s and innovation RMS of each piece (the AR fitted beside ``inputs``,
-    the innovation without them: what the whitened residual's variance is)."""
-    ar, sigma = [], []
-    for a, b in pieces:
+    the innovation without them: what the whitened residual's variance is), one pair per
+    disturbance regime (the pieces between the ``cuts``, the noise split's onsets): the data
+    segments a historian's lost samples cut a regime into share its disturbance, and a
+    correction fitted to each alone would need MIN_AR_ROWS_PER_COEFFICIENT * AR_ORDER rows
+    after SETTLE in every one (a 2 h record with a PV value lost every 100-200 rows had none)."""
+    regime = [int(np.searchsorted(np.sort(cuts), a, side="right")) for a, _ in pieces]
+    ar, sigma = [None] * len(pieces), [0.0] * len(pieces)
+    for r in sorted(set(regime)):
+        mine = [k for k, g in enumerate(regime) if g == r]
         rows = np.zeros(len(free), bool)
-        rows[a + SETTLE:b] = True
+        for k in mine:
+            a, b = pieces[k]
+            rows[a + SETTLE:b] = True
         poly = masked_ar(free, rows, AR_ORDER, inputs)
-        ar.append(poly)
-        w = TransferFunction(poly, [1.0], 0).filter(free[a:b])[SETTLE:]
-        sigma.append(float(np.sqrt(np.mean(w**2))))
+        w = np.concatenate([TransferFunction(poly, [1.0], 0).filter(free[a:b])[SETTLE:]
+                            for a, b in (pieces[k] for k in mine)])
+        for k in mine:
+            ar[k], sigma[k] = poly, float(np.sqrt(np.mean(w**2)))
     return ar, sigma
 
 

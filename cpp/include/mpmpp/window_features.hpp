@@ -58,10 +58,12 @@ class WindowFeatures {
   // One window: u (window_samples x inputs), y (window_samples x outputs), columns in the
   // model's order. Fills features[k] for every channel k and returns true, or returns false
   // with the reason when the window holds a NaN or is not informative (NumericalError of
-  // ARX-OE); InputError on wrong shapes. Missing values that a window can do without (a
-  // tenth of its rows at most): lost output samples under NoiseTest::Residual (the residual
-  // regression leaves out the rows that read them), and any missing row under the plain
-  // ARX-OE of the paper's presets (fitted on the complete rows, each stretch from rest).
+  // ARX-OE); InputError on wrong shapes. Missing values that a window can do without: under
+  // NoiseTest::Residual lost output samples (the residual regression leaves out the rows that
+  // read them, a tenth of its rows at most) and lost input samples (held at the last value
+  // present, 1 % of an input's samples at most); under the plain ARX-OE of the paper's
+  // presets any missing row (fitted on the complete rows, each stretch from rest, a tenth of
+  // the window at most).
   // With Resampling::Estimator, `covariances` (when given) receives per channel the OE
   // covariance sigma^2 (J'J)^-1 of features[k] (process channels; the FIR structure makes the
   // OE parameters the features themselves) and a 0 x 0 matrix for noise channels. With

@@ -8,7 +8,7 @@ import pytest
 
 import mpmpp
 from mpmpp.cli import main
-from mpmpp.diagnose import diagnose
+from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 from mpmpp.diagnose.pipeline import record_lengths
 from mpmpp.identify import model_from_data
 from mpmpp.record_length import scaled_rows
@@ -53,6 +53,32 @@ def test_wrong_hand_written_gain_is_found_on_a_2h_record():
     assert res.findings and res.findings[0].effect == "gain"
     assert 1.6 < res.findings[0].estimate["gain_ratio"] < 2.5
     assert res.findings[0].error_after < res.findings[0].error_before
+
+
+def _foptd_model(loop, gain_factor=1.0):
+    """The FOPTD model a user writes for ``loop`` (its gain times ``gain_factor``), no noise model."""
+    g = mpmpp.TransferFunction.from_foptd(loop.gain * gain_factor, loop.time_constant_s, loop.dead_time_s, 10.0)
+    return mpmpp.Model("hand-written", 10.0, ["OP"], ["PV"], {"PV": {"OP": g}})
+
+
+@pytest.mark.parametrize("loop, seed", [(pi_loop.FLOW, 1), (pi_loop.PRESSURE, 1), (pi_loop.LEVEL, 3)])
+def test_doubled_hand_written_gain_is_found_on_a_2h_record(loop, seed):
+    """A hand-written FOPTD model with twice the process gain, 2 h with setpoint steps: a gain
+    finding from the first row with a ratio near 0.5. Before the short-record check of
+    pipeline._without_unconfirmed_standing_changes each was withheld: the process part of each
+    half, fitted on two blocks, rose in one of them."""
+    res = diagnose(_foptd_model(loop, 2.0), pi_loop.simulate(loop, seed, setpoint_steps=True))
+    top = res.findings[0]
+    assert (top.effect, top.onset_s) == ("gain", 0.0)
+    assert 0.38 < top.estimate["gain_ratio"] < 0.65
+    assert not [n for n in res.notes if "withheld" in n]
+
+
+@pytest.mark.parametrize("loop", pi_loop.LOOPS)
+def test_right_hand_written_model_gets_no_process_finding_on_a_2h_record(loop):
+    for seed in (1, 2, 3):
+        res = diagnose(_foptd_model(loop), pi_loop.simulate(loop, seed, setpoint_steps=True))
+        assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS], (loop.name, seed)
 
 
 def test_short_record_says_too_short(tmp_path, capsys):

@@ -11,9 +11,12 @@ import pytest
 
 from mpmpp import TransferFunction, families
 from mpmpp.diagnose import diagnose
-from mpmpp.diagnose.pipeline import CHANNEL_EFFECTS, _without_unconfirmed_standing_changes, diagnosis_signals
+from mpmpp.diagnose.errors import one_step_errors
+from mpmpp.diagnose.pipeline import (CHANNEL_EFFECTS, HALF_BLOCKS, _refitted_gains_per_half,
+                                    _without_unconfirmed_standing_changes, diagnosis_signals)
 from mpmpp.diagnose.process_error import held_out_rms, process_parts
 from mpmpp.diagnose.result import Finding, ModelChange
+from mpmpp.diagnose.whitening import output_residual
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
 
@@ -39,27 +42,56 @@ def standing_gain(model, ratio, onset_s=0.0):
                    error_before=1.0, error_after=0.9, explanation=f"gain {ratio}x", change=change)
 
 
+def _judged(n, plant_gain, plant_onset, found):
+    """_without_unconfirmed_standing_changes on the closed-loop test loop (n rows, 720-row
+    blocks) for a gain ``found`` times the model's from the first row."""
+    model = loop.model()
+    prepared = diagnosis_signals(model, loop.simulate(n=n, seed=3, onset=plant_onset, gain=plant_gain))
+    out = output_residual(prepared.sig, 0, 720, 0, 720)
+    finding = standing_gain(model, found)
+    return prepared, out, finding, _without_unconfirmed_standing_changes([finding], prepared, [out], 0, 720, np.log(n))
+
+
 @pytest.mark.parametrize("plant_gain, plant_onset, found, kept",
                          [(1.0, 0, 1.5, False), (2.0, 0, 2.0, True), (2.0, 4000, 1.2, False)])
 def test_a_change_throughout_stays_only_when_the_process_part_confirms_it(plant_gain, plant_onset, found, kept):
     """A gain change present from the first row, on the closed-loop test loop whose plant gain is
-    ``plant_gain`` times the model's from ``plant_onset``: a 1.5x on an exact model raises the
-    held-out process-part error and is withheld with a note; the true 2x throughout lowers it in
-    both halves of the record and stays; a 1.2x throughout where the plant doubled only in the
-    second half lowers the whole record's process-part error but raises the first half's, and
-    is withheld. The same 1.5x with an onset is not this rule's to judge."""
-    model = loop.model()
-    prepared = diagnosis_signals(model, loop.simulate(n=8000, seed=3, onset=plant_onset, gain=plant_gain))
-    sig = prepared.sig
-    finding = standing_gain(model, found)
-    got, notes = _without_unconfirmed_standing_changes([finding], prepared, 0, 720)
+    ``plant_gain`` times the model's from ``plant_onset`` (9000 rows: each half holds
+    HALF_BLOCKS blocks or more): a 1.5x on an exact model raises the held-out process-part error
+    and is withheld with a note; the true 2x throughout lowers it in both halves of the record
+    and stays; a 1.2x throughout where the plant doubled at row 4000 lowers the whole
+    record's process-part error but raises the first half's, and is withheld. The same 1.5x
+    with an onset is not this rule's to judge."""
+    prepared, out, finding, (got, notes) = _judged(9000, plant_gain, plant_onset, found)
+    assert 9000 >= 2 * HALF_BLOCKS * 720
     assert (got == [finding]) == kept
     assert bool(notes) != kept and all("withheld" in n and "both halves" in n for n in notes)
     if plant_onset:   # the whole record's process part alone would have kept it
-        before, after = (held_out_rms(p, 720) for p in process_parts(sig, 0, finding.model_changes(), 0, 720))
+        before, after = (held_out_rms(p, 720) for p in process_parts(prepared.sig, 0, finding.model_changes(), 0, 720))
         assert after < before
-    later = standing_gain(model, found, onset_s=float(sig.time_s[4000]))
-    assert _without_unconfirmed_standing_changes([later], prepared, 0, 720) == ([later], [])
+    later = standing_gain(loop.model(), found, onset_s=float(prepared.sig.time_s[4000]))
+    assert _without_unconfirmed_standing_changes([later], prepared, [out], 0, 720, np.log(9000)) == ([later], [])
+
+
+@pytest.mark.parametrize("plant_gain, plant_onset, found, kept",
+                         [(1.0, 0, 1.5, False), (2.0, 0, 2.0, True), (2.0, 2000, 1.2, False)])
+def test_on_a_short_record_each_half_must_carry_the_change_in_the_one_step_error(plant_gain, plant_onset, found,
+                                                                                 kept):
+    """4000 rows of 720-row blocks: the halves are too short for their own process-part fits, so
+    the process part is judged over the whole record and each half must carry the change in
+    the one-step error, with the AR correction refitted beside it. The true 2x throughout
+    stays; the 1.2x averaged over a doubling halfway through lowers the whole record's errors
+    but not the first half's one-step error, and is withheld with a note naming both halves."""
+    prepared, out, finding, (got, notes) = _judged(4000, plant_gain, plant_onset, found)
+    assert (got == [finding]) == kept
+    if plant_onset:
+        before, after = (held_out_rms(p, 720) for p in process_parts(prepared.sig, 0, finding.model_changes(), 0, 720))
+        assert after < before
+        first, second = _refitted_gains_per_half(out, one_step_errors(prepared.sig, 0, finding.model_changes()),
+                                                 0, 2000)
+        assert first <= np.log(4000) < second
+        [note] = notes
+        assert "not above log N" in note and "both halves" in note
 
 
 def test_a_change_throughout_must_hold_with_the_noise_model_fitted_without_the_inputs():

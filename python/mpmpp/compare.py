@@ -22,7 +22,7 @@ import numpy as np
 
 from . import _core
 from .record_length import MIN_ROWS, require_rows, scaled_rows
-from .signals import Signals, extract, per_segment
+from .signals import Signals, bridged_reach, extract, per_segment
 
 Z99 = 2.5758293035489  # two-sided 99 % normal quantile
 
@@ -90,6 +90,7 @@ class CompareResult:
     window_s: float
     skipped_rows: int
     outputs: list[OutputComparison]
+    interpolated_samples: int = 0   # lost output samples interpolated (signals.bridge_lost_outputs)
     note: str = ("signals are deviations from the record mean; in closed loop, correlation at "
                  "negative lags (e leading the input) reflects feedback, not model error")
 
@@ -107,7 +108,9 @@ class CompareResult:
         stamp = stamp or (lambda t: f"{t / 3600:.1f} h")
         lines = [f"compare: model '{self.model}', k = {self.horizon} samples, windows of "
                  f"{self.window_s / 3600:g} h" + (f", {self.skipped_rows} rows skipped (missing values)"
-                                                  if self.skipped_rows else "")]
+                                                  if self.skipped_rows else "")
+                 + (f", {self.interpolated_samples} lost output sample(s) interpolated (their errors left out)"
+                    if self.interpolated_samples else "")]
         for oc in self.outputs:
             white = "white" if not oc.whiteness.positive_lag_violations else (
                 f"NOT white (lags {_short(oc.whiteness.positive_lag_violations)})")
@@ -163,6 +166,7 @@ def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float |
         skipped_rows=sig.skipped_rows,
         outputs=[_compare_output(sig, i, horizon, max_lag, window, attribution_lags)
                  for i in range(len(sig.outputs))],
+        interpolated_samples=int(sig.bridged.sum()),
     )
 
 
@@ -172,6 +176,7 @@ def _compare_output(sig: Signals, i: int, horizon: int, max_lag: int, window: in
     sim = per_segment(sig, lambda yy, uu: _core.predict_output(row, noise, yy, uu, 0), y, sig.u)
     pred = per_segment(sig, lambda yy, uu: _core.predict_output(row, noise, yy, uu, horizon), y, sig.u)
     err = per_segment(sig, lambda yy, uu: _core.prediction_error(row, noise, yy, uu), y, sig.u)
+    err[bridged_reach(sig, i, noise.inverse(), 0)] = np.nan   # errors that read an interpolated sample
     ok = np.isfinite(err)
     fit_one_step = float(100.0 * (1.0 - np.linalg.norm(err[ok]) / np.linalg.norm(y[ok] - y[ok].mean())))
     ym, sm, pm, em = y[ok], sim[ok], pred[ok], err[ok]

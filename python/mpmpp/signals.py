@@ -4,8 +4,9 @@ The data are absolute engineering units (docs/formats.md), the model's transfer 
 deviations from an operating point. We take the operating point as the sample mean of each
 column over a reference span (the whole record unless the caller gives one) and subtract it.
 Rows with a missing value split the record into NaN-free segments; every filter restarts at the
-start of a segment (no interpolation), and segments shorter than ``min_segment`` are skipped and
-reported.
+start of a segment, and segments shorter than ``min_segment`` are skipped and reported. The one
+exception is a few lost output samples (``bridge_lost_outputs``): those are interpolated, and
+the analyses leave out the errors that read them (``Signals.bridged``).
 """
 from __future__ import annotations
 
@@ -31,6 +32,7 @@ class Signals:
     segments: list[tuple[int, int]]   # NaN-free [start, stop) row ranges used
     skipped_rows: int = 0
     sample_time_s: float = 1.0
+    bridged: np.ndarray | None = None  # N x ny: output samples lost and interpolated (bridge_lost_outputs)
     rows: list = field(default_factory=list)    # model rows: list per output of [TF or None]
     noise: list = field(default_factory=list)   # noise model per output
 
@@ -62,10 +64,11 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     raw_z = data[extras].to_numpy(dtype=float) if extras else np.zeros((len(data), 0))
     ref = np.ones(len(data), bool) if reference is None else np.asarray(reference, bool)
     nu, ny = len(inputs), len(outputs)
-    valid = np.all(np.isfinite(np.column_stack([raw_u, raw_y])), axis=1)
     # rows a data frame leaves out (a historian gap: a step of two samples or more) end a
     # segment as a missing row would; load_data puts a file on the grid with missing rows
     gaps = np.flatnonzero(np.diff(time_s) > 1.5 * float(model.sample_time_s)) + 1
+    raw_y, bridged = bridge_lost_outputs(raw_y, np.all(np.isfinite(raw_u), axis=1), gaps)
+    valid = np.all(np.isfinite(np.column_stack([raw_u, raw_y])), axis=1)
     segments, skipped = complete_segments(valid, min_segment, gaps)
     raw_u = through_actuators(model, raw_u, segments)
     both = np.column_stack([raw_u, raw_y, raw_z])
@@ -78,8 +81,43 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
         u=dev[:, :nu], y=dev[:, nu:nu + ny], z=dev[:, nu + ny:],
         operating_point=dict(zip([*inputs, *outputs, *extras], map(float, means))),
         segments=segments, skipped_rows=skipped, sample_time_s=float(model.sample_time_s),
-        rows=rows, noise=noise,
+        rows=rows, noise=noise, bridged=bridged,
     )
+
+
+# Lost output samples interpolated instead of splitting the record (bridge_lost_outputs).
+MAX_BRIDGED_RUN = 2        # consecutive lost samples of one output
+MAX_BRIDGED_SHARE = 0.01   # of an output's rows: beyond it, that output's lost samples split the record
+
+
+def bridge_lost_outputs(raw_y: np.ndarray, inputs_present: np.ndarray, starts=()) -> tuple[np.ndarray, np.ndarray]:
+    """(``raw_y`` with its short runs of lost samples linearly interpolated, the N x ny mask of
+    the samples filled). A run is filled when it holds at most MAX_BRIDGED_RUN rows, the samples
+    either side of it are present, every input is present from the sample before it to the one
+    after, and no segment starts (``starts``: rows after a time gap) inside that span; an output
+    with more such rows than MAX_BRIDGED_SHARE of the record keeps all of them lost.
+
+    Why: a historian that drops a PV sample now and then (a 2 h export with four lost samples)
+    otherwise cuts the record into pieces, each filtered from rest and the short ones skipped;
+    on a 2 h PI loop with four lost PV samples half the record went, and with it a model's gain
+    error, for a stick-slip valve at confidence 0.97. The G u part of the output error reads no
+    output, so only the noise filter sees the interpolated value, and the analyses leave out
+    the errors within its reach (bridged_reach)."""
+    y = np.array(raw_y, dtype=float)
+    filled = np.zeros(y.shape, bool)
+    n = len(y)
+    split = np.zeros(n + 1, bool)
+    split[np.asarray(starts, dtype=int)] = True
+    for k in range(y.shape[1]):
+        runs = [(a, b) for a, b in complete_runs(~np.isfinite(y[:, k]))
+                if b - a <= MAX_BRIDGED_RUN and a >= 1 and b < n and np.isfinite(y[a - 1, k]) and np.isfinite(y[b, k])
+                and inputs_present[a - 1:b + 1].all() and not split[a:b + 1].any()]
+        if not runs or sum(b - a for a, b in runs) > MAX_BRIDGED_SHARE * n:
+            continue
+        for a, b in runs:
+            y[a:b, k] = np.interp(np.arange(a, b), [a - 1, b], [y[a - 1, k], y[b, k]])
+            filled[a:b, k] = True
+    return y, filled
 
 
 def through_actuators(model, raw_u: np.ndarray, segments=None, inputs=None) -> np.ndarray:
@@ -101,6 +139,21 @@ def through_actuators(model, raw_u: np.ndarray, segments=None, inputs=None) -> n
             for a, b in runs:
                 out[a:b, j] = valve_position(actuators[name], raw_u[a:b, j])
     return out
+
+
+def bridged_reach(sig: Signals, i: int, inverse_noise, lags: int) -> np.ndarray:
+    """Rows whose error reads an interpolated sample of output i (bridge_lost_outputs):
+    through ``inverse_noise`` (H^-1, its impulse response to 1 % of its peak) and then an AR of
+    ``lags`` lags. The interpolation is not data, so these rows stay out of every fit and score."""
+    n = len(sig.time_s)
+    reach = np.zeros(n, bool)
+    if sig.bridged is None or not sig.bridged[:, i].any():
+        return reach
+    h = np.abs(inverse_noise.impulse(4096))
+    span = int(np.flatnonzero(h >= 0.01 * h.max())[-1]) + 1 + lags
+    for t in np.flatnonzero(sig.bridged[:, i]):
+        reach[t:t + span] = True
+    return reach
 
 
 def complete_runs(valid: np.ndarray, starts=()) -> list[tuple[int, int]]:

@@ -94,6 +94,10 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
     sig = extract(model, data, reference=reference)
     rows = np.ones(len(time_s), bool) if reference is None else reference
     noise, estimated, notes = list(sig.noise), [], []
+    for name, lost in zip(sig.outputs, sig.bridged.sum(axis=0)):
+        if lost:
+            notes.append(f"{name}: {lost} lost sample(s) ({100 * lost / len(time_s):.2g} % of the rows) interpolated "
+                         "to keep the record in one piece; the errors that read them are left out of every fit")
     for i, name in enumerate(sig.outputs):
         if has_noise_model(noise[i]):
             continue

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._core import TransferFunction
-from ..signals import Signals, per_segment
+from ..signals import Signals, bridged_reach, per_segment
 from .errors import one_step_errors
 from .laguerre import basis_responses, laguerre_filters, laguerre_pole
 from .result import ModelChange
@@ -75,6 +75,7 @@ def process_part(sig: Signals, i: int, changes: list[ModelChange], onset: int, b
     t = np.arange(len(e))
     end = len(e) if end is None else end
     usable = (t >= onset) & (t < end) & np.isfinite(e) & np.isfinite(columns).all(axis=1) & np.isfinite(x).all(axis=1)
+    usable &= ~bridged_reach(sig, i, noise.inverse(), 0)
     odd = (t // block) % 2 == 1
     fit = usable & ~odd
     series = np.full(len(e), np.nan)

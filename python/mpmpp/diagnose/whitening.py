@@ -26,7 +26,7 @@ import numpy as np
 
 from .. import _core
 from .._core import TransferFunction
-from ..signals import Signals, per_segment
+from ..signals import Signals, bridged_reach, per_segment
 from .laguerre import basis_responses, delayed_before, laguerre_filters, laguerre_pole
 from .result import InsufficientData
 from .trend import TrendScan, trend_fit
@@ -103,6 +103,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     weight = np.zeros(n)
     for a, b in sig.segments:
         weight[a + SETTLE:b] = 1.0
+    weight[bridged_reach(sig, i, noise.inverse(), AR_ORDER)] = 0.0
     e0 = np.nan_to_num(e)
     # The split looks for a change of the disturbance's level or colour. A slow drift
     # changes the AR fit too, and a split inside it lets each side's correction absorb a
@@ -296,7 +297,7 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray, beside_inputs:
     usable = np.zeros(len(v), bool)
     for a, b in sig.segments:
         usable[a + SETTLE:b] = True
-    usable &= rows
+    usable &= rows & ~bridged_reach(sig, i, TransferFunction(), NOISE_ORDER)
     free = v - trend_fit(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE).trend
     free -= free[usable].mean()
     basis = input_basis(sig, i) if beside_inputs else None

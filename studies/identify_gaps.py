@@ -3,7 +3,7 @@ from rest) against the longest stretch alone (the method before 2026-11-29) and 
 without gaps.
 
 Loops: flow / pressure / level-like PI loops with setpoint steps (tests/python/pi_loop.py, plain
-NumPy), 6 h at 10 s (2,160 rows). Gaps: PV missing in one row every ``--every`` rows (a
+NumPy), 6 h at 10 s (2,160 rows). Gaps: one row lost (OP and PV) every ``--every`` rows (a
 historian that drops a sample now and then); at 140 rows no stretch reaches the 150 rows a
 record needs, so the longest stretch alone is always refused. Columns as in
 studies/identify_study.py: bias and spread (sd over seeds) in % of the true value for K and tau,
@@ -34,10 +34,11 @@ ROWS = 2160
 
 
 def variants(df, every):
-    """The record three ways: without gaps, with PV missing every ``every`` rows, and the longest
-    complete stretch of the latter alone."""
+    """The record three ways: without gaps, with a row lost (OP and PV) every ``every`` rows, and
+    the longest complete stretch of the latter alone. A lost input ends a stretch; PV samples
+    lost alone, this few, would be interpolated (signals.bridge_lost_outputs)."""
     gapped = df.copy()
-    gapped.loc[every - 1::every, "PV"] = np.nan
+    gapped.loc[every - 1::every, ["OP", "PV"]] = np.nan
     a, b = longest(complete_runs(gapped["PV"].notna().to_numpy()))
     return {"no gaps": df, "gaps, every stretch": gapped, "gaps, longest only": gapped.iloc[a:b]}
 
@@ -69,11 +70,11 @@ def main(argv=None):
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--first-seed", type=int, default=1)
     parser.add_argument("--every", type=int, nargs="+", default=[140, 400],
-                        help="PV missing in one row every this many rows")
+                        help="one row lost (OP and PV) every this many rows")
     args = parser.parse_args(argv)
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     for every in args.every:
-        print(f"\nPV missing every {every} rows; {ROWS} rows at 10 s, setpoint steps, seeds "
+        print(f"\nrow lost every {every} rows; {ROWS} rows at 10 s, setpoint steps, seeds "
               f"{seeds.start}-{seeds.stop - 1}")
         print(f"{'loop':<9} {'variant':<20} {'rows':>5} {'refused':>7}   K: bias sd %   tau: bias sd %"
               "   theta: bias sd s   cover K tau theta")

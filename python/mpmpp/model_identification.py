@@ -59,7 +59,7 @@ from .compare import _finite
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import MIN_ROWS, require_rows
-from .signals import complete_runs
+from .signals import bridge_lost_outputs, complete_runs
 from .stretches import Stretches
 from .timeaxis import sample_grid, seconds_of
 
@@ -191,6 +191,7 @@ class IdentificationResult:
     channels: list[ChannelSummary]
     outputs: list[OutputFit]
     selection: str = "BIC on one-step prediction errors over a common sample range"
+    interpolated_samples: int = 0       # lost output samples interpolated (signals.bridge_lost_outputs)
 
     def to_dict(self) -> dict:
         d = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "model"}
@@ -203,6 +204,8 @@ class IdentificationResult:
         lines = [f"identify: {self.rows_used} rows at {self.sample_time_s:g} s"
                  + (f" ({self.skipped_rows} rows skipped: missing values, time gaps or stretches between them "
                     f"too short to fit)" if self.skipped_rows else "")
+                 + (f" ({self.interpolated_samples} lost output sample(s) interpolated)"
+                    if self.interpolated_samples else "")
                  + f"; orders and dead times by {self.selection}"]
         for o in self.outputs:
             lines.append(f"  {o.output} ({o.process_class}): fit 1-step {o.fit_one_step:.1f} %,"
@@ -249,9 +252,16 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     for col in ["time", *inputs, *outputs, *[c for c in setpoints if c]]:
         if col not in data.columns:
             raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
-    raw = data[inputs + outputs].to_numpy(dtype=float)
+    raw = data[inputs + outputs].to_numpy(dtype=float, copy=True)
     ts, gaps = sample_grid(seconds_of(data), data.attrs.get("segment_starts", ()))
     require_rows(len(raw), ts)
+    # A few lost output samples are interpolated rather than cutting the record into stretches,
+    # each fitted from rest (signals.bridge_lost_outputs). They stay in the criterion (the C++
+    # estimators take no row mask): on 2 h PI test loops with 4-7 lost PV samples K and tau
+    # moved 0-0.6 % (median) from the complete record's estimates, against 3-50 % cut; on the
+    # held-out loops of studies/standing_errors.py 0-1.7 % against 1-100 %.
+    raw[:, len(inputs):], bridged = bridge_lost_outputs(raw[:, len(inputs):],
+                                                        np.all(np.isfinite(raw[:, :len(inputs)]), axis=1), gaps)
     runs = complete_runs(np.all(np.isfinite(raw), axis=1), gaps)
     if max_dead_time_s is None:
         max_dead_time_s = DEFAULT_MAX_DEAD_TIME_S
@@ -323,7 +333,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                                   float(_core.fit_percent(Y[:, i], sim)), count,
                                   {1: "direct", -1: "reverse", 0: "none"}[action], cls.name))
     model = _core.Model(name or "identified from data", ts, inputs, outputs, process, noise)
-    return IdentificationResult(model, ts, n, len(data) - n, summaries, fits)
+    return IdentificationResult(model, ts, n, len(data) - n, summaries, fits, interpolated_samples=int(bridged.sum()))
 
 
 @dataclass

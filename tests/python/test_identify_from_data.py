@@ -182,9 +182,11 @@ def test_a_stretch_too_short_to_fit_is_left_out_and_said():
 
 
 def _with_gaps(df, rows):
-    """(df with PV missing at ``rows``, the complete stretches [a, b) of the rows left, laid end to end)."""
+    """(df with the rows ``rows`` lost, OP and PV, the complete stretches [a, b) of the rows left,
+    laid end to end). A lost input ends a stretch; a few lost PV samples alone would be
+    interpolated (test_lost_outputs.py)."""
     gapped = df.copy()
-    gapped.loc[rows, "PV"] = np.nan
+    gapped.loc[rows, ["OP", "PV"]] = np.nan
     kept = np.flatnonzero(gapped["PV"].notna())
     breaks = np.flatnonzero(np.diff(kept) > 1) + 1
     bounds = np.r_[0, breaks, len(kept)]
@@ -225,7 +227,7 @@ def test_every_stretch_between_missing_values_is_fitted_as_scipy_does_it():
 
 
 def test_a_record_with_no_long_stretch_is_identified_from_its_many_short_ones():
-    """PV missing every 140th row of a 6 h record: no stretch reaches the 150 rows a record
+    """Every 140th row of a 6 h record lost: no stretch reaches the 150 rows a record
     needs, but 15 stretches of 139 rows hold 2,085 rows, and the loop is identified from them
     (the longest stretch alone was refused)."""
     df = pi_loop.simulate(pi_loop.PRESSURE, seed=12, rows=2160, setpoint_steps=True)

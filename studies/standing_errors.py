@@ -17,6 +17,11 @@ at least a quarter of the channel's step-response error against the plant
 finding from the first row was withheld (pipeline._without_unconfirmed_standing_changes);
 "false" counts control runs with any process finding.
 
+``--later``: the same models on records (setpoint steps) whose plant gain doubles or halves
+one hour in (``pi_loop.simulate``'s ``gain_change``), or stays: "later change named" is a gain
+finding dated within half an hour of the change, in its direction; with no change, "dated
+finding" counts runs with any process finding dated inside the record (false).
+
     PYTHONPATH=python python studies/standing_errors.py --seeds 8 --first-seed 1
 """
 from __future__ import annotations
@@ -82,6 +87,39 @@ def run_case(loop_name: str, parameter: str, factor: float, seed: int, steps: bo
             "withheld": sum("withheld" in n for n in result.notes)}
 
 
+LATER_ROW = 360                 # one hour in at 10 s
+LATER_CHANGES = (2.0, 0.5, 1.0)  # plant gain factor from LATER_ROW on (1.0: no change)
+
+
+def run_later_case(loop_name: str, parameter: str, factor: float, seed: int, change: float, rows: int) -> dict:
+    loop = next(lp for lp in pi_loop.LOOPS + HELD_OUT_LOOPS if lp.name == loop_name)
+    data = pi_loop.simulate(loop, seed, rows=rows, ts=TS, setpoint_steps=True,
+                            gain_change=None if change == 1.0 else (LATER_ROW, change))
+    result = diagnose(hand_written(loop, parameter, factor), data)
+    start = float(data["time"].iloc[0])
+    dated = [f for f in result.findings if f.effect in PROCESS_EFFECTS and f.onset_s > start]
+    onset_s = start + LATER_ROW * TS
+    named = change != 1.0 and any(
+        f.effect == "gain" and abs(f.onset_s - onset_s) <= 1800.0 and (f.estimate["gain_ratio"] > 1) == (change > 1)
+        for f in dated)
+    return {"parameter": parameter, "factor": factor, "change": change, "named": named, "dated": bool(dated)}
+
+
+def later_summary(runs: list) -> list[str]:
+    out = ["| model error | plant gain at 1 h | runs | later change named | dated finding |",
+           "| --- | --- | --- | --- | --- |"]
+    for parameter, factor in ERRORS:
+        for change in LATER_CHANGES:
+            rs = [r for r in runs if (r["parameter"], r["factor"], r["change"]) == (parameter, factor, change)]
+            if not rs:
+                continue
+            label = "none" if parameter == "none" else f"{parameter} x{factor:g}"
+            named = "-" if change == 1.0 else f"{sum(r['named'] for r in rs)}/{len(rs)}"
+            out.append(f"| {label} | {'unchanged' if change == 1.0 else f'x{change:g}'} | {len(rs)} | {named} | "
+                       f"{sum(r['dated'] for r in rs)}/{len(rs)} |")
+    return out
+
+
 def summary(runs: list) -> list[str]:
     out = ["| model error | operation | runs | named | any process finding | runs with a finding withheld |",
            "| --- | --- | --- | --- | --- | --- |"]
@@ -104,18 +142,24 @@ def main(argv=None) -> int:
     p.add_argument("--first-seed", type=int, default=1)
     p.add_argument("--rows", type=int, default=751, help="record length in rows at 10 s (default 751 = 2.1 h)")
     p.add_argument("--loops", choices=sorted(LOOP_SETS), default="tuning")
+    p.add_argument("--later", action="store_true", help="records whose plant gain changes one hour in")
     p.add_argument("--workers", type=int, default=None)
     args = p.parse_args(argv)
     loops = LOOP_SETS[args.loops]
     started = time.perf_counter()
-    tasks = [(lp.name, parameter, factor, seed, steps, args.rows) for lp in loops
-             for parameter, factor in ERRORS for seed in range(args.first_seed, args.first_seed + args.seeds)
-             for steps in (True, False)]
-    runs, where = run_tasks(run_case, tasks, None, args.workers, True, unit="runs")
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    if args.later:
+        tasks = [(lp.name, parameter, factor, seed, change, args.rows) for lp in loops
+                 for parameter, factor in ERRORS for seed in seeds for change in LATER_CHANGES]
+        runs, where = run_tasks(run_later_case, tasks, None, args.workers, True, unit="runs")
+    else:
+        tasks = [(lp.name, parameter, factor, seed, steps, args.rows) for lp in loops
+                 for parameter, factor in ERRORS for seed in seeds for steps in (True, False)]
+        runs, where = run_tasks(run_case, tasks, None, args.workers, True, unit="runs")
     print(f"{args.loops} loops {', '.join(lp.name for lp in loops)}; seeds {args.first_seed}-"
           f"{args.first_seed + args.seeds - 1}; {args.rows} rows at {TS:g} s; "
           f"{time.perf_counter() - started:.0f} s wall on {where}\n")
-    print("\n".join(summary(runs)))
+    print("\n".join(later_summary(runs) if args.later else summary(runs)))
     return 0
 
 

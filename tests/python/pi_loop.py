@@ -70,9 +70,11 @@ def foptd_coefficients(loop: Loop, ts: float):
 
 
 def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_steps: bool = False,
-             step_size: float | None = None, op0: float = 50.0, pv0: float = 20.0) -> pd.DataFrame:
+             step_size: float | None = None, op0: float = 50.0, pv0: float = 20.0,
+             gain_change: tuple[int, float] | None = None) -> pd.DataFrame:
     """One record: time, OP, PV, PV_sp. With ``setpoint_steps`` the setpoint alternates +-step_size
-    (default 4 disturbance sds of PV) every 20 minutes."""
+    (default 4 disturbance sds of PV) every 20 minutes. ``gain_change`` (row, factor): from that
+    row of the record on, the process gain is ``factor`` times the loop's (self-regulating loops)."""
     rng = np.random.default_rng(seed)
     kc, ti = loop.pi_tuning(ts)
     warm = 200  # settle the disturbance and controller before the record starts
@@ -100,11 +102,12 @@ def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_
         if process is not None:
             x[t] = process.step(op[t - 1] - op0 if t >= 1 else 0.0)
         elif t >= 1:
+            k = gain_change[1] if gain_change is not None and t >= warm + gain_change[0] else 1.0
             x[t] = a * x[t - 1]
             if t - d >= 0:
-                x[t] += b0 * (op[t - d] - op0)
+                x[t] += k * b0 * (op[t - d] - op0)
             if t - d - 1 >= 0:
-                x[t] += b1 * (op[t - d - 1] - op0)
+                x[t] += k * b1 * (op[t - d - 1] - op0)
         pv[t] = pv0 + x[t] + v[t]
         err = sp[t] - pv[t]
         integral += kc * ts / ti * err

@@ -81,6 +81,19 @@ def test_right_hand_written_model_gets_no_process_finding_on_a_2h_record(loop):
         assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS], (loop.name, seed)
 
 
+def test_a_deadband_fit_of_the_valve_is_reported_not_a_crash():
+    """A 2 h flow loop whose plant gain halves an hour in, the model's gain half the plant's: the
+    valve fit's best hysteresis kind is a positioner deadband, which has a width and no S or J;
+    diagnose raised KeyError 'S' on it."""
+    loop = pi_loop.FLOW
+    data = pi_loop.simulate(loop, 3, setpoint_steps=True, gain_change=(360, 0.5))
+    res = diagnose(_foptd_model(loop, 0.5), data)
+    [valve] = [f for f in res.findings if f.effect == "input_nonlinearity"]
+    assert valve.estimate["kind"] == valve.estimate["actuator"]["kind"] == "deadband"
+    assert valve.estimate["width"] == valve.estimate["actuator"]["width"] > 0
+    assert "has a deadband" in valve.explanation and "S =" not in valve.explanation
+
+
 def test_short_record_says_too_short(tmp_path, capsys):
     data = pi_loop.simulate(pi_loop.FLOW, 1, rows=126)
     csv, model = tmp_path / "loop.csv", tmp_path / "model.json"

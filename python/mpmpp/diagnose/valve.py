@@ -214,6 +214,14 @@ def _numerator(b: np.ndarray, lags: list[int]) -> np.ndarray:
     return num
 
 
+def _valve_fault(kind: str, params: dict) -> str:
+    """The valve fault of a hysteresis kind of the fit (stiction.hammerstein.HYSTERESIS_KINDS) in words."""
+    if kind == "deadband":   # a positioner's dead zone: no S and J (a deadband fit crashed this with KeyError)
+        return f"has a deadband: it moves only when the OP is more than {params['width']:.3g} away"
+    law = {"stick_slip": "stick-slip", "he": "stick-slip (He's model)", "backlash": "backlash"}[kind]
+    return f"sticks: {law} with S = {params['S']:.3g} and J = {params['J']:.3g}"
+
+
 def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> Finding | None:
     name = sig.inputs[lp.input]
     g = out.row[lp.input]
@@ -241,16 +249,14 @@ def _finding(out: OutputResidual, sig: Signals, lp: Loop, fit, logn: float) -> F
     # the refitted channel's steady-state gain over the model's (none for an integrating channel)
     nominal_gain = g.dc_gain()
     ratio = change.channel.dc_gain() / nominal_gain if math.isfinite(nominal_gain) else None
-    s, j = fit.params["S"], fit.params["J"]
-    kind = {"stick_slip": "stick-slip", "he": "stick-slip (He's model)", "backlash": "backlash"}[fit.kind]
     return Finding(
         id="", effect="input_nonlinearity", output=out.name, input=name, onset_s=0.0,
         confidence=fit.confidence, calibrated=True,
-        estimate={"kind": fit.kind, "S": s, "J": j, "units": "input", "actuator": actuator,
+        estimate={"kind": fit.kind, **fit.params, "units": "input", "actuator": actuator,
                   "gain_ratio": ratio,
                   "likelihood_gain_per_sample": fit.gain_per_sample},
         error_before=before, error_after=err.after,
-        explanation=(f"valve {name} sticks: {kind} with S = {s:.3g} and J = {j:.3g} (OP units), "
-                     f"throughout the record (held-out one-step error against the linear valve "
-                     f"refitted the same way; the model on file: {err.before:.4g})"),
+        explanation=(f"valve {name} {_valve_fault(fit.kind, fit.params)} (OP units), throughout the record "
+                     f"(held-out one-step error against the linear valve refitted the same way; the model "
+                     f"on file: {err.before:.4g})"),
         score=heldout - 0.5 * PARAMS * logn, change=change, outputs_driven=(out.name,))

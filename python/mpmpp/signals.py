@@ -99,10 +99,11 @@ def bridge_lost_outputs(raw_y: np.ndarray, inputs_present: np.ndarray, starts=()
 
     Why: a historian that drops a PV sample now and then (a 2 h export with four lost samples)
     otherwise cuts the record into pieces, each filtered from rest and the short ones skipped;
-    on a 2 h PI loop with four lost PV samples half the record went, and with it a model's gain
-    error, for a stick-slip valve at confidence 0.97. The G u part of the output error reads no
-    output, so only the noise filter sees the interpolated value, and the analyses leave out
-    the errors within its reach (bridged_reach)."""
+    on a 2 h PI loop with four lost PV samples half the record went, and diagnose named the
+    model's gain error a stick-slip valve at confidence 0.97. The G u part of the output error
+    reads no output, so only the noise filter sees the interpolated value: compare and diagnose
+    leave out the errors within its reach (bridged_reach); identify keeps them in its criterion
+    (model_identification.model_from_data)."""
     y = np.array(raw_y, dtype=float)
     filled = np.zeros(y.shape, bool)
     n = len(y)

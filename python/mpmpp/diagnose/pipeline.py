@@ -370,9 +370,8 @@ def _without_unconfirmed_standing_changes(found: list[Finding], prepared: Diagno
                 gains = _refitted_gains_per_half(outputs[i], one_step_errors(sig, i, f.model_changes()),
                                                  first_onset, mid)
                 if min(gains) <= logn:
-                    shown = ", ".join(f"{g:.3g}" for g in gains)
                     why = (f"its held-out gain with the noise correction refitted beside it is not above log N = "
-                           f"{logn:.3g} in both halves of the record ({shown})")
+                           f"{logn:.3g} in both halves of the record ({', '.join(f'{g:.3g}' for g in gains)})")
             if why is not None:
                 notes.append(f"{f.explanation}: withheld, {why}; a change later in the record, or the controller's "
                              "compensation of the disturbance, can pose as a change present throughout")

@@ -216,7 +216,7 @@ def _numerator(b: np.ndarray, lags: list[int]) -> np.ndarray:
 
 def _valve_fault(kind: str, params: dict) -> str:
     """The valve fault of a hysteresis kind of the fit (stiction.hammerstein.HYSTERESIS_KINDS) in words."""
-    if kind == "deadband":   # a positioner's dead zone: no S and J (a deadband fit crashed this with KeyError)
+    if kind == "deadband":   # a positioner's dead zone: a width, no S and J
         return f"has a deadband: it moves only when the OP is more than {params['width']:.3g} away"
     law = {"stick_slip": "stick-slip", "he": "stick-slip (He's model)", "backlash": "backlash"}[kind]
     return f"sticks: {law} with S = {params['S']:.3g} and J = {params['J']:.3g}"

@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pandas as pd
 import pathlib
 import pytest
 
@@ -53,6 +54,24 @@ def test_check_counts_missing_and_integrating_channel(tmp_path, capsys):
     assert "y <- v: integrating (infinite dc gain)" in out
     assert "missing values: u 1, y 1, x 1 (2 rows affected" in out
     assert "setpoints: y_sp" in out and "candidates for diagnose): x" in out
+
+
+def test_check_says_which_lost_output_samples_the_analyses_interpolate(tmp_path, capsys):
+    """Two lone lost PV samples in 300 rows are interpolated by compare, diagnose and identify
+    (signals.bridge_lost_outputs); a lost OP sample and a PV lost beside it end a segment."""
+    model = mpmpp.Model("m", 1.0, ["OP"], ["PV"], {"PV": {"OP": mpmpp.TransferFunction([0.5], [1.0, -0.5], 1)}})
+    mpmpp.save_model(model, tmp_path / "m.json")
+    t = np.arange(300)
+    op, pv = np.sin(t / 7.0), np.cos(t / 5.0)
+    pv[[40, 150, 201]] = np.nan
+    op[200] = np.nan
+    pd.DataFrame({"time": t, "OP": op, "PV": pv}).to_csv(tmp_path / "d.csv", index=False)
+    assert cli.main(["check", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["data"]["interpolated"] == {"PV": 2}
+    assert cli.main(["check", str(tmp_path / "m.json"), str(tmp_path / "d.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "missing values: OP 1, PV 3 (4 rows affected)" in out
+    assert "interpolated by compare, diagnose and identify" in out and "): PV 2;" in out
 
 
 def test_python_dash_m_runs_the_command_line(tmp_path):

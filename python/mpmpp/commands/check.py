@@ -75,7 +75,19 @@ def _data_summary(path: str, df, model) -> dict:
         "setpoints": setpoints,
         "candidates": [c for c in others if c not in setpoints],
         "rows_with_missing": int(np.isnan(df.drop(columns="time").to_numpy()).any(axis=1).sum()),
+        "interpolated": _interpolated(df, model),
     }
+
+
+def _interpolated(df, model) -> dict:
+    """Output -> lost samples compare, diagnose and identify interpolate rather than cut the
+    record at (signals.bridge_lost_outputs), outputs with none left out."""
+    from ..signals import bridge_lost_outputs
+
+    inputs_present = np.isfinite(df[list(model.inputs)].to_numpy(dtype=float)).all(axis=1)
+    _, filled = bridge_lost_outputs(df[list(model.outputs)].to_numpy(dtype=float), inputs_present,
+                                    df.attrs["segment_starts"])
+    return {o: int(n) for o, n in zip(model.outputs, filled.sum(axis=0)) if n}
 
 
 def _channel_line(ch: dict) -> str:
@@ -113,8 +125,11 @@ def _print_summary(report: dict, detail: bool) -> None:
     missing = {c: n for c, n in d["missing"].items() if n}
     if missing:
         listed = ", ".join(f"{c} {n}" for c, n in missing.items())
-        print(f"  missing values: {listed} ({d['rows_with_missing']} rows affected; "
-              f"windows containing them are skipped)")
+        print(f"  missing values: {listed} ({d['rows_with_missing']} rows affected)")
+        if d["interpolated"]:
+            bridged = ", ".join(f"{o} {n}" for o, n in d["interpolated"].items())
+            print(f"  interpolated by compare, diagnose and identify (runs of at most 2, at most 1 % of an "
+                  f"output's rows): {bridged}; the other missing values end a data segment")
     else:
         print("  missing values: none")
 

@@ -260,8 +260,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     # estimators take no row mask): on 2 h PI test loops with 4-7 lost PV samples K and tau
     # moved 0-0.6 % (median) from the complete record's estimates, against 3-50 % cut; on the
     # held-out loops of studies/standing_errors.py 0-1.7 % against 1-100 %.
-    raw[:, len(inputs):], bridged = bridge_lost_outputs(raw[:, len(inputs):],
-                                                        np.all(np.isfinite(raw[:, :len(inputs)]), axis=1), gaps)
+    raw[:, len(inputs):], bridged = bridge_lost_outputs(raw[:, len(inputs):], raw[:, :len(inputs)], gaps)
     runs = complete_runs(np.all(np.isfinite(raw), axis=1), gaps)
     if max_dead_time_s is None:
         max_dead_time_s = DEFAULT_MAX_DEAD_TIME_S

@@ -67,7 +67,7 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     # rows a data frame leaves out (a historian gap: a step of two samples or more) end a
     # segment as a missing row would; load_data puts a file on the grid with missing rows
     gaps = np.flatnonzero(np.diff(time_s) > 1.5 * float(model.sample_time_s)) + 1
-    raw_y, bridged = bridge_lost_outputs(raw_y, np.all(np.isfinite(raw_u), axis=1), gaps)
+    raw_y, bridged = bridge_lost_outputs(raw_y, raw_u, gaps)
     valid = np.all(np.isfinite(np.column_stack([raw_u, raw_y])), axis=1)
     segments, skipped = complete_segments(valid, min_segment, gaps)
     raw_u = through_actuators(model, raw_u, segments)
@@ -90,11 +90,11 @@ MAX_BRIDGED_RUN = 2        # consecutive lost samples of one output
 MAX_BRIDGED_SHARE = 0.01   # of an output's rows: beyond it, that output's lost samples split the record
 
 
-def bridge_lost_outputs(raw_y: np.ndarray, inputs_present: np.ndarray, starts=()) -> tuple[np.ndarray, np.ndarray]:
+def bridge_lost_outputs(raw_y: np.ndarray, raw_u: np.ndarray, starts=()) -> tuple[np.ndarray, np.ndarray]:
     """(``raw_y`` with its short runs of lost samples linearly interpolated, the N x ny mask of
     the samples filled). A run is filled when it holds at most MAX_BRIDGED_RUN rows, the samples
-    either side of it are present, every input is present from the sample before it to the one
-    after, and no segment starts (``starts``: rows after a time gap) inside that span; an output
+    either side of it are present, every input (``raw_u``, N x nu) is present from the sample
+    before it to the one after, and no segment starts (``starts``: rows after a time gap) inside that span; an output
     with more such rows than MAX_BRIDGED_SHARE of the record keeps all of them lost.
 
     Why: a historian that drops a PV sample now and then (a 2 h export with four lost samples)
@@ -105,6 +105,7 @@ def bridge_lost_outputs(raw_y: np.ndarray, inputs_present: np.ndarray, starts=()
     leave out the errors within its reach (bridged_reach); identify keeps them in its criterion
     (model_identification.model_from_data)."""
     y = np.array(raw_y, dtype=float)
+    inputs_present = np.isfinite(np.asarray(raw_u, dtype=float)).all(axis=1)
     filled = np.zeros(y.shape, bool)
     n = len(y)
     split = np.zeros(n + 1, bool)

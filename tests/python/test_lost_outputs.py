@@ -17,7 +17,7 @@ def test_short_runs_are_interpolated_between_their_neighbours():
     lost = y.copy()
     lost[50, 0] = np.nan
     lost[[120, 121], 1] = np.nan
-    filled, mask = bridge_lost_outputs(lost, np.ones(200, bool))
+    filled, mask = bridge_lost_outputs(lost, np.ones((200, 1)))
     assert np.flatnonzero(mask[:, 0]).tolist() == [50] and np.flatnonzero(mask[:, 1]).tolist() == [120, 121]
     assert filled[50, 0] == pytest.approx((y[49, 0] + y[51, 0]) / 2)
     assert filled[[120, 121], 1] == pytest.approx(y[119, 1] + (y[122, 1] - y[119, 1]) * np.array([1, 2]) / 3)
@@ -34,8 +34,8 @@ def test_short_runs_are_interpolated_between_their_neighbours():
 def test_runs_that_are_not_interpolated(rows, inputs_lost, starts):
     y = np.ones((200, 1))
     y[rows, 0] = np.nan
-    inputs = np.ones(200, bool)
-    inputs[inputs_lost] = False
+    inputs = np.ones((200, 1))
+    inputs[inputs_lost] = np.nan
     filled, mask = bridge_lost_outputs(y, inputs, starts)
     assert not mask.any() and np.isnan(filled[rows, 0]).all()
 
@@ -46,7 +46,7 @@ def test_an_output_losing_more_than_its_share_keeps_every_gap():
     many = np.arange(10, n - 10, 90)[: int(MAX_BRIDGED_SHARE * n) + 1]
     y[many, 0] = np.nan
     y[500, 1] = np.nan
-    filled, mask = bridge_lost_outputs(y, np.ones(n, bool))
+    filled, mask = bridge_lost_outputs(y, np.ones((n, 1)))
     assert not mask[:, 0].any() and np.isnan(filled[many, 0]).all()
     assert np.flatnonzero(mask[:, 1]).tolist() == [500]
 

@@ -84,9 +84,8 @@ def _interpolated(df, model) -> dict:
     record at (signals.bridge_lost_outputs), outputs with none left out."""
     from ..signals import bridge_lost_outputs
 
-    inputs_present = np.isfinite(df[list(model.inputs)].to_numpy(dtype=float)).all(axis=1)
-    _, filled = bridge_lost_outputs(df[list(model.outputs)].to_numpy(dtype=float), inputs_present,
-                                    df.attrs["segment_starts"])
+    _, filled = bridge_lost_outputs(df[list(model.outputs)].to_numpy(dtype=float),
+                                    df[list(model.inputs)].to_numpy(dtype=float), df.attrs["segment_starts"])
     return {o: int(n) for o, n in zip(model.outputs, filled.sum(axis=0)) if n}
 
 

@@ -77,7 +77,8 @@ class TrendScan:
         except np.linalg.LinAlgError:
             # An onset whose step and ramp the mask leaves (numerically) collinear with the level:
             # a record cut by many lost samples (the PV lost every 250 rows of a day-long record
-            # raised "Singular matrix"). The minimum-norm solution scores it; the others are as solved.
+            # raised "Singular matrix"). Every onset then gets the minimum-norm solution, which for
+            # a regular system is the one solve gives.
             coef = np.einsum("kij,kj->ki", np.linalg.pinv(normal, hermitian=True), rhs)
         # residual sum of squares e'e - 2 c'X'e + c'X'X c
         rss = np.sum(we * e) - 2.0 * np.sum(coef * rhs, axis=1) + np.einsum("ki,kij,kj->k", coef, gram, coef)

@@ -83,6 +83,9 @@ def _case(family, seed):
     ("mpc_2x2", 19, "deadband", "width", "deadband"),      # positioner deadband on an MV driving two outputs
     ("mpc_siso", 3, "stick_slip", "S", "stiction_s"),      # two-parameter stick-slip
     ("mpc_siso", 13, "saturation", None, None),           # MV limited to a band around its target
+    # an MV that leaves its band on both sides: the one-sided best limit sits in the wound-up
+    # excursion, so the search adds the second limit to each side's best (read as a gain of 0.06x before)
+    ("mpc_2x2", 3, "saturation", None, None),
 ])
 def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, kind, size_key, truth_key):
     spec, linear, actuator = _case(family, seed)

@@ -86,6 +86,9 @@ def _case(family, seed):
     # an MV that leaves its band on both sides: the one-sided best limit sits in the wound-up
     # excursion, so the search adds the second limit to each side's best (read as a gain of 0.06x before)
     ("mpc_2x2", 3, "saturation", None, None),
+    # a band the MV leaves for good: the valve pinned at its lower limit fits about as well as a
+    # gain of 0.14x, and a channel switched off is the actuator's doing (pipeline.DEAD_CHANNEL)
+    ("mpc_siso", 5, "saturation", None, None),
 ])
 def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, kind, size_key, truth_key):
     spec, linear, actuator = _case(family, seed)

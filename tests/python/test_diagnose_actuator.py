@@ -83,11 +83,9 @@ def _case(family, seed):
     ("mpc_2x2", 19, "deadband", "width", "deadband"),      # positioner deadband on an MV driving two outputs
     ("mpc_siso", 3, "stick_slip", "S", "stiction_s"),      # two-parameter stick-slip
     ("mpc_siso", 13, "saturation", None, None),           # MV limited to a band around its target
-    # an MV that leaves its band on both sides: the one-sided best limit sits in the wound-up
-    # excursion, so the search adds the second limit to each side's best (read as a gain of 0.06x before)
+    # bands the MV leaves for good: the valve pinned at a limit fits about as well as a gain of
+    # 0.06x (2x2) or 0.14x (SISO), and a channel switched off is the actuator's doing (pipeline.DEAD_CHANNEL)
     ("mpc_2x2", 3, "saturation", None, None),
-    # a band the MV leaves for good: the valve pinned at its lower limit fits about as well as a
-    # gain of 0.14x, and a channel switched off is the actuator's doing (pipeline.DEAD_CHANNEL)
     ("mpc_siso", 5, "saturation", None, None),
 ])
 def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, kind, size_key, truth_key):

@@ -165,14 +165,10 @@ class ActuatorSearch:
             return best
 
         start = {"kind": "saturation", **ends}
-        found = []
-        for side, other in (("lower", "upper"), ("upper", "lower")):
-            one = best_limit(start, side)
-            if one is None:
-                continue
-            two = best_limit(one.block, other)
-            found.append(two if two is not None and objective(two) > objective(one) else one)
-        return max(found, key=objective)
+        one = max((best_limit(start, side) for side in ("lower", "upper")), key=objective)
+        other = "lower" if one.block["lower"] == ends["lower"] else "upper"
+        two = best_limit(one.block, other)
+        return two if two is not None and objective(two) > objective(one) else one
 
 
 def actuator_findings(outputs: list[OutputResidual], sig: Signals, first_onset: int, min_segment: int,

@@ -423,7 +423,7 @@ def _switches_the_input_off(rivals: list[Finding], nl: Finding) -> bool:
     about equally (the gain has one parameter fewer, worth log N / 2); the actuator still has to
     pass its own tests (actuator_findings). Tuning families seeds 0-9 (630 runs): the gain findings
     below 0.25x came on 11 runs, 10 of them valve saturations (read as 0.01-0.21x) and one a true
-    0.625x estimated at 0.24x (with no actuator finding beside it); with this rule 5 more
+    0.625x estimated at 0.24x (with no actuator finding beside it); with this rule 8 more
     saturations are named, no other run changes."""
     return bool(rivals) and all(f.effect == "gain" and f.input == nl.input
                                 and abs(f.estimate.get("gain_ratio", 1.0)) < DEAD_CHANNEL for f in rivals)

@@ -381,3 +381,24 @@ def test_stretches_fit_each_piece_and_one_stretch_is_the_record():
     for bad in ([(0, 700)], [(300, 400), (350, 600)], [(10, 10)], [(400, 600), (0, 300)]):
         with pytest.raises(ValueError, match="stretches: row ranges"):
             fit_valve(op, pv, bad)
+
+
+def test_a_dead_time_beyond_the_valve_lags_is_no_valve():
+    """A linear PI loop whose dead time (70 s at 10 s) lies beyond the valve lags 1..N_U: a
+    hysteresis candidate, which delays the OP's reversals, stood in for the lags the ARX lacks
+    (a valve verdict on this record). Given the channel's first lag, every structure is also
+    fitted with the valve lags around it, and the linear valve explains the loop."""
+    import pi_loop
+
+    loop = pi_loop.Loop("long dead time", 1.0, 100.0, 70.0, 0.05, 0.9)
+    data = pi_loop.simulate(loop, 8, rows=2000, ts=10.0, setpoint_steps=True)
+    op, pv = data["OP"].to_numpy(), data["PV"].to_numpy()
+    assert fit_valve(op, pv).verdict
+    assert not fit_valve(op, pv, first_lag=8).verdict
+    # a window within 1..N_U adds no structure: the same fit as without it
+    assert hammerstein.dead_time_window(2) == () and hammerstein.dead_time_window(3) == (2, 3, 4, 5, 6, 7)
+    assert fit_valve(op, pv, first_lag=2).gain_per_sample == fit_valve(op, pv).gain_per_sample
+    # the window's structures predict the same rows as the others
+    phi_short, t_short = hammerstein._lagged(pv, op, start=12)
+    phi_wide, t_wide = hammerstein._lagged(pv, op, window=hammerstein.dead_time_window(8), start=12)
+    assert np.array_equal(t_short, t_wide) and phi_wide.shape[1] == phi_short.shape[1] + 6

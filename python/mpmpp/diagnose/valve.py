@@ -48,7 +48,7 @@ def valve_findings(outputs: list[OutputResidual], sig: Signals, loops: list[Loop
         a, b = longest(sig.segments)
         notes += record_notes({name: op[a:b], out.name: pv[a:b]})
         try:
-            fit = fit_valve(op, pv, sig.segments)
+            fit = fit_valve(op, pv, sig.segments, first_lag(out.row[lp.input]))
         except ValueError as exc:
             notes.append(f"{out.name} <- {name}: valve fit not possible ({exc})")
             continue

@@ -17,7 +17,7 @@ import math
 from .._core import TransferFunction
 from ..signals import Signals, longest, valve_input
 from ..stiction import fit_valve
-from ..stiction.hammerstein import CAL_GAIN_AT_HALF, MIN_VALVE_ROWS, N_U, N_Y, held_out_losses
+from ..stiction.hammerstein import CAL_GAIN_AT_HALF, MIN_VALVE_ROWS, N_U, N_Y, dead_time_window, held_out_losses
 from ..stiction.record_quality import record_notes
 from ..stiction.valve import actuator_from_fit
 from .errors import held_out_error
@@ -79,9 +79,8 @@ class _ValveArx:
     structure). Every set is fitted on the same rows, so their errors compare."""
 
     def __init__(self, out: OutputResidual, sig: Signals, lp: Loop):
-        around = max(first_lag(out.row[lp.input]) - 1, 1)
         short = list(range(1, N_U + 1))
-        wide = sorted(set(short) | set(range(around, around + N_U)))
+        wide = sorted(set(short) | set(dead_time_window(first_lag(out.row[lp.input]))))
         self.lag_sets = [short] if wide == short else [short, wide]
         start = max(N_Y, wide[-1])
         self.y = np.nan_to_num(sig.y[:, lp.output])

@@ -55,7 +55,7 @@ def test_wrong_hand_written_gain_is_found_on_a_2h_record():
     assert res.findings[0].error_after < res.findings[0].error_before
 
 
-def _foptd_model(loop, gain_factor=1.0):
+def _hand_written_model(loop, gain_factor=1.0):
     """The FOPTD model a user writes for ``loop`` (its gain times ``gain_factor``), no noise model."""
     g = mpmpp.TransferFunction.from_foptd(loop.gain * gain_factor, loop.time_constant_s, loop.dead_time_s, 10.0)
     return mpmpp.Model("hand-written", 10.0, ["OP"], ["PV"], {"PV": {"OP": g}})
@@ -67,7 +67,7 @@ def test_doubled_hand_written_gain_is_found_on_a_2h_record(loop, seed):
     finding from the first row with a ratio near 0.5. Before the short-record check of
     pipeline._without_unconfirmed_standing_changes each was withheld: the process part of each
     half, fitted on two blocks, rose in one of them."""
-    res = diagnose(_foptd_model(loop, 2.0), pi_loop.simulate(loop, seed, setpoint_steps=True))
+    res = diagnose(_hand_written_model(loop, 2.0), pi_loop.simulate(loop, seed, setpoint_steps=True))
     top = res.findings[0]
     assert (top.effect, top.onset_s) == ("gain", 0.0)
     assert 0.38 < top.estimate["gain_ratio"] < 0.65
@@ -82,19 +82,19 @@ def test_a_wrong_gain_stays_beside_an_unsure_valve_verdict():
     With the right model the valve finding stands alone (nothing to report beside it)."""
     loop = pi_loop.FLOW
     data = pi_loop.simulate(loop, 8, setpoint_steps=True)
-    res = diagnose(_foptd_model(loop, 0.5), data)
+    res = diagnose(_hand_written_model(loop, 0.5), data)
     assert [f.effect for f in res.findings] == ["gain", "input_nonlinearity"]
     gain, valve = res.findings
     assert gain.onset_s == 0.0 and 1.6 < gain.estimate["gain_ratio"] < 2.5
     assert valve.confidence < 0.9
-    right = diagnose(_foptd_model(loop), data)
+    right = diagnose(_hand_written_model(loop), data)
     assert [f.effect for f in right.findings if f.effect in PROCESS_EFFECTS] == ["input_nonlinearity"]
 
 
 @pytest.mark.parametrize("loop", pi_loop.LOOPS)
 def test_right_hand_written_model_gets_no_process_finding_on_a_2h_record(loop):
     for seed in (1, 2, 3):
-        res = diagnose(_foptd_model(loop), pi_loop.simulate(loop, seed, setpoint_steps=True))
+        res = diagnose(_hand_written_model(loop), pi_loop.simulate(loop, seed, setpoint_steps=True))
         assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS], (loop.name, seed)
 
 
@@ -104,7 +104,7 @@ def test_a_deadband_fit_of_the_valve_is_reported_not_a_crash():
     diagnose raised KeyError 'S' on it."""
     loop = pi_loop.FLOW
     data = pi_loop.simulate(loop, 3, setpoint_steps=True, gain_change=(360, 0.5))
-    res = diagnose(_foptd_model(loop, 0.5), data)
+    res = diagnose(_hand_written_model(loop, 0.5), data)
     [valve] = [f for f in res.findings if f.effect == "input_nonlinearity"]
     assert valve.estimate["kind"] == valve.estimate["actuator"]["kind"] == "deadband"
     assert valve.estimate["width"] == valve.estimate["actuator"]["width"] > 0

@@ -355,7 +355,7 @@ def _without_unconfirmed_standing_changes(found: list[Finding], prepared: Diagno
     mid = (first_onset + n) // 2
     spans = ((first_onset, None),) if short else ((first_onset, mid), (mid, None))
     for f in found:
-        if f.effect in LINEAR_CHANNEL_EFFECTS and sig.seconds_to_index(f.onset_s) == first_onset:
+        if _from_first_row(f, sig, first_onset):
             i = sig.outputs.index(f.output)
             whitenings = [w for w in (sig, prepared.without_input_basis(f.output)) if w is not None]
             errors = [[held_out_rms(p, block) for p in process_parts(w, i, f.model_changes(), a, block, b)]
@@ -405,8 +405,13 @@ def _model_error_beside_valve(f: Finding, valve: Finding, sig: Signals, first_on
     loops land). Replaced, the model's error was never named: on 2 h PI loops with a hand-written
     model (studies/standing_errors.py) the valve took the place of a right gain finding. The
     standing finding still has to be confirmed (_without_unconfirmed_standing_changes)."""
-    return (valve.confidence < VALVE_SURE and f.effect in LINEAR_CHANNEL_EFFECTS
-            and sig.seconds_to_index(f.onset_s) == first_onset)
+    return valve.confidence < VALVE_SURE and _from_first_row(f, sig, first_onset)
+
+
+def _from_first_row(f: Finding, sig: Signals, first_onset: int) -> bool:
+    """Whether ``f`` is a linear channel change present from the first row diagnosed (the
+    record's start, or ``train_end_s``): a model error rather than a change within the record."""
+    return f.effect in LINEAR_CHANNEL_EFFECTS and sig.seconds_to_index(f.onset_s) == first_onset
 
 
 # A gain finding whose new gain is below this fraction of the model's says the input has all but

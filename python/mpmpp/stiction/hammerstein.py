@@ -162,7 +162,7 @@ def dead_time_window(first_lag: int) -> tuple:
     (diagnose/valve.py, _ValveArx). Lags 1..N_U hold few of a longer dead time's response
     coefficients, or none."""
     start = max(first_lag - 1, 1)
-    return tuple(range(start, start + N_U)) if start + N_U - 1 > N_U else ()
+    return tuple(range(start, start + N_U)) if start > 1 else ()
 
 
 def fit_valve(op, pv, stretches=None, first_lag: int = 0) -> HammersteinResult:

@@ -24,13 +24,14 @@ process finding, ``update`` with the top one. Scoring per run, from the scenario
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
 import numpy as np
 
 from . import families as fam
-from ._core import TransferFunction
+from ._core import TransferFunction, actuator_positions
 from .diagnose import PROCESS_EFFECTS, diagnose
 from .diagnose.changes import apply_changes
 from .diagnose.errors import one_step_errors
@@ -59,7 +60,8 @@ EFFECT_ORDER = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled
 
 def true_change(spec: dict, expect: dict) -> dict | None:
     """The scheduled change: {"output", "input" (an input or extra column, None for a noise
-    change or drift), "channel" (true transfer function after the change, None if not linear)}."""
+    change or drift), "channel" (true transfer function after the change, None if not linear),
+    and for an actuator nonlinearity "actuator" (the engine's valve the plant switched to)}."""
     onset = expect.get("onset_s")
     if onset is None:
         return None
@@ -75,7 +77,7 @@ def true_change(spec: dict, expect: dict) -> dict | None:
         if kind in names:
             return {"output": output, "input": names[kind][ev.input], "channel": ev.model}
         if kind == "actuator":
-            return {"output": None, "input": sc.inputs[ev.input], "channel": None}
+            return {"output": None, "input": sc.inputs[ev.input], "channel": None, "actuator": ev.actuator}
         if doc["type"] in ("noise", "sigma", "drift"):
             return {"output": output, "input": None, "channel": None}
     raise ValueError(f"{spec['name']}: no event at the onset {onset} s")
@@ -170,6 +172,7 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
     run["false_process"] = effect in fam.CONTROL_EFFECTS and top is not None
     if effect in LINEAR_EFFECTS:
         run["update"] = update_quality(model, data, top, change)
+    if effect in LINEAR_EFFECTS or effect == "input_nonlinearity":
         # against the plant before the change (a hand-written model is not it)
         run["evidence"] = true_evidence(plant, data, change, expect["onset_s"])
     run["seconds"] = time.perf_counter() - t0
@@ -177,7 +180,7 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
 
 
 def true_evidence(model, data, change: dict, onset_s: float) -> float:
-    """The record's evidence for the scheduled linear change: the drop of the output's squared
+    """The record's evidence for the scheduled change (linear or actuator): the drop of the output's squared
     one-step prediction error after the onset when the changed channel is set to the truth,
     over the nominal error's variance before the onset (a likelihood-ratio statistic with the
     true change's structure, size and onset known; the disturbance model is diagnose's, the
@@ -187,13 +190,26 @@ def true_evidence(model, data, change: dict, onset_s: float) -> float:
 
 
 def change_evidence(sig, change: dict, onset_s: float) -> float:
-    """``true_evidence`` on deviation signals ``sig``, whose noise models whiten the error."""
+    """``true_evidence`` on deviation signals ``sig``, whose noise models whiten the error. An
+    actuator nonlinearity's is summed over the outputs its input drives."""
+    onset = sig.seconds_to_index(onset_s)
+
+    def drop(i, after):
+        before = one_step_errors(sig, i, [])
+        return float(np.nansum(before[onset:] ** 2 - after[onset:] ** 2) / np.nanvar(before[:onset]))
+
+    if change.get("actuator") is not None:
+        j = sig.inputs.index(change["input"])
+        level = sig.operating_point[change["input"]]
+        op = sig.u[onset:, j] + level
+        u = sig.u.copy()   # the valve from the onset on, starting at rest where the input stood
+        u[onset:, j] = np.asarray(actuator_positions(op, change["actuator"], float(op[0]))) - level
+        valved = dataclasses.replace(sig, u=u)
+        return sum(drop(i, one_step_errors(valved, i, [])) for i in range(len(sig.outputs)) if sig.rows[i][j] is not None)
     i = sig.outputs.index(change["output"])
     truth = ModelChange(output=change["output"], input=change["input"], channel=change["channel"],
                         new_input=change["input"] not in sig.inputs)
-    before, after = one_step_errors(sig, i, []), one_step_errors(sig, i, [truth])
-    onset = sig.seconds_to_index(onset_s)
-    return float(np.nansum(before[onset:] ** 2 - after[onset:] ** 2) / np.nanvar(before[:onset]))
+    return drop(i, one_step_errors(sig, i, [truth]))
 
 
 def update_quality(model, data, top, change: dict) -> dict:
@@ -274,14 +290,15 @@ def family_rows(runs: list, high: float = 0.9) -> list:
     return list(rows.values())
 
 
-def evidence_rows(runs: list) -> list:
-    """Per split and evidence bin (``true_evidence``), over the linear change runs: right top
-    process finding, and runs without any process finding."""
+def evidence_rows(runs: list, effects=LINEAR_EFFECTS) -> list:
+    """Per split and evidence bin (``true_evidence``), over the change runs of ``effects``:
+    right top process finding, and runs without any process finding."""
     rows = []
     for split in (fam.TUNING, fam.HELD_OUT):
-        rs = [r for r in runs if r["split"] == split and r.get("evidence") is not None]
+        rs = [r for r in runs if r["split"] == split and r["effect"] in effects and r.get("evidence") is not None]
         for lo, hi in zip(EVIDENCE_BINS[:-1], EVIDENCE_BINS[1:]):
-            inside = [r for r in rs if lo <= r["evidence"] < hi]
+            # a negative evidence (the truth predicts worse than the model: noise) is no evidence
+            inside = [r for r in rs if lo <= max(r["evidence"], 0.0) < hi]
             if inside:
                 rows.append({"split": split, "bin": f"[{lo:g}, {hi:g})", "n": len(inside),
                              "right": sum(r["top_right"] for r in inside),
@@ -356,6 +373,11 @@ def format_tables(study: dict) -> str:
             "change after its onset, chi-square units)", "",
             "| split | evidence | runs | right | no process finding |", "| --- | --- | --- | --- | --- |"]
     for r in evidence_rows(runs):
+        out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {_frac(r['none'], r['n'])} |")
+    out += ["", "Actuator nonlinearities by the record's evidence for them (the same statistic with the true valve "
+            "from the onset, summed over the outputs its input drives)", "",
+            "| split | evidence | runs | right | no process finding |", "| --- | --- | --- | --- | --- |"]
+    for r in evidence_rows(runs, ("input_nonlinearity",)):
         out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {_frac(r['none'], r['n'])} |")
     out += ["", "Update with the top process finding (over the runs with one: median change of the shown "
             "held-out errors, one-step and process part, and of the true step-response error of the changed "

@@ -30,7 +30,7 @@ def test_true_change_reads_the_scheduled_event(effect):
         assert ev["input"] not in nominal[ev["output"]]
         assert change["channel"].dc_gain() == pytest.approx(expect["size"], rel=1e-9)
     elif effect == "input_nonlinearity":
-        assert change["input"] == ev["input"] and change["channel"] is None
+        assert change["input"] == ev["input"] and change["channel"] is None and change["actuator"] is not None
     else:
         assert change["output"] == ev["output"] and change["input"] is None
         assert ds.finding_right({"effect": "output_drift", "output": ev["output"]}, effect, change)
@@ -95,6 +95,26 @@ def test_true_evidence_is_the_one_step_likelihood_ratio_of_the_true_change():
     assert evidence == pytest.approx(want, rel=1e-6)
     # the true change written as the nominal channel carries no evidence
     assert ds.true_evidence(model, data, {**change, "channel": g0}, expect["onset_s"]) == 0.0
+
+
+def test_true_evidence_of_a_saturation_is_that_of_the_clipped_input():
+    """An actuator nonlinearity's evidence: the same statistic with the plant seeing the valve
+    from the onset on, here a saturation, against the plain NumPy clip of the input."""
+    from evidence_reference import reference_evidence
+
+    from mpmpp.simulate import simulate
+
+    spec, expect = fam.family("mpc_siso").draw(5, effect="input_nonlinearity")
+    assert expect["nonlinearity"] == "saturation"
+    ev = next(e for e in spec["events"] if e["type"] == "actuator")
+    model, data = nominal_model(spec), simulate(spec)
+    change = ds.true_change(spec, expect)
+    evidence = ds.true_evidence(model, data, change, expect["onset_s"])
+    g0 = model.process_dict()["y1"]["u1"]
+    k = int(round(expect["onset_s"] / spec["sample_time_s"]))
+    want = reference_evidence(data, "y1", "u1", g0, g0, model.noise_dict()["y1"], k, limits=(ev["min"], ev["max"]))
+    assert evidence > 30.0
+    assert evidence == pytest.approx(want, rel=1e-6)
 
 
 def test_a_standing_finding_is_right_when_its_fix_removes_a_quarter_of_the_model_error():

@@ -180,11 +180,11 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
 
 
 def true_evidence(model, data, change: dict, onset_s: float) -> float:
-    """The record's evidence for the scheduled change (linear or actuator): the drop of the output's squared
-    one-step prediction error after the onset when the changed channel is set to the truth,
-    over the nominal error's variance before the onset (a likelihood-ratio statistic with the
-    true change's structure, size and onset known; the disturbance model is diagnose's, the
-    file's or the estimated one). A change that a record shows by less than a few units of it
+    """The record's evidence for the scheduled change: the drop of the output's squared one-step
+    prediction error after the onset when the change is set to the truth (the channel, or the
+    valve from the onset on), over the nominal error's variance before the onset (a
+    likelihood-ratio statistic with the true change's structure, size and onset known; the
+    disturbance model is diagnose's, the file's or the estimated one). A change that a record shows by less than a few units of it
     cannot be named by any search, whatever its size in the plant."""
     return change_evidence(diagnosis_signals(model, data).sig, change, onset_s)
 
@@ -355,6 +355,12 @@ def reliability_by_effect(runs: list, high: float = 0.9) -> list:
     return rows
 
 
+def _evidence_table(title: str, rows: list) -> list[str]:
+    return ["", title, "", "| split | evidence | runs | right | no process finding |", "| --- | --- | --- | --- | --- |"] + [
+        f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {_frac(r['none'], r['n'])} |"
+        for r in rows]
+
+
 def format_tables(study: dict) -> str:
     runs = study["runs"]
     out = ["Top process finding (change runs: right / runs; controls: runs with a false process finding)", "",
@@ -369,16 +375,11 @@ def format_tables(study: dict) -> str:
         control = [r for r in runs if r["split"] == split and r["effect"] in fam.CONTROL_EFFECTS]
         out.append(f"| {split} | all changes / all controls | {_frac(sum(r['top_right'] for r in change), len(change))}"
                    f" / {_frac(sum(r['false_process'] for r in control), len(control))} | | |")
-    out += ["", "Linear changes by the record's evidence for them (the one-step likelihood-ratio gain of the true "
-            "change after its onset, chi-square units)", "",
-            "| split | evidence | runs | right | no process finding |", "| --- | --- | --- | --- | --- |"]
-    for r in evidence_rows(runs):
-        out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {_frac(r['none'], r['n'])} |")
-    out += ["", "Actuator nonlinearities by the record's evidence for them (the same statistic with the true valve "
-            "from the onset, summed over the outputs its input drives)", "",
-            "| split | evidence | runs | right | no process finding |", "| --- | --- | --- | --- | --- |"]
-    for r in evidence_rows(runs, ("input_nonlinearity",)):
-        out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {_frac(r['none'], r['n'])} |")
+    out += _evidence_table("Linear changes by the record's evidence for them (the one-step likelihood-ratio gain "
+                           "of the true change after its onset, chi-square units)", evidence_rows(runs))
+    out += _evidence_table("Actuator nonlinearities by the record's evidence for them (the same statistic with "
+                           "the true valve from the onset, summed over the outputs its input drives)",
+                           evidence_rows(runs, ("input_nonlinearity",)))
     out += ["", "Update with the top process finding (over the runs with one: median change of the shown "
             "held-out errors, one-step and process part, and of the true step-response error of the changed "
             "channel; 'true error halved' over all runs, a run without a process finding counts as not halved)", "",

@@ -184,8 +184,9 @@ def true_evidence(model, data, change: dict, onset_s: float) -> float:
     prediction error after the onset when the change is set to the truth (the channel, or the
     valve from the onset on), over the nominal error's variance before the onset (a
     likelihood-ratio statistic with the true change's structure, size and onset known; the
-    disturbance model is diagnose's, the file's or the estimated one). A change that a record shows by less than a few units of it
-    cannot be named by any search, whatever its size in the plant."""
+    disturbance model is diagnose's, the file's or the estimated one). A change that a record
+    shows by less than a few units of it cannot be named by any search, whatever its size in
+    the plant."""
     return change_evidence(diagnosis_signals(model, data).sig, change, onset_s)
 
 
@@ -205,7 +206,8 @@ def change_evidence(sig, change: dict, onset_s: float) -> float:
         u = sig.u.copy()   # the valve from the onset on, starting at rest where the input stood
         u[onset:, j] = np.asarray(actuator_positions(op, change["actuator"], float(op[0]))) - level
         valved = dataclasses.replace(sig, u=u)
-        return sum(drop(i, one_step_errors(valved, i, [])) for i in range(len(sig.outputs)) if sig.rows[i][j] is not None)
+        driven = [i for i in range(len(sig.outputs)) if sig.rows[i][j] is not None]
+        return sum(drop(i, one_step_errors(valved, i, [])) for i in driven)
     i = sig.outputs.index(change["output"])
     truth = ModelChange(output=change["output"], input=change["input"], channel=change["channel"],
                         new_input=change["input"] not in sig.inputs)
@@ -356,9 +358,10 @@ def reliability_by_effect(runs: list, high: float = 0.9) -> list:
 
 
 def _evidence_table(title: str, rows: list) -> list[str]:
-    return ["", title, "", "| split | evidence | runs | right | no process finding |", "| --- | --- | --- | --- | --- |"] + [
-        f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {_frac(r['none'], r['n'])} |"
-        for r in rows]
+    head = ["", title, "", "| split | evidence | runs | right | no process finding |",
+            "| --- | --- | --- | --- | --- |"]
+    return head + [f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | "
+                   f"{_frac(r['none'], r['n'])} |" for r in rows]
 
 
 def format_tables(study: dict) -> str:

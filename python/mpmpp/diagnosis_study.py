@@ -357,58 +357,58 @@ def reliability_by_effect(runs: list, high: float = 0.9) -> list:
     return rows
 
 
+def _table(title: str, columns: list[str], cells: list[list]) -> list[str]:
+    """A titled Markdown table, preceded by a blank line."""
+    return (["", title, "", "| " + " | ".join(columns) + " |", "|" + " --- |" * len(columns)]
+            + ["| " + " | ".join(str(c) for c in row) + " |" for row in cells])
+
+
 def _evidence_table(title: str, rows: list) -> list[str]:
-    head = ["", title, "", "| split | evidence | runs | right | no process finding |",
-            "| --- | --- | --- | --- | --- |"]
-    return head + [f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | "
-                   f"{_frac(r['none'], r['n'])} |" for r in rows]
+    return _table(title, ["split", "evidence", "runs", "right", "no process finding"],
+                  [[r["split"], r["bin"], r["n"], _frac(r["right"], r["n"]), _frac(r["none"], r["n"])] for r in rows])
 
 
 def format_tables(study: dict) -> str:
     runs = study["runs"]
-    out = ["Top process finding (change runs: right / runs; controls: runs with a false process finding)", "",
-           "| split | effect | right or false | diagnose refused | what misses and false findings named |",
-           "| --- | --- | --- | --- | --- |"]
+    accuracy = []
     for r in accuracy_rows(runs):
         label = f"control: {r['effect']}" if r["control"] else r["effect"]
         misses = ", ".join(f"{k} {v}" for k, v in sorted(r["misses"].items())) or "-"
-        out.append(f"| {r['split']} | {label} | {_frac(r['k'], r['n'])} | {r['refused']} | {misses} |")
+        accuracy.append([r["split"], label, _frac(r["k"], r["n"]), r["refused"], misses])
     for split in sorted({r["split"] for r in runs}, key=(fam.TUNING, fam.HELD_OUT).index):
         change = [r for r in runs if r["split"] == split and r["effect"] not in fam.CONTROL_EFFECTS]
         control = [r for r in runs if r["split"] == split and r["effect"] in fam.CONTROL_EFFECTS]
-        out.append(f"| {split} | all changes / all controls | {_frac(sum(r['top_right'] for r in change), len(change))}"
-                   f" / {_frac(sum(r['false_process'] for r in control), len(control))} | | |")
+        accuracy.append([split, "all changes / all controls",
+                         f"{_frac(sum(r['top_right'] for r in change), len(change))}"
+                         f" / {_frac(sum(r['false_process'] for r in control), len(control))}", "", ""])
+    out = _table("Top process finding (change runs: right / runs; controls: runs with a false process finding)",
+                 ["split", "effect", "right or false", "diagnose refused", "what misses and false findings named"],
+                 accuracy)[1:]   # the first table opens the text
     out += _evidence_table("Linear changes by the record's evidence for them (the one-step likelihood-ratio gain "
                            "of the true change after its onset, chi-square units)", evidence_rows(runs))
     out += _evidence_table("Actuator nonlinearities by the record's evidence for them (the same statistic with "
                            "the true valve from the onset, summed over the outputs its input drives)",
                            evidence_rows(runs, ("input_nonlinearity",)))
-    out += ["", "Update with the top process finding (over the runs with one: median change of the shown "
-            "held-out errors, one-step and process part, and of the true step-response error of the changed "
-            "channel; 'true error halved' over all runs, a run without a process finding counts as not halved)", "",
-            "| split | effect | runs | updated | one-step error | process part | true error | true error halved "
-            "| one-step fell, true rose |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for r in update_rows(runs):
-        out.append(f"| {r['split']} | {r['effect']} | {r['n']} | {r['updated']} | {r['shown']} | {r['process']} | {r['true']} | "
-                   f"{_frac(r['halved'], r['n'])} | {r['misleading']} |")
-    out += ["", "Confidence reliability (every finding, binned by its reported confidence: the calibrated "
-            "probability, and the chi-square CDF of its held-out gain)", "",
-            "| split | confidence | findings (calibrated) | right | findings (chi-square) | right |",
-            "| --- | --- | --- | --- | --- | --- |"]
-    for r, c in zip(reliability_rows(runs), reliability_rows(runs, "evidence_confidence")):
-        out.append(f"| {r['split']} | {r['bin']} | {r['n']} | {_frac(r['right'], r['n'])} | {c['n']} | "
-                   f"{_frac(c['right'], c['n'])} |")
-    out += ["", "Reliability per reported effect (calibrated confidence)", "",
-            "| split | finding | findings | right | at >= 0.9 | right at >= 0.9 |", "| --- | --- | --- | --- | --- | --- |"]
-    for r in reliability_by_effect(runs):
-        out.append(f"| {r['split']} | {r['effect']} | {r['n']} | {_frac(r['right'], r['n'])} | {r['n_high']} | "
-                   f"{_frac(r['right_high'], r['n_high'])} |")
-    out += ["", "Per family (top process finding right / change runs; control runs with a false process finding; "
-            "findings at >= 0.9 right)", "",
-            "| split | family | right | controls false | right at >= 0.9 |", "| --- | --- | --- | --- | --- |"]
-    for r in family_rows(runs):
-        out.append(f"| {r['split']} | {r['family']} | {_frac(r['right'], r['changes'])} | "
-                   f"{_frac(r['false'], r['controls'])} | {_frac(r['right_high'], r['n_high'])} |")
+    out += _table("Update with the top process finding (over the runs with one: median change of the shown "
+                  "held-out errors, one-step and process part, and of the true step-response error of the changed "
+                  "channel; 'true error halved' over all runs, a run without a process finding counts as not halved)",
+                  ["split", "effect", "runs", "updated", "one-step error", "process part", "true error",
+                   "true error halved", "one-step fell, true rose"],
+                  [[r["split"], r["effect"], r["n"], r["updated"], r["shown"], r["process"], r["true"],
+                    _frac(r["halved"], r["n"]), r["misleading"]] for r in update_rows(runs)])
+    out += _table("Confidence reliability (every finding, binned by its reported confidence: the calibrated "
+                  "probability, and the chi-square CDF of its held-out gain)",
+                  ["split", "confidence", "findings (calibrated)", "right", "findings (chi-square)", "right"],
+                  [[r["split"], r["bin"], r["n"], _frac(r["right"], r["n"]), c["n"], _frac(c["right"], c["n"])]
+                   for r, c in zip(reliability_rows(runs), reliability_rows(runs, "evidence_confidence"))])
+    out += _table("Reliability per reported effect (calibrated confidence)",
+                  ["split", "finding", "findings", "right", "at >= 0.9", "right at >= 0.9"],
+                  [[r["split"], r["effect"], r["n"], _frac(r["right"], r["n"]), r["n_high"],
+                    _frac(r["right_high"], r["n_high"])] for r in reliability_by_effect(runs)])
+    out += _table("Per family (top process finding right / change runs; control runs with a false process finding; "
+                  "findings at >= 0.9 right)", ["split", "family", "right", "controls false", "right at >= 0.9"],
+                  [[r["split"], r["family"], _frac(r["right"], r["changes"]), _frac(r["false"], r["controls"]),
+                    _frac(r["right_high"], r["n_high"])] for r in family_rows(runs)])
     out.append(f"\n{len(runs)} runs, seeds {study['seeds'][0]}-{study['seeds'][-1]}, "
                f"{study['wall_seconds']:.0f} s wall on {study['where']}")
     return "\n".join(out)

@@ -67,8 +67,14 @@ def test_tables_count_what_the_runs_say():
     assert (ev["[100, inf)"]["n"], ev["[100, inf)"]["right"], ev["[0, 10)"]["right"]) == (1, 1, 0)
     assert (held["split"], held["effect"]) == (fam.HELD_OUT, "gain")
     assert (held["n"], held["right"], held["n_high"], held["right_high"]) == (2, 1, 2, 1)
-    assert "| held_out | gain | 1/2 (50%)" in ds.format_tables({"runs": runs, "seeds": [0], "where": "x",
-                                                               "wall_seconds": 0.0})
+    text = ds.format_tables({"runs": runs, "seeds": [0], "where": "x", "wall_seconds": 0.0})
+    assert "| held_out | gain | 1/2 (50%)" in text
+    tables = [[line for line in block.splitlines() if line.startswith("|")] for block in text.split("\n\n")]
+    tables = [t for t in tables if t]
+    assert len(tables) == 7   # accuracy, two evidence tables, update, two reliability tables, families
+    for table in tables:      # every row as many cells as its header, the separator below it
+        assert set(table[1].replace(" ", "")) == {"|", "-"}
+        assert all(row.count("|") == table[0].count("|") for row in table)
 
 
 def test_one_run_end_to_end():

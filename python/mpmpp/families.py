@@ -412,7 +412,8 @@ FAMILIES = [
     # hand-written PI records: two coupled PI loops at the tuning sample times and noise colours
     # (the held-out multi_pi_2x2 keeps 15-30 s, second-order / high-pass noise and disturbances).
     Family("pi_2x2_loops", TUNING, "two PI loops on a 2x2 plant, setpoint steps, saturation, 5-10 s "
-           "sampling, discrete model with noise model or FOPTD without", "pi", 2, _EFFECTS_MIMO + ("none", "noise_change"),
+           "sampling, discrete model with noise model or FOPTD without", "pi", 2,
+           _EFFECTS_MIMO + ("none", "noise_change"),
            time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0), model_forms=("discrete+noise", "foptd"),
            setpoint_steps=True),
     Family("pid_siso_slow", HELD_OUT, "PID (derivative on measurement), 30-60 s sampling, 2-3 day "

@@ -416,6 +416,12 @@ FAMILIES = [
            _EFFECTS_MIMO + ("none", "noise_change"),
            time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0), model_forms=("discrete+noise", "foptd"),
            setpoint_steps=True),
+    # Added the same day for the other gap: historian-length records of a hand-written loop. The
+    # held-out pi_siso_short (1-5 s, exact FOPTD) and pi_siso_handwritten (1-10 s, 10-24 h) stay unseen.
+    Family("pi_siso_brief", TUNING, "single PI loop with setpoint steps, records of 3-6 h, the FOPTD "
+           "model a user writes by hand, without noise model", "pi", 1, _EFFECTS_SISO + ("none", "noise_change"),
+           sample_times_s=(5.0, 10.0), model_forms=("foptd",), record_hours=(3.0, 6.0), setpoint_steps=True,
+           hand_written=True),
     Family("pid_siso_slow", HELD_OUT, "PID (derivative on measurement), 30-60 s sampling, 2-3 day "
            "records, second-order noise, FOPTD or discrete model without noise model", "pid", 1,
            _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(30.0, 60.0),

@@ -46,7 +46,8 @@ def main(argv=None) -> int:
         if args.record_hours is not None and not args.record_hours > 0:
             raise ValueError(f"--record-hours must be > 0, got {args.record_hours}")
         study = run_study(names, seeds, 3600 * args.record_hours if args.record_hours else None,
-                          scheduler=args.scheduler, workers=args.workers, configs=configs)
+                          scheduler=args.scheduler, workers=args.workers, configs=configs,
+                          channel_switch=args.channel_switch)
     except ValueError as exc:
         print(f"detection_families: error: {exc}", file=sys.stderr)
         return 2

@@ -27,8 +27,8 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     names, seeds = study_selection(p, args)
     try:
-        study = run_study(names, seeds,
-                          scheduler=args.scheduler, workers=args.workers)
+        study = run_study(names, seeds, scheduler=args.scheduler, workers=args.workers,
+                          channel_switch=args.channel_switch)
     except ValueError as exc:
         print(f"diagnosis_families: error: {exc}", file=sys.stderr)
         return 2

@@ -40,12 +40,12 @@ from mpmpp.simulate import simulate
 CLASSES = ("detected", "short", "never", "near", "sparse")
 
 
-def window_p_values(name: str, seed: int, configs: dict) -> dict:
+def window_p_values(name: str, seed: int, configs: dict, channel_switch: str = "replay") -> dict:
     """One run: per-window log10 p of every process channel, window times from the record's
     start, and detect's own MPM alarm starts; ``refused`` when detect refuses the data.
     configs: {"siso": config, "mimo": config}, by the family's size."""
     family = fam.family(name)
-    spec, expect = family.draw(seed)
+    spec, expect = family.draw(seed, channel_switch=channel_switch)
     model = nominal_model(spec)
     data = simulate(spec)
     run = {"family": name, "seed": int(seed), "expect": expect}
@@ -128,8 +128,8 @@ def main(argv=None) -> int:
             rules.append((parts[0], parts[1], int(parts[2]) if len(parts) > 2 else None))
         except (ValueError, IndexError):
             p.error(f"--rule {text!r}: expected LEVEL/THRESHOLD[/N_T], e.g. 0.003/0.5/24")
-    runs, _ = run_tasks(window_p_values, [(n, s, configs) for n in names for s in seeds], args.scheduler, args.workers,
-                        True, unit="runs")
+    runs, _ = run_tasks(window_p_values, [(n, s, configs, args.channel_switch) for n in names for s in seeds],
+                        args.scheduler, args.workers, True, unit="runs")
     runs = [r for r in runs if r["refused"] is None]
     for r in runs:  # the NumPy alarm rule must be detect's own at the preset's values
         mine = rule_alarms(r, r["significance"], r["alarm_count"] / r["n_T"], r["n_T"])

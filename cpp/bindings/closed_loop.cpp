@@ -46,6 +46,9 @@ void bind_closed_loop(py::module_& m) {
       .def_readwrite("output", &Event::output)
       .def_readwrite("input", &Event::input)
       .def_readwrite("model", &Event::model)
+      .def_readwrite("fresh", &Event::fresh,
+                     "process events: the new channel from rest, the old one's response fading "
+                     "(default: the new channel replayed over the input history)")
       .def_readwrite("value", &Event::value)
       .def_readwrite("rate", &Event::rate)
       .def_readwrite("actuator", &Event::actuator);

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
+#include <utility>
 
 #include "mpmpp/detail/incremental_filter.hpp"
 #include "mpmpp/error.hpp"
@@ -100,9 +102,16 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
     throw InputError("operating outputs (CV targets) must have one value per output");
   if (!u0.allFinite() || !y0.allFinite()) throw InputError("operating point must be finite");
 
-  std::vector<Event> events = cfg.events;
-  std::stable_sort(events.begin(), events.end(),
-                   [](const Event& a, const Event& b) { return a.sample < b.sample; });
+  // In sample order, ties in list order; sorted by index (a stable sort moving the Events
+  // themselves trips GCC 12's -Wmaybe-uninitialized on their optional channel).
+  std::vector<size_t> order(cfg.events.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&cfg](size_t a, size_t b) {
+    return cfg.events[a].sample < cfg.events[b].sample;
+  });
+  std::vector<Event> events;
+  events.reserve(order.size());
+  for (size_t k : order) events.push_back(cfg.events[k]);
   for (const Event& ev : events) {
     if (ev.sample < 0 || ev.sample >= n) throw InputError("event sample outside the simulation");
     const bool needs_output = ev.kind != EventKind::Actuator && ev.kind != EventKind::MvTarget;
@@ -170,6 +179,7 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
                                                                 " <- " + plant.extra[k].name);
   }
   std::vector<IncrementalFilter> h0, hx;
+  std::vector<std::pair<int, IncrementalFilter>> fading;  // (output, channel replaced `fresh`)
   for (int i = 0; i < ny; ++i) h0.emplace_back(plant.noise[i]);
   for (int k = 0; k < nx; ++k) hx.emplace_back(plant.extra[k].noise);
   Eigen::VectorXd sigma = plant.sigma, drift = Eigen::VectorXd::Zero(ny),
@@ -206,10 +216,17 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
       switch (ev.kind) {
         case EventKind::Process: {
           const std::string what = "event channel " + model.outputs[i] + " <- " + model.inputs[j];
-          g0[i * nu + j] = ev.model
-                               ? std::optional<IncrementalFilter>(replayed(
-                                     detail::advanced_one_sample(*ev.model, what), ua_dev, j, t))
-                               : std::nullopt;
+          std::optional<IncrementalFilter>& g = g0[i * nu + j];
+          if (ev.fresh) {
+            if (g) fading.emplace_back(i, std::move(*g));
+            g = ev.model ? std::optional<IncrementalFilter>(
+                               IncrementalFilter(detail::advanced_one_sample(*ev.model, what)))
+                         : std::nullopt;
+          } else {
+            g = ev.model ? std::optional<IncrementalFilter>(replayed(
+                               detail::advanced_one_sample(*ev.model, what), ua_dev, j, t))
+                         : std::nullopt;
+          }
           break;
         }
         case EventKind::ExtraProcess: {
@@ -263,6 +280,8 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
       drift[i] += slope[i];
       for (int j = 0; j < nu; ++j)
         if (auto& g = g0[i * nu + j]) yi += g->step(t == 0 ? 0.0 : ua_dev(t - 1, j));
+      for (auto& [output, g] : fading)
+        if (output == i) yi += g.step(0.0);
       for (int k = 0; k < nx; ++k)
         if (auto& g = gx[i * nx + k]) yi += g->step(t == 0 ? 0.0 : x_dev(t - 1, k));
       y[i] = yi;

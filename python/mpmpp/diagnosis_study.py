@@ -131,11 +131,12 @@ def _finding_record(f, effect: str, change: dict | None, drifting: set = frozens
     return d
 
 
-def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None = None) -> dict:
+def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None = None,
+                       channel_switch: str = "replay") -> dict:
     """One draw of family ``name`` with ``effect`` forced: diagnose, update with the top
     process finding, and score both against the truth."""
     family = fam.family(name)
-    spec, expect = family.draw(seed, record_s, effect)
+    spec, expect = family.draw(seed, record_s, effect, channel_switch)
     change = true_change(spec, expect)
     model = nominal_model(spec)
     t0 = time.perf_counter()
@@ -231,10 +232,10 @@ def update_quality(model, data, top, change: dict) -> dict:
 
 
 def run_study(names=None, seeds=range(4), record_s=None, scheduler=None, workers=None,
-              progress: bool = True) -> dict:
+              progress: bool = True, channel_switch: str = "replay") -> dict:
     """Every (family, effect, seed) run in parallel (``parallel.run_tasks``)."""
     names = [f.name for f in fam.FAMILIES] if names is None else list(names)
-    tasks = [(n, s, e, record_s) for n in names for e in fam.family(n).effects for s in seeds]
+    tasks = [(n, s, e, record_s, channel_switch) for n in names for e in fam.family(n).effects for s in seeds]
     started = time.perf_counter()
     runs, where = run_tasks(run_diagnosis_seed, tasks, scheduler, workers, progress, unit="runs")
     runs.sort(key=lambda r: (names.index(r["family"]), r["effect"], r["seed"]))

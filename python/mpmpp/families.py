@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .scenario import parse_transfer_function
+from .scenario import CHANNEL_EVENTS, CHANNEL_SWITCHES, parse_transfer_function
 
 HOUR = 3600.0
 TUNING, HELD_OUT = "tuning", "held_out"
@@ -56,17 +56,26 @@ class Family:
     hand_written: bool = False
     details: dict = field(default_factory=dict)
 
-    def draw(self, seed: int, record_s: float | None = None, effect: str | None = None) -> tuple[dict, dict]:
+    def draw(self, seed: int, record_s: float | None = None, effect: str | None = None,
+             channel_switch: str = "replay") -> tuple[dict, dict]:
         """(scenario document, expectation) for `seed`; the scenario's noise seed derives from
         it too. record_s shortens the record (and moves the onset into it) for quick checks;
-        effect forces one of the family's effects instead of drawing it.
+        effect forces one of the family's effects instead of drawing it; channel_switch is how
+        a changed channel takes over (docs/scenario.md: "replay", or "fresh" as a simulator that
+        swaps the channel's filter), the same draw otherwise.
         Expectation: kind "mpm" (an MPM alarm on one of `channels` at or after `onset_s` is a
         detection), "none" (a control: any MPM alarm is false) or "any" (an unmodelled input:
         an MPM or noise alarm on `output` counts); `effect` and `size` name what changed."""
         if effect is not None and effect not in self.effects:
             raise ValueError(f"effect: {effect!r} is not an effect of family {self.name} ({', '.join(self.effects)})")
+        if channel_switch not in CHANNEL_SWITCHES:
+            raise ValueError(f"channel switch: {channel_switch!r} is not one of {', '.join(CHANNEL_SWITCHES)}")
         rng = np.random.default_rng([zlib.crc32(self.name.encode()), int(seed)])
-        return _draw(self, rng, int(seed), record_s, effect)
+        spec, expect = _draw(self, rng, int(seed), record_s, effect)
+        if channel_switch != "replay":
+            spec["events"] = [{**ev, "switch": channel_switch} if ev["type"] in CHANNEL_EVENTS else ev
+                              for ev in spec["events"]]
+        return spec, expect
 
     def scenario(self, seed: int, record_s: float | None = None) -> dict:
         return self.draw(seed, record_s)[0]
@@ -469,11 +478,15 @@ def family(name: str) -> Family:
 
 
 def add_study_arguments(parser, runs_per: str, first_seed: int) -> None:
-    """The options every family study takes: which seeds, which families, where to run."""
+    """The options every family study takes: which seeds, which families, how a changed
+    channel takes over in the simulator, where to run."""
     parser.add_argument("--seeds", type=int, default=4, help=f"runs per {runs_per} (default 4)")
     parser.add_argument("--first-seed", type=int, default=first_seed,
                         help=f"seeds S..S+N-1 (default {first_seed})")
     parser.add_argument("--families", help="comma-separated family names (default: all)")
+    parser.add_argument("--channel-switch", choices=CHANNEL_SWITCHES, default="replay",
+                        help="a changed channel replayed over the input history (default) or started "
+                             "fresh from its onset, the old one fading (docs/scenario.md)")
     parser.add_argument("--workers", type=int, help="local processes (default: all cores)")
     parser.add_argument("--scheduler", help="Dask scheduler address instead of local processes")
     parser.add_argument("--json", metavar="OUT.json", help="also write every run as JSON")

@@ -32,10 +32,10 @@ MV_KEYS = {"target", "target_weight", "move_weight", "deviation_weight", "minmax
            "min", "max", "max_move", "soft_min", "soft_max", "scale"}
 # event type -> (required keys, optional keys), besides "time_s" and "type"
 EVENT_KEYS = {
-    "process": ({"output", "input", "model"}, set()),
-    "gain": ({"output", "input", "factor"}, set()),
-    "time_constant": ({"output", "input", "factor"}, set()),
-    "delay": ({"output", "input", "delay"}, set()),
+    "process": ({"output", "input", "model"}, {"switch"}),
+    "gain": ({"output", "input", "factor"}, {"switch"}),
+    "time_constant": ({"output", "input", "factor"}, {"switch"}),
+    "delay": ({"output", "input", "delay"}, {"switch"}),
     "noise": ({"output", "model"}, set()),
     "sigma": ({"output", "value"}, set()),
     "drift": ({"output"}, {"offset", "rate_per_s"}),
@@ -45,6 +45,11 @@ EVENT_KEYS = {
     "extra_channel": ({"output", "extra", "model"}, set()),
 }
 INF = math.inf
+# How a channel event switches the truth (cpp/include/mpmpp/closed_loop.hpp): "replay" the new
+# channel as if it had always been there (no transient), or "fresh" from rest on the inputs from
+# the event on while the old channel's response to the earlier inputs fades out.
+CHANNEL_SWITCHES = ("replay", "fresh")
+CHANNEL_EVENTS = ("process", "gain", "time_constant", "delay")   # the event types that take "switch"
 
 
 def _fail(where: str, msg: str):
@@ -358,7 +363,7 @@ def _events(items, sc: Scenario) -> list:
         i = _name(ev["output"], f"{w}.output", outs, "output") if "output" in ev else -1
         j = _name(ev["input"], f"{w}.input", ins, "input") if "input" in ev else -1
         e.output, e.input = i, j
-        if kind in ("process", "gain", "time_constant", "delay"):
+        if kind in CHANNEL_EVENTS:
             e.kind = _core.EventKind.process
             current = truth[i][j]
             if kind == "process":
@@ -374,6 +379,10 @@ def _events(items, sc: Scenario) -> list:
                 new = _core.TransferFunction(current.num, current.den, _int(ev.get("delay"), f"{w}.delay"))
             truth[i][j] = new
             e.model = new
+            switch = ev.get("switch", "replay")
+            if switch not in CHANNEL_SWITCHES:
+                _fail(f"{w}.switch", f"must be one of {', '.join(CHANNEL_SWITCHES)}, not {switch!r}")
+            e.fresh = switch == "fresh"
         elif kind == "noise":
             e.kind = _core.EventKind.noise
             e.model = parse_transfer_function(ev["model"], f"{w}.model", ts)

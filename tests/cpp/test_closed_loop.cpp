@@ -85,6 +85,34 @@ TEST(ClosedLoop, GainEventReplaysTheNewChannelOverTheInputHistory) {
   EXPECT_NEAR(r.y(1499, 0), 23.75, 1e-3);  // offset-free after the change
 }
 
+// `fresh`: the new channel from rest on the inputs from the event on, the old one's response
+// to the earlier inputs fading out (a simulator that swaps the channel's filter).
+TEST(ClosedLoop, FreshGainEventStartsTheNewChannelFromRest) {
+  auto c = siso(1500, 0.0);
+  c.y_operating = vec({24.0});
+  const TransferFunction doubled(vec({0.2006}), vec({1.0, -0.9048}), 17);
+  mpmpp::Event ev;
+  ev.sample = 600;
+  ev.kind = mpmpp::EventKind::Process;
+  ev.output = ev.input = 0;
+  ev.model = doubled;
+  ev.fresh = true;
+  c.events = {ev};
+  const auto r = mpmpp::simulate_closed_loop(c);
+  const Vec du = r.u_actual.col(0).array() - 131.0;
+  Vec early = du, late = du;  // inputs up to sample 598 / from 599 on (the one-sample advance)
+  early.tail(du.size() - 599).setZero();
+  late.head(599).setZero();
+  const Vec before = c.plant.process[0][0]->filter(du),
+            after = c.plant.process[0][0]->filter(early) + doubled.filter(late);
+  for (int t = 0; t < 1500; ++t)
+    EXPECT_NEAR(r.y(t, 0), 24.0 + (t < 600 ? before[t] : after[t]), 1e-10) << t;
+  // The two conventions differ by the channel change's response to the earlier inputs.
+  c.events[0].fresh = false;
+  const auto replay = mpmpp::simulate_closed_loop(c);
+  EXPECT_GT((replay.y.col(0) - r.y.col(0)).cwiseAbs().maxCoeff(), 1e-3);
+}
+
 TEST(ClosedLoop, EveryEventKindTakesEffectAtItsSample) {
   auto c = siso(600, 0.05);
   mpmpp::ExtraVariable x;

@@ -83,6 +83,15 @@ def test_one_run_end_to_end():
     assert r["update"]["shown_after"] < r["update"]["shown_before"]
 
 
+@pytest.mark.parametrize("name, seed, effect", [("pi_siso", 2, "gain"), ("mpc_2x2", 1, "missing_coupling")])
+def test_a_channel_started_fresh_is_named_and_its_update_halves_the_error(name, seed, effect):
+    """Another simulator's convention: the changed channel starts from rest at its onset and
+    the old one's response fades (docs/scenario.md), not the replay diagnose's candidates
+    mirror. The change is still named and sized (tuning draws; docs/diagnose.md "Channel switch")."""
+    r = ds.run_diagnosis_seed(name, seed, effect, channel_switch="fresh")
+    assert r["top_right"] and r["update"]["true_after"] < 0.5 * r["update"]["true_before"]
+
+
 def test_true_evidence_is_the_one_step_likelihood_ratio_of_the_true_change():
     """Against the same statistic from a plain NumPy one-step error: y - G u filtered by H^-1,
     with the model's own channels and noise model (this draw has one: H = 1 / (1 - 0.6 q^-1))."""

@@ -124,6 +124,24 @@ def test_forced_effect():
         fam.draw(5, effect="output_drift")
 
 
+def test_channel_switch_changes_only_the_record_after_the_onset():
+    """The same draw with the changed channel started fresh: every event but the switch is the
+    same, the record before the onset is identical and after it differs (the old channel's
+    response to the earlier inputs fades instead of the new one replaying them)."""
+    fam = families.family("mpc_2x2")
+    spec, expect = fam.draw(3, None, "missing_coupling")
+    fresh, expect_fresh = fam.draw(3, None, "missing_coupling", "fresh")
+    assert expect_fresh == expect
+    assert [{k: v for k, v in ev.items() if k != "switch"} for ev in fresh["events"]] == spec["events"]
+    assert [ev.get("switch") for ev in fresh["events"] if ev["type"] == "process"] == ["fresh"]
+    a, b = mpmpp.simulate(spec), mpmpp.simulate(fresh)
+    k = int(round(expect["onset_s"] / spec["sample_time_s"]))
+    assert np.array_equal(a.iloc[:k].to_numpy(), b.iloc[:k].to_numpy())
+    assert np.abs(a["y1"].to_numpy()[k:] - b["y1"].to_numpy()[k:]).max() > 0.1
+    with pytest.raises(ValueError, match="channel switch: 'swap' is not one of replay, fresh"):
+        fam.draw(3, channel_switch="swap")
+
+
 def test_cli_simulate_family_writes_data_and_a_model_file(tmp_path, capsys):
     from mpmpp.cli import main
     from mpmpp.io import load_data, load_model

@@ -67,6 +67,7 @@ def mutate(path, value):
     (["events", 0, "type"], "quake", "events[0].type: unknown event type 'quake'"),
     (["events", 1, "input"], "steam", "events[1].input: unknown input 'steam'"),
     (["events", 1, "factor"], KeyError, "events[1].factor: is required"),
+    (["events", 1, "switch"], "swap", "events[1].switch: must be one of replay, fresh, not 'swap'"),
     (["events", 0, "model"], {"num": [1], "den": [0]}, "events[0].model: den[0] must be non-zero"),
     (["process", "dry_weight", "stock_flow", "delay"], -1, "process.dry_weight.stock_flow.delay"),
     (["truth", "actuators"], {"stock_flow": {"deadband": -1}}, "truth.actuators.stock_flow.deadband: must be >= 0"),

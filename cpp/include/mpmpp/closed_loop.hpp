@@ -13,7 +13,11 @@
 // y(t) is formed). A replaced channel or noise model acts as if it had always been in place
 // on the recorded input (or innovation) history, in deviation units around the operating
 // point: it is replayed over that history once, so the change shows without an artificial
-// transient from a filter-state mismatch.
+// transient from a filter-state mismatch. A process event with `fresh` switches the other
+// way, as a simulator that swaps a channel's filter does: the new channel starts from rest on
+// the inputs from the event on, and the old one's response to the earlier inputs fades out
+// (its filter fed zeros), so y_ij = G_old (u 1[s < k - 1]) + G_new (u 1[s >= k - 1]) with the
+// one-sample advance below.
 #include <Eigen/Dense>
 #include <cstdint>
 #include <limits>
@@ -73,6 +77,7 @@ struct Event {
   double value = 0.0;
   double rate = 0.0;
   ActuatorNonlinearity actuator;
+  bool fresh = false;  // Process: the new channel from rest, the old one fading (see above)
 };
 
 struct ClosedLoopConfig {

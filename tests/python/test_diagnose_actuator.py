@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from mpmpp import families
-from mpmpp.diagnose import diagnose
+from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
+from mpmpp.diagnose.process import DEAD_CHANNEL
 from mpmpp.diagnose.refitted_noise import RefittedNoise
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
@@ -84,7 +85,7 @@ def _case(family, seed):
     ("mpc_siso", 3, "stick_slip", "S", "stiction_s"),      # two-parameter stick-slip
     ("mpc_siso", 13, "saturation", None, None),           # MV limited to a band around its target
     # bands the MV leaves for good: the valve pinned at a limit fits about as well as a gain of
-    # 0.06x (2x2) or 0.14x (SISO), and a channel switched off is the actuator's doing (pipeline.DEAD_CHANNEL)
+    # 0.06x (2x2) or 0.14x (SISO), and a channel switched off is the actuator's doing (process.DEAD_CHANNEL)
     ("mpc_2x2", 3, "saturation", None, None),
     ("mpc_siso", 5, "saturation", None, None),
 ])
@@ -106,6 +107,23 @@ def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, 
         assert top.estimate["lower"] < actuator["max"] and top.estimate["upper"] > actuator["min"]
     control = diagnose(model, simulate(linear))
     assert not any(f.effect == "input_nonlinearity" for f in control.findings)
+
+
+def test_a_channel_all_but_switched_off_says_a_valve_does_that_too():
+    """A valve pinned in a band far narrower than the MV's moves (mpc_2x2_clip seed 19: u2
+    limited to +-0.2 around 47.4, the MPC winding up to 133) fits as well as a gain near 0 of
+    its channel, and the actuator candidates lose to it; the gain finding then says that a
+    stuck or pinned valve reads the same (process.DEAD_CHANNEL)."""
+    spec, _, actuator = _case("mpc_2x2_clip", 19)
+    res = diagnose(nominal_model(spec), simulate(spec))
+    top = next(f for f in res.findings if f.effect in PROCESS_EFFECTS)
+    assert (top.effect, top.input) == ("gain", actuator["input"])
+    assert abs(top.estimate["gain_ratio"]) < DEAD_CHANNEL
+    assert "has all but stopped acting on" in top.explanation and "valve stuck or pinned" in top.explanation
+    gain, _ = families.family("mpc_2x2_clip").draw(19, effect="gain")   # the same loop, a gain x 0.5-2
+    ordinary = diagnose(nominal_model(gain), simulate(gain))
+    assert any(f.effect == "gain" for f in ordinary.findings)
+    assert not any("stopped acting" in f.explanation for f in ordinary.findings)
 
 
 def test_search_beyond_the_cost_budget_is_skipped_with_a_note_unless_asked(monkeypatch):

@@ -16,7 +16,7 @@ from .confidence import calibrated_confidence
 from .errors import one_step_errors
 from .loops import single_loops
 from .noise import noise_finding
-from .process import SCALED_CHANNEL_EFFECTS, process_findings
+from .process import DEAD_CHANNEL, SCALED_CHANNEL_EFFECTS, process_findings
 from .process_error import held_out_rms, process_parts
 from .reference_refit import refitted_before
 from .refitted_noise import RefittedNoise
@@ -412,11 +412,6 @@ def _from_first_row(f: Finding, sig: Signals, first_onset: int) -> bool:
     """Whether ``f`` is a linear channel change present from the first row diagnosed (the
     record's start, or ``train_end_s``): a model error rather than a change within the record."""
     return f.effect in LINEAR_CHANNEL_EFFECTS and sig.seconds_to_index(f.onset_s) == first_onset
-
-
-# A gain finding whose new gain is below this fraction of the model's says the input has all but
-# stopped acting on the output.
-DEAD_CHANNEL = 0.25
 
 
 def _switches_the_input_off(rivals: list[Finding], nl: Finding) -> bool:

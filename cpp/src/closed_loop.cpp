@@ -132,6 +132,8 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
     if (!std::isfinite(ev.value) || !std::isfinite(ev.rate))
       throw InputError("event values must be finite");
     if (ev.kind == EventKind::Actuator) check_actuator(ev.actuator, "event actuator");
+    if (ev.fresh && ev.kind != EventKind::Process)
+      throw InputError("event fresh: only a process (channel) event switches fresh");
   }
 
   if (!(plant.outlier_probability >= 0.0 && plant.outlier_probability <= 1.0))

@@ -181,6 +181,12 @@ TEST(ClosedLoop, BadInputThrowsInputError) {
   c = siso(100, 0.05);
   c.plant.noise = {TransferFunction(vec({1.0}), vec({1.0, -1.5}), 0)};
   EXPECT_THROW(mpmpp::simulate_closed_loop(c), mpmpp::InputError);
+  c = siso(100, 0.05);
+  ev.sample = 50;
+  ev.value = 0.1;
+  ev.fresh = true;  // a switch only a channel event has
+  c.events = {ev};
+  EXPECT_THROW(mpmpp::simulate_closed_loop(c), mpmpp::InputError);
 }
 
 }  // namespace

@@ -225,8 +225,8 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
                                IncrementalFilter(detail::advanced_one_sample(*ev.model, what)))
                          : std::nullopt;
           } else {
-            g = ev.model ? std::optional<IncrementalFilter>(replayed(
-                               detail::advanced_one_sample(*ev.model, what), ua_dev, j, t))
+            g = ev.model ? std::optional<IncrementalFilter>(
+                               replayed(detail::advanced_one_sample(*ev.model, what), ua_dev, j, t))
                          : std::nullopt;
           }
           break;

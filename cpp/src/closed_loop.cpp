@@ -219,16 +219,13 @@ SimulationResult simulate_closed_loop(const ClosedLoopConfig& cfg) {
         case EventKind::Process: {
           const std::string what = "event channel " + model.outputs[i] + " <- " + model.inputs[j];
           std::optional<IncrementalFilter>& g = g0[i * nu + j];
-          if (ev.fresh) {
-            if (g) fading.emplace_back(i, std::move(*g));
-            g = ev.model ? std::optional<IncrementalFilter>(
-                               IncrementalFilter(detail::advanced_one_sample(*ev.model, what)))
-                         : std::nullopt;
-          } else {
-            g = ev.model ? std::optional<IncrementalFilter>(
-                               replayed(detail::advanced_one_sample(*ev.model, what), ua_dev, j, t))
-                         : std::nullopt;
+          if (ev.fresh && g) fading.emplace_back(i, std::move(*g));
+          if (!ev.model) {
+            g.reset();
+            break;
           }
+          const TransferFunction advanced = detail::advanced_one_sample(*ev.model, what);
+          g = ev.fresh ? IncrementalFilter(advanced) : replayed(advanced, ua_dev, j, t);
           break;
         }
         case EventKind::ExtraProcess: {

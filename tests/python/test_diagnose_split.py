@@ -1,7 +1,8 @@
 """A process change the disturbance split has absorbed (diagnose/pipeline.py, noise.py): the AR
 split of the one-step error finds where the error changed and gives each side its own
 correction, which also absorbs what a process change made predictable. When the inputs explain
-the change, the process candidates are scored again with the disturbance unchanged."""
+the change, or when the verdict is a noise change that the candidates outscore, the process
+candidates scored again with the disturbance unchanged replace it."""
 import importlib
 
 import pytest

@@ -292,8 +292,8 @@ def _changes_the_split_absorbed(out, verdict, *search) -> list[Finding]:
     takes the dead time in. Tuning families, seeds 0-19, the 177 runs with a dated
     ``noise_change`` (160 controls): dead-time changes named 3 -> 6 of 17 change runs, controls
     with a process finding 0 -> 0; the controls' best candidates reach at most 0.71 of the noise
-    change's score, the changes gained 2.1-6.7 times it. Scored again for every ``noise_change``
-    whatever the scores (tried on 2026-11-29), 35 of the 160 controls got a process finding."""
+    change's score, the changes gained 2.1-6.7 times it. Taking the candidates whatever the scores
+    (as tried on 2026-11-29), 35 of the 160 controls got a process finding."""
     if not out.split_significant:
         return []
     absorbed = verdict.finding is not None and verdict.finding.effect == "noise_change"

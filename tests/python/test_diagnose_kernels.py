@@ -11,6 +11,7 @@ import mpmpp
 from mpmpp import TransferFunction, _core
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.plots import rolling_rms
+from mpmpp.diagnose import process
 from mpmpp.diagnose.process import DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
 from mpmpp.diagnose.refine import neighbours, refine
 from mpmpp.diagnose.trend import trend_fit
@@ -215,6 +216,27 @@ def test_delayed_responses_match_direct_whitening(with_channel):
     for s in shapes:
         direct = nuisance.project(out.whiten(out.channel_response(s.shape, np.nan_to_num(s.drive))))
         np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)
+
+
+def test_coarse_drift_search_finds_the_exhaustive_searchs_drift(monkeypatch):
+    # 50 h at 5 s: 98 drift onsets per form, fitted every 3rd and then around the leaders;
+    # a ramp from 29 h on, between two onsets of the grid
+    data = loop.simulate(n=36000, seed=3, onset=21000, drift_rate=2e-5)
+    sig = diagnosis_signals(loop.model(), data).sig
+    out = output_residual(sig, 0, 720, 0, 720)
+    nuisance = disturbance_nuisance(out, [])
+    responses = ShapeResponses(out, nuisance)
+    logn = math.log(len(sig.time_s))
+    search = process._Search(out, process_shapes(sig, 0), 0, 720, 12, logn, {}, 0.0)
+    scan = search.scan(nuisance.project(out.r), responses)
+    coarse = search._drift_fits(scan, responses)
+    monkeypatch.setattr(process, "DRIFT_ONSETS_EXHAUSTIVE", 10**6)
+    every = search._drift_fits(scan, responses)
+    assert len(every) == 2 * 98 and len(coarse) < len(every) / 2
+    (found,), (best,) = process._best_per_channel(coarse, logn), process._best_per_channel(every, logn)
+    assert (found.shape.label, found.shape.drift_form) == (best.shape.label, best.shape.drift_form)
+    assert found.onset == best.onset and found.heldout == best.heldout
+    assert best.shape.drift_form == "ramp" and abs(best.shape.label - 21000) <= 360
 
 
 def test_rolling_rms_matches_a_plain_window():

@@ -19,6 +19,7 @@ controller's reaction to the noise correlated with the whitened error.
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import math
@@ -46,6 +47,9 @@ COUPLING_POLES = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98)
 COUPLING_DELAYS = range(1, 41)
 DRIFT_GRID_S = 1800.0
 DRIFT_COLUMN = "(drift)"
+# Drift onsets per form fitted one by one; a longer record's (a day holds 46 per form) are
+# searched coarse to fine (_Search._drift_fits), so the drifts cost O(N), not O(N^2).
+DRIFT_ONSETS_EXHAUSTIVE = 48
 MAX_FINDINGS_PER_OUTPUT = 3
 DELAY_GRID_EFFECTS = ("delay", "missing_coupling", "unmodeled_input")
 # A gain finding whose new gain is below this fraction of the model's says the input has all but
@@ -122,6 +126,9 @@ class DelayFamily:
 
     response: np.ndarray = field(repr=False)   # channel response per data segment
     whitened: np.ndarray = field(repr=False)   # and whitened per piece
+    # piece -> the response from its segment's start whitened with that piece's filter (for a
+    # piece that starts inside a segment; ShapeResponses._inside_segment)
+    from_segment_start: dict = field(repr=False, default_factory=dict)
 
 
 @dataclass
@@ -146,6 +153,13 @@ class ShapeResponses:
         self._drift_base: dict = {}
         self._delay_families: dict = {}
         self._segment_starts = {a for a, _ in out.sig.segments}
+
+    def beside(self, nuisance: Nuisance) -> ShapeResponses:
+        """The same responses fitted beside other disturbances: what is not projected is shared
+        (``_Search.disturbances`` fits the first round beside up to three sets)."""
+        other = copy.copy(self)
+        other.nuisance, other.project, other._nominal = nuisance, nuisance.project, {}
+        return other
 
     def whitened(self, shape: Shape) -> WhitenedShape:
         """The shape's whitened response and its nominal channel's, both projected."""
@@ -177,7 +191,7 @@ class ShapeResponses:
         """Whitened response of a delayed channel. In a piece that starts a data segment, the
         channel and the whitening filter start at rest and see zeros for the first ``delay``
         samples, so the response is the undelayed one, delayed; a piece that starts inside a
-        segment (after a noise split) inherits the channel's history and is filtered directly."""
+        segment (after a noise split) inherits the channel's history (``_inside_segment``)."""
         out, g = self.out, shape.shape
         key = (id(shape.drive), tuple(g.num), tuple(g.den))
         if key not in self._delay_families:
@@ -190,11 +204,31 @@ class ShapeResponses:
                 if d < b - a:
                     psi[a + d:b] = family.whitened[a:b - d]
             else:
-                start = max(a, self._segment_start(a) + d)
-                x = np.zeros(b - a)
-                x[start - a:] = family.response[start - d:b - d]
-                psi[a:b] = out.whiten_piece(p, x)
+                psi[a:b] = self._inside_segment(family, p, d)
         return psi
+
+    def _inside_segment(self, family: DelayFamily, p: int, d: int) -> np.ndarray:
+        """The delayed channel's whitened response on piece p, which starts inside a data
+        segment: the piece's filter starts at rest at the piece while the channel has run since
+        the segment's start. Once the filter has forgotten its start (``forgetting_rows``) this
+        is the response whitened from the segment's start (once per family and piece), delayed;
+        only the rows before are filtered here. Filtering every delay's piece directly cost a
+        third of diagnose on a week of 3x3 data after a noise split (1,920 coupling shapes)."""
+        out = self.out
+        a, b = out.pieces[p]
+        s0 = self._segment_start(a)
+        if p not in family.from_segment_start:
+            family.from_segment_start[p] = out.whiten_piece(p, family.response[s0:b])
+        restarted = family.from_segment_start[p]
+        start = max(a, s0 + d)
+        piece = np.zeros(b - a)
+        if start > a:   # the channel's input reaches it after the piece starts: no history
+            piece[start - a:] = restarted[:b - start]
+            return piece
+        head = a + out.forgetting_rows(p)
+        piece[:head - a] = out.whiten_piece(p, family.response[a - d:head - d])
+        piece[head - a:] = restarted[head - d - s0:b - d - s0]
+        return piece
 
     def _segment_start(self, t: int) -> int:
         return max(a for a in self._segment_starts if a <= t)
@@ -458,11 +492,14 @@ class _Search:
     actions: dict
     min_effect: float
     taken: set = field(default_factory=set)
+    unprojected: ShapeResponses | None = None   # the responses every disturbance set shares
 
     def best(self, r: np.ndarray, responses: ShapeResponses) -> Fit | None:
         """The preferred fit of a round on residual r (None when every candidate is refused)."""
         scan = self.scan(r, responses)
-        fits = [_fit_shape(scan, s, responses) for s in self.shapes if s.column not in self.taken]
+        fits = [_fit_shape(scan, s, responses) for s in self.shapes if s.column not in self.taken and s.kind != "drift"]
+        if DRIFT_COLUMN not in self.taken:
+            fits += self._drift_fits(scan, responses)
         fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]
         fits = [f for f in _best_per_channel(fits, self.logn) if f.score > 0.0]
         fits = [f for f in fits if _present_in_both_halves(self.out, r, f, responses)]
@@ -472,6 +509,39 @@ class _Search:
         # time 3 -> 6 samples behind it, 235 chi-square units of evidence, was never named).
         fits = [f for f in fits if _material(self.out, f, self.min_effect, self.first_onset)]
         return _preferred(fits) if fits else None
+
+    def _drift_fits(self, scan: _core.ProjectedOnsetScan, responses: ShapeResponses) -> list[Fit]:
+        """The drift shapes' fits. Up to DRIFT_ONSETS_EXHAUSTIVE onsets per form every onset is
+        fitted; beyond, every c-th (at most that many per form), then every onset within c of
+        the coarse fits that lead on all data and on each fold (the three choices
+        ``_best_per_channel`` makes). A ramp's or step's statistic moves smoothly with its
+        onset at this 30 min grid; each drift's scan costs O(N), and a week at 5 s holds 334
+        onsets per form, so an exhaustive search cost O(N^2) (the 7-day 3x3 bench: 5,344 drift
+        fits, a third of diagnose's time)."""
+        drifts = [s for s in self.shapes if s.kind == "drift"]
+        forms: dict = {}
+        for s in drifts:
+            forms.setdefault(s.drift_form, []).append(s)
+        c = max((math.ceil(len(f) / DRIFT_ONSETS_EXHAUSTIVE) for f in forms.values()), default=1)
+        fitted: dict = {}
+
+        def fit(shape: Shape) -> None:
+            if id(shape) not in fitted:
+                fitted[id(shape)] = _fit_shape(scan, shape, responses)
+
+        for shapes in forms.values():
+            for shape in shapes[::c]:
+                fit(shape)
+        if c > 1:
+            coarse = list(fitted.values())
+            leaders = [max(coarse, key=lambda f: f.statistic)]
+            leaders += [max(coarse, key=lambda f, k=k: f.folds[k].statistic) for k in (0, 1)]
+            for leader in leaders:
+                shapes = forms[leader.shape.drift_form]
+                i = next(j for j, s in enumerate(shapes) if s is leader.shape)
+                for shape in shapes[max(i - c + 1, 0):i + c]:
+                    fit(shape)
+        return [fitted[id(s)] for s in drifts if id(s) in fitted]
 
     def scan(self, r: np.ndarray, responses: ShapeResponses) -> _core.ProjectedOnsetScan:
         """The onset scans of this output's candidates on residual r, beside the responses'
@@ -508,7 +578,9 @@ class _Search:
 
     def _first_round(self, onsets: list[int]) -> FirstRound:
         nuisance = disturbance_nuisance(self.out, onsets)
-        responses = ShapeResponses(self.out, nuisance)
+        if self.unprojected is None:
+            self.unprojected = ShapeResponses(self.out, nuisance)
+        responses = self.unprojected.beside(nuisance)
         return FirstRound(nuisance, responses, self.best(nuisance.project(self.out.r), responses))
 
     def _cost(self, first: FirstRound) -> float:

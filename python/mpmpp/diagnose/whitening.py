@@ -87,6 +87,21 @@ class OutputResidual:
         """A_p H^-1 x / sigma_p for x on piece p (filters start at rest)."""
         return TransferFunction(self.ar[p], [1.0], 0).filter(self.noise.inverse().filter(x)) / self.sigma[p]
 
+    def forgetting_rows(self, p: int) -> int:
+        """Rows after which piece p's whitening filter, started at rest, gives what it gives
+        started earlier on the same input, to below 1e-21 of the earlier start's state (its
+        free response, the powers of H^-1's largest pole, has decayed): the FIR parts' length,
+        plus 50 time constants of that pole. A pole within 1e-3 of the unit circle never
+        forgets within a record (the piece's length)."""
+        inverse = self.noise.inverse()
+        a, b = self.pieces[p]
+        fir = len(inverse.num) + len(self.ar[p]) + inverse.delay
+        poles = np.abs(inverse.poles())
+        rho = float(poles.max()) if len(poles) else 0.0
+        if rho >= 1.0 - 1e-3:
+            return b - a
+        return min(b - a, fir + (math.ceil(50.0 / -math.log(rho)) if rho > 0.0 else 0))
+
     def channel_response(self, g: TransferFunction, x: np.ndarray) -> np.ndarray:
         """g x per data segment (zero outside)."""
         return np.nan_to_num(per_segment(self.sig, g.filter, x))

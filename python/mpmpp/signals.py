@@ -158,6 +158,21 @@ def bridged_reach(sig: Signals, i: int, inverse_noise, lags: int) -> np.ndarray:
     return reach
 
 
+def frozen(x: np.ndarray) -> bool:
+    """Whether a column holds one value wherever it is known: a tag the historian stopped
+    updating, or a transmitter or valve stuck for the whole record. Nothing about a channel
+    through it can be learnt from the record."""
+    known = np.asarray(x, dtype=float)
+    known = known[np.isfinite(known)]
+    return len(known) > 0 and bool(np.all(known == known[0]))
+
+
+def frozen_inputs(sig: Signals, i: int | None = None) -> list[str]:
+    """The model inputs (of output i's channels, or all) that are ``frozen`` in the record."""
+    return [name for j, name in enumerate(sig.inputs)
+            if (i is None or sig.rows[i][j] is not None) and frozen(sig.u[:, j])]
+
+
 def complete_runs(valid: np.ndarray, starts=()) -> list[tuple[int, int]]:
     """The stretches [a, b) of rows where ``valid`` holds, each also cut before every row of
     ``starts`` (rows that follow a time gap)."""

@@ -10,6 +10,7 @@ import json
 
 import numpy as np
 
+from ..signals import frozen
 from ._pair import add_data_arguments, load_data_for, repair_lines
 
 
@@ -75,6 +76,7 @@ def _data_summary(path: str, df, model) -> dict:
         "setpoints": setpoints,
         "candidates": [c for c in others if c not in setpoints],
         "rows_with_missing": int(np.isnan(df.drop(columns="time").to_numpy()).any(axis=1).sum()),
+        "frozen": {c: float(df[c].dropna().iloc[0]) for c in [*model.inputs, *model.outputs] if frozen(df[c])},
         "interpolated": _interpolated(df, model),
     }
 
@@ -117,6 +119,10 @@ def _print_summary(report: dict, detail: bool) -> None:
           + (f", {d['segments']} segments" if d["segments"] > 1 else ""))
     for line in repair_lines(d["repairs"], shown_gaps=10):
         print(f"  repaired: {line}")
+    if d["frozen"]:
+        listed = ", ".join(f"{c} = {v:g}" for c, v in d["frozen"].items())
+        print(f"  one value throughout (a frozen tag or a stuck signal; no channel through it can be checked): "
+              f"{listed}")
     if d["setpoints"]:
         print(f"  setpoints: {', '.join(d['setpoints'])}")
     if d["candidates"]:

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._core import TransferFunction
+from ..signals import frozen_inputs
 from .errors import held_out_error
 from .input_driven import input_driven_gain
 from .result import Finding, InsufficientData, ModelChange
@@ -54,6 +55,18 @@ def noise_finding(out: OutputResidual, first_onset: int, logn: float, min_effect
     colour must remove at least ``min_effect`` of the one-step error variance on held-out
     blocks, as a process finding must."""
     return _disturbance_finding(out, first_onset, logn, None, min_effect)
+
+
+def _process_claim(out: OutputResidual) -> str:
+    """What a disturbance verdict may say about the process model: that it fits, as far as the
+    inputs moved. A frozen input's channels were never tested."""
+    still = frozen_inputs(out.sig, out.i)
+    if not still:
+        return "the process model still fits"
+    names = ", ".join(still)
+    if len(still) == sum(g is not None for g in out.row):
+        return f"the process model is not checked ({names}: one value throughout)"
+    return f"the process model still fits (not checked from {names}: one value throughout)"
 
 
 def drift_finding(out: OutputResidual, first_onset: int, logn: float, drift_onset: int) -> Finding | None:
@@ -168,7 +181,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
         estimate = {"variance_ratio": ratio, "ci95": [ratio * math.exp(-1.96 * se), ratio * math.exp(1.96 * se)],
                     "noise_den": list(map(float, noise.den))}
         text = (f"the disturbance on {out.name} changed {when} (innovation variance x{ratio:.2f}, "
-                f"new colour); the process model still fits")
+                f"new colour); {_process_claim(out)}")
         params = AR_ORDER + onset_params
         conf_stat = max(best.gain, best.level)
         # The noise model update writes is refitted on the fit blocks only (errors on the others).
@@ -178,7 +191,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
                                    np.convolve(out.noise.den, [1.0, -drift.rho]), 0)
         estimate = {"drift_pole": drift.rho, "ci95": [min(DRIFT_POLES), max(DRIFT_POLES)], "drift_zero": drift.c,
                     "drift_time_constant_s": -sig.sample_time_s / math.log(drift.rho)}
-        text = f"slow drift on {out.name} {when}; the process model still fits"
+        text = f"slow drift on {out.name} {when}; {_process_claim(out)}"
         params = 2 + onset_params
         conf_stat = best.gain
     change = ModelChange(output=out.name, noise=written)

@@ -22,7 +22,7 @@ import numpy as np
 
 from . import _core
 from .record_length import MIN_ROWS, require_rows, scaled_rows
-from .signals import Signals, bridged_reach, extract, per_segment
+from .signals import Signals, bridged_reach, extract, frozen_inputs, frozen_note, per_segment
 
 Z99 = 2.5758293035489  # two-sided 99 % normal quantile
 
@@ -91,6 +91,7 @@ class CompareResult:
     skipped_rows: int
     outputs: list[OutputComparison]
     interpolated_samples: int = 0   # lost output samples interpolated (signals.bridge_lost_outputs)
+    frozen_inputs: list = field(default_factory=list)   # model inputs with one value throughout (signals.frozen)
     note: str = ("signals are deviations from the record mean; in closed loop, correlation at "
                  "negative lags (e leading the input) reflects feedback, not model error")
 
@@ -129,6 +130,7 @@ class CompareResult:
             for p in oc.failing:
                 lines.append(f"    fails {stamp(p.start_s)} .. {stamp(p.end_s)} "
                              f"(one-step error up to {p.worst_rms_ratio:.2f}x the early level)")
+        lines += [f"  note: {frozen_note(name)}" for name in self.frozen_inputs]
         lines.append(f"  note: {self.note}")
         return "\n".join(lines)
 
@@ -167,6 +169,7 @@ def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float |
         outputs=[_compare_output(sig, i, horizon, max_lag, window, attribution_lags)
                  for i in range(len(sig.outputs))],
         interpolated_samples=int(sig.bridged.sum()),
+        frozen_inputs=frozen_inputs(sig),
     )
 
 

@@ -25,7 +25,7 @@ from . import _core
 from ._core import DetectorConfig
 from .disturbance import WHITENING_FLOOR, describe, disturbance_orders
 from .preset_timing import TIMING_FIELDS, fit_to_record, resolve_timing, span_text
-from .signals import through_actuators
+from .signals import frozen, frozen_note, through_actuators
 from .timeaxis import seconds_of
 
 __all__ = ["DetectorConfig", "Detector", "DetectionResult", "detect", "make_config"]
@@ -232,7 +232,8 @@ class Detector:
         features = _core.WindowFeatures(model, config)
         series = features.extract_series(time_s, u, y)
         core = _core.train_detector(model, config, series, float(train_end_s))
-        return cls(core, timing + notes + _reference_notes(core, _channel_dicts(model, features.channels))), series
+        still = [frozen_note(name) for j, name in enumerate(model.inputs) if frozen(u[:, j])]
+        return cls(core, still + timing + notes + _reference_notes(core, _channel_dicts(model, features.channels))), series
 
     def monitor(self, data: pd.DataFrame) -> DetectionResult:
         time_s, u, y = _arrays(self.model, data)

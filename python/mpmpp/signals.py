@@ -167,6 +167,12 @@ def frozen(x: np.ndarray) -> bool:
     return len(known) > 0 and bool(np.all(known == known[0]))
 
 
+def frozen_note(name: str) -> str:
+    """The note every analysis gives for a ``frozen`` model input."""
+    return (f"{name}: one value throughout the record (a frozen tag or a stuck signal): the channels from it "
+            "cannot be checked on these data")
+
+
 def frozen_inputs(sig: Signals, i: int | None = None) -> list[str]:
     """The model inputs (of output i's channels, or all) that are ``frozen`` in the record."""
     return [name for j, name in enumerate(sig.inputs)

@@ -43,20 +43,6 @@ def test_check_json_summary(capsys):
     assert report["data"]["frozen"] == {}
 
 
-def test_check_names_a_frozen_column(tmp_path, capsys):
-    """A model column with one value wherever it is known (lost rows aside) is named with it."""
-    model = mpmpp.Model("m", 1.0, ["OP"], ["PV"], {"PV": {"OP": mpmpp.TransferFunction([0.5], [1.0, -0.5], 1)}})
-    mpmpp.save_model(model, tmp_path / "m.json")
-    t = np.arange(300)
-    op, pv = np.full(300, 42.5), np.cos(t / 5.0)
-    op[7] = np.nan
-    pd.DataFrame({"time": t, "OP": op, "PV": pv}).to_csv(tmp_path / "d.csv", index=False)
-    assert cli.main(["check", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["data"]["frozen"] == {"OP": 42.5}
-    assert cli.main(["check", str(tmp_path / "m.json"), str(tmp_path / "d.csv")]) == 0
-    assert "no channel through it can be checked): OP = 42.5" in capsys.readouterr().out
-
-
 def test_check_counts_missing_and_integrating_channel(tmp_path, capsys):
     integrator = mpmpp.TransferFunction([0.1], [1.0, -1.0], 3)  # 0.1 e^(-2 s) / s at Ts = 1 s
     lagged = mpmpp.TransferFunction([0.1], [1.0, -2.0, 1.0])  # a double integrator: no reading

@@ -247,22 +247,3 @@ def test_the_noise_correction_is_one_per_disturbance_regime_over_the_data_segmen
     split, _ = _corrections(free, pieces, inputs, cuts=[601])
     assert np.array_equal(split[0], split[1]) and np.array_equal(split[2], split[3])
     assert not np.allclose(split[0], split[2])
-
-
-def test_a_frozen_input_is_said_to_leave_the_process_model_unchecked():
-    """A tag the historian stopped updating: one value for the whole record (a few lost rows
-    too). Its channel cannot be tested, so the disturbance verdict must not say that the
-    process model still fits, and a note names the column."""
-    data = loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9])
-    data["u"] = 100.0
-    data.loc[[10, 2000], "u"] = np.nan
-    result = diagnose(loop.model(), data)
-    assert any(n.startswith("u: one value throughout the record") for n in result.notes)
-    assert not [f for f in result.findings if f.effect in PROCESS_EFFECTS]
-    disturbance = [f for f in result.findings if f.effect in ("noise_change", "output_drift")]
-    assert disturbance and all("the process model is not checked (u: one value throughout)" in f.explanation
-                               for f in disturbance)
-    moving = diagnose(loop.model(), loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9]))
-    assert not any("one value throughout" in n for n in moving.notes)
-    assert all("not checked" not in f.explanation for f in moving.findings)
-    assert any("the process model still fits" in f.explanation for f in moving.findings)

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..record_length import minimum_rows, require_rows, scaled_rows
-from ..signals import Signals, extract, frozen_inputs
+from ..signals import Signals, extract, frozen_inputs, frozen_note
 from ..timeaxis import seconds_of
 from .actuator import actuator_findings, rival_score
 from .changes import apply_changes
@@ -98,9 +98,7 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
         if lost:
             notes.append(f"{name}: {lost} lost sample(s) ({100 * lost / len(time_s):.2g} % of the rows) interpolated "
                          "to keep the record in one piece; the errors that read them are left out of every fit")
-    for name in frozen_inputs(sig):
-        notes.append(f"{name}: one value throughout the record (a frozen tag or a stuck signal): the channels "
-                     "from it cannot be checked on these data, and no finding is made on them")
+    notes += [frozen_note(name) for name in frozen_inputs(sig)]
     for i, name in enumerate(sig.outputs):
         if has_noise_model(noise[i]):
             continue

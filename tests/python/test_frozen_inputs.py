@@ -1,0 +1,63 @@
+"""A model input with one value throughout the record (a frozen historian tag, a stuck
+signal): every analysis names it, and none claims the channels from it were checked."""
+import json
+
+import numpy as np
+import pandas as pd
+
+import mpmpp
+from mpmpp import cli
+from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
+
+import closed_loop_case as loop
+
+FROZEN_NOTE = "u: one value throughout the record (a frozen tag or a stuck signal)"
+
+
+def frozen_loop():
+    data = loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9])
+    data["u"] = 100.0
+    data.loc[[10, 2000], "u"] = np.nan
+    return data
+
+
+def test_check_names_a_frozen_column(tmp_path, capsys):
+    """A model column with one value wherever it is known (lost rows aside) is named with it."""
+    model = mpmpp.Model("m", 1.0, ["OP"], ["PV"], {"PV": {"OP": mpmpp.TransferFunction([0.5], [1.0, -0.5], 1)}})
+    mpmpp.save_model(model, tmp_path / "m.json")
+    t = np.arange(300)
+    op, pv = np.full(300, 42.5), np.cos(t / 5.0)
+    op[7] = np.nan
+    pd.DataFrame({"time": t, "OP": op, "PV": pv}).to_csv(tmp_path / "d.csv", index=False)
+    assert cli.main(["check", str(tmp_path / "m.json"), str(tmp_path / "d.csv"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["data"]["frozen"] == {"OP": 42.5}
+    assert cli.main(["check", str(tmp_path / "m.json"), str(tmp_path / "d.csv")]) == 0
+    assert "no channel through it can be checked): OP = 42.5" in capsys.readouterr().out
+
+
+def test_a_frozen_input_is_said_to_leave_the_process_model_unchecked():
+    """A tag the historian stopped updating: one value for the whole record (a few lost rows
+    too). Its channel cannot be tested, so the disturbance verdict must not say that the
+    process model still fits, and a note names the column."""
+    result = diagnose(loop.model(), frozen_loop())
+    assert any(n.startswith(FROZEN_NOTE) for n in result.notes)
+    assert not [f for f in result.findings if f.effect in PROCESS_EFFECTS]
+    disturbance = [f for f in result.findings if f.effect in ("noise_change", "output_drift")]
+    assert disturbance and all("the process model is not checked (u: one value throughout)" in f.explanation
+                               for f in disturbance)
+    moving = diagnose(loop.model(), loop.simulate(n=8000, seed=2, onset=4000, noise_den_after=[1.0, -0.9]))
+    assert not any("one value throughout" in n for n in moving.notes)
+    assert all("not checked" not in f.explanation for f in moving.findings)
+    assert any("the process model still fits" in f.explanation for f in moving.findings)
+
+
+def test_compare_and_detect_name_a_frozen_input():
+    data = frozen_loop()
+    compared = mpmpp.compare(loop.model(), data)
+    assert compared.frozen_inputs == ["u"] and compared.to_dict()["frozen_inputs"] == ["u"]
+    assert f"note: {FROZEN_NOTE}" in compared.summary()
+    detected = mpmpp.detect(loop.model(), data)
+    assert any(n.startswith(FROZEN_NOTE) for n in detected.notes)
+    moving = loop.simulate(n=8000, seed=2)
+    assert mpmpp.compare(loop.model(), moving).frozen_inputs == []
+    assert not any("one value throughout" in n for n in mpmpp.detect(loop.model(), moving).notes)

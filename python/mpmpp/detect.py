@@ -25,7 +25,7 @@ from . import _core
 from ._core import DetectorConfig
 from .disturbance import WHITENING_FLOOR, describe, disturbance_orders
 from .preset_timing import TIMING_FIELDS, fit_to_record, resolve_timing, span_text
-from .signals import frozen, frozen_note, through_actuators
+from .signals import frozen, frozen_note, require_moving_outputs, through_actuators
 from .timeaxis import seconds_of
 
 __all__ = ["DetectorConfig", "Detector", "DetectionResult", "detect", "make_config"]
@@ -105,7 +105,9 @@ def _arrays(model, data: pd.DataFrame):
         raise ValueError(f"data: column '{missing[0]}' of the model is missing")
     as_float = lambda cols: np.ascontiguousarray(data[cols].to_numpy(dtype=float))  # noqa: E731
     u = np.ascontiguousarray(through_actuators(model, as_float(list(model.inputs))))
-    return np.ascontiguousarray(seconds_of(data)), u, as_float(list(model.outputs))
+    y = as_float(list(model.outputs))
+    require_moving_outputs(model.outputs, y)
+    return np.ascontiguousarray(seconds_of(data)), u, y
 
 
 def _channel_dicts(model, core_channels):

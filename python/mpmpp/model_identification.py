@@ -59,7 +59,7 @@ from .compare import _finite
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import MIN_ROWS, require_rows
-from .signals import bridge_lost_outputs, complete_runs
+from .signals import bridge_lost_outputs, complete_runs, frozen
 from .stretches import Stretches
 from .timeaxis import sample_grid, seconds_of
 
@@ -286,6 +286,10 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     for j, col in enumerate(inputs):
         if not np.std(U[:, j]) > 1e-9 * max(1.0, float(np.abs(raw[:, j]).max())):
             raise NotIdentified(f"not identified: input {col!r} does not move (no excitation)")
+    for i, col in enumerate(outputs):
+        if frozen(Y[:, i]):
+            raise NotIdentified(f"not identified: output {col!r} does not move (one value throughout: a frozen tag "
+                                "or a stuck transmitter)")
     sp = {o: data[c].to_numpy(dtype=float)[rows] if c else None for o, c in zip(outputs, setpoints)}
     process, noise, summaries, fits = {}, {}, [], []
     workers = min(os.cpu_count() or 1, len(na_orders)) if workers is None else int(workers)

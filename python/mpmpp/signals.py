@@ -62,6 +62,7 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     raw_u = data[inputs].to_numpy(dtype=float)
     raw_y = data[outputs].to_numpy(dtype=float)
     raw_z = data[extras].to_numpy(dtype=float) if extras else np.zeros((len(data), 0))
+    require_moving_outputs(outputs, raw_y)
     ref = np.ones(len(data), bool) if reference is None else np.asarray(reference, bool)
     nu, ny = len(inputs), len(outputs)
     # rows a data frame leaves out (a historian gap: a step of two samples or more) end a
@@ -165,6 +166,17 @@ def frozen(x: np.ndarray) -> bool:
     known = np.asarray(x, dtype=float)
     known = known[np.isfinite(known)]
     return len(known) > 0 and bool(np.all(known == known[0]))
+
+
+def require_moving_outputs(names, y: np.ndarray) -> None:
+    """ValueError naming the first model output (column of y) that is ``frozen``: nothing about
+    the model can be checked against an output that never moves."""
+    for name, column in zip(names, np.asarray(y, dtype=float).T):
+        if frozen(column):
+            value = column[np.isfinite(column)][0]
+            raise ValueError(f"data: output '{name}' has one value throughout the record ({value:g}): a frozen tag "
+                             "or a stuck transmitter leaves nothing to check the model against (leave the output "
+                             "out of the model file, or bring a record where it moves)")
 
 
 def frozen_note(name: str) -> str:

@@ -1,9 +1,11 @@
-"""A model input with one value throughout the record (a frozen historian tag, a stuck
-signal): every analysis names it, and none claims the channels from it were checked."""
+"""A model column with one value throughout the record (a frozen historian tag, a stuck
+signal). An input: every analysis names it, and none claims the channels from it were checked.
+An output: nothing can be checked against it, and every command says so in one line."""
 import json
 
 import numpy as np
 import pandas as pd
+import pytest
 
 import mpmpp
 from mpmpp import cli
@@ -61,3 +63,20 @@ def test_compare_and_detect_name_a_frozen_input():
     moving = loop.simulate(n=8000, seed=2)
     assert mpmpp.compare(loop.model(), moving).frozen_inputs == []
     assert not any("one value throughout" in n for n in mpmpp.detect(loop.model(), moving).notes)
+
+
+@pytest.mark.parametrize("command", ["compare", "detect", "diagnose", "update", "identify"])
+def test_a_frozen_output_is_refused_in_one_line_naming_it(command, tmp_path, capsys):
+    data = loop.simulate(n=8000, seed=2)
+    data["y"] = 20.0
+    data.loc[[10, 2000], "y"] = np.nan
+    data.to_csv(tmp_path / "d.csv", index=False)
+    mpmpp.save_model(loop.model(), tmp_path / "m.json")
+    pair = [str(tmp_path / "m.json"), str(tmp_path / "d.csv")]
+    args = {"update": ["update", *pair, "--apply", "F1", "-o", str(tmp_path / "new.json")],
+            "identify": ["identify", str(tmp_path / "d.csv"), "--inputs", "u", "--outputs", "y",
+                         "-o", str(tmp_path / "new.json")]}.get(command, [command, *pair])
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "output 'y'" in err and "one value throughout" in err
+    assert not (tmp_path / "new.json").exists()

@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 
-from ..signals import frozen
+from ..signals import frozen, held_stretch_rows, held_stretches
 from ._pair import add_data_arguments, load_data_for, repair_lines
 
 
@@ -77,8 +77,29 @@ def _data_summary(path: str, df, model) -> dict:
         "candidates": [c for c in others if c not in setpoints],
         "rows_with_missing": int(np.isnan(df.drop(columns="time").to_numpy()).any(axis=1).sum()),
         "frozen": {c: float(df[c].dropna().iloc[0]) for c in [*model.inputs, *model.outputs] if frozen(df[c])},
+        "held": clock.stamp_fields(_held(df, model)),
         "interpolated": _interpolated(df, model),
     }
+
+
+def _held(df, model) -> dict:
+    """Model column -> the stretches of an hour or more (signals.HELD_STRETCH_S) over which it holds one value
+    (columns frozen throughout, or with no such stretch, left out)."""
+    rows = held_stretch_rows(model.sample_time_s)
+    time = df["time"].to_numpy(dtype=float)
+    held = {}
+    for c in [*model.inputs, *model.outputs]:
+        x = df[c].to_numpy(dtype=float)
+        if not frozen(x):
+            stretches = [{"start_s": float(time[a]), "end_s": float(time[b - 1])} for a, b in held_stretches(x, rows)]
+            if stretches:
+                held[c] = stretches
+    return held
+
+
+def _when(doc: dict, key: str) -> str:
+    """A point in time of a document: its calendar stamp, or hours of the time column."""
+    return doc.get(key, f"{doc[key + '_s'] / 3600:.2f} h")
 
 
 def _interpolated(df, model) -> dict:
@@ -123,6 +144,9 @@ def _print_summary(report: dict, detail: bool) -> None:
         listed = ", ".join(f"{c} = {v:g}" for c, v in d["frozen"].items())
         print(f"  one value throughout (a frozen tag or a stuck signal; no channel through it can be checked): "
               f"{listed}")
+    for c, stretches in d["held"].items():
+        shown = ", ".join(f"{_when(s, 'start')} .. {_when(s, 'end')}" for s in stretches)
+        print(f"  {c} holds one value for an hour or more (at a limit, in manual, stuck or a stale tag): {shown}")
     if d["setpoints"]:
         print(f"  setpoints: {', '.join(d['setpoints'])}")
     if d["candidates"]:

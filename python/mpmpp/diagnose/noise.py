@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._core import TransferFunction
-from ..signals import frozen_inputs
+from ..signals import unchecked_inputs
 from .errors import held_out_error
 from .input_driven import input_driven_gain
 from .result import Finding, InsufficientData, ModelChange
@@ -57,16 +57,17 @@ def noise_finding(out: OutputResidual, first_onset: int, logn: float, min_effect
     return _disturbance_finding(out, first_onset, logn, None, min_effect)
 
 
-def _process_claim(out: OutputResidual) -> str:
-    """What a disturbance verdict may say about the process model: that it fits, as far as the
-    inputs moved. A frozen input's channels were never tested."""
-    still = frozen_inputs(out.sig, out.i)
+def _process_claim(out: OutputResidual, onset: int) -> str:
+    """What a disturbance verdict from ``onset`` on may say about the process model: that it
+    fits, as far as the inputs moved. The channels of an input frozen, or held at one value for
+    most of the rows after the onset, were not tested."""
+    still = unchecked_inputs(out.sig, out.i, onset)
     if not still:
         return "the process model still fits"
     names = ", ".join(still)
     if len(still) == sum(g is not None for g in out.row):
-        return f"the process model is not checked ({names}: one value throughout)"
-    return f"the process model still fits (not checked from {names}: one value throughout)"
+        return f"the process model is not checked there ({names} holds one value)"
+    return f"the process model still fits (not checked from {names}, which holds one value there)"
 
 
 def drift_finding(out: OutputResidual, first_onset: int, logn: float, drift_onset: int) -> Finding | None:
@@ -181,7 +182,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
         estimate = {"variance_ratio": ratio, "ci95": [ratio * math.exp(-1.96 * se), ratio * math.exp(1.96 * se)],
                     "noise_den": list(map(float, noise.den))}
         text = (f"the disturbance on {out.name} changed {when} (innovation variance x{ratio:.2f}, "
-                f"new colour); {_process_claim(out)}")
+                f"new colour); {_process_claim(out, onset)}")
         params = AR_ORDER + onset_params
         conf_stat = max(best.gain, best.level)
         # The noise model update writes is refitted on the fit blocks only (errors on the others).
@@ -191,7 +192,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
                                    np.convolve(out.noise.den, [1.0, -drift.rho]), 0)
         estimate = {"drift_pole": drift.rho, "ci95": [min(DRIFT_POLES), max(DRIFT_POLES)], "drift_zero": drift.c,
                     "drift_time_constant_s": -sig.sample_time_s / math.log(drift.rho)}
-        text = f"slow drift on {out.name} {when}; {_process_claim(out)}"
+        text = f"slow drift on {out.name} {when}; {_process_claim(out, onset)}"
         params = 2 + onset_params
         conf_stat = best.gain
     change = ModelChange(output=out.name, noise=written)

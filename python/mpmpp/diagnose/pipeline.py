@@ -8,7 +8,8 @@ import math
 import numpy as np
 
 from ..record_length import minimum_rows, require_rows, scaled_rows
-from ..signals import Signals, extract, frozen_inputs, frozen_note
+from ..signals import (Signals, extract, frozen_inputs, frozen_note, held_note, held_stretch_rows,
+                       held_stretches)
 from ..timeaxis import seconds_of
 from .actuator import actuator_findings, rival_score
 from .changes import apply_changes
@@ -98,7 +99,10 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
         if lost:
             notes.append(f"{name}: {lost} lost sample(s) ({100 * lost / len(time_s):.2g} % of the rows) interpolated "
                          "to keep the record in one piece; the errors that read them are left out of every fit")
-    notes += [frozen_note(name) for name in frozen_inputs(sig)]
+    frozen_names = frozen_inputs(sig)
+    notes += [frozen_note(name) for name in frozen_names]
+    notes += [held_note(sig, name, s) for j, name in enumerate(sig.inputs) if name not in frozen_names
+              for s in held_stretches(sig.u[:, j], held_stretch_rows(sig.sample_time_s))]
     for i, name in enumerate(sig.outputs):
         if has_noise_model(noise[i]):
             continue

@@ -22,7 +22,8 @@ import numpy as np
 
 from . import _core
 from .record_length import MIN_ROWS, require_rows, scaled_rows
-from .signals import Signals, bridged_reach, extract, frozen_inputs, frozen_note, per_segment
+from .held_values import frozen_inputs, frozen_note
+from .signals import Signals, bridged_reach, extract, per_segment
 
 Z99 = 2.5758293035489  # two-sided 99 % normal quantile
 
@@ -91,7 +92,7 @@ class CompareResult:
     skipped_rows: int
     outputs: list[OutputComparison]
     interpolated_samples: int = 0   # lost output samples interpolated (signals.bridge_lost_outputs)
-    frozen_inputs: list = field(default_factory=list)   # model inputs with one value throughout (signals.frozen)
+    frozen_inputs: list = field(default_factory=list)   # model inputs with one value throughout (held_values.frozen)
     note: str = ("signals are deviations from the record mean; in closed loop, correlation at "
                  "negative lags (e leading the input) reflects feedback, not model error")
 

@@ -25,7 +25,8 @@ from . import _core
 from ._core import DetectorConfig
 from .disturbance import WHITENING_FLOOR, describe, disturbance_orders
 from .preset_timing import TIMING_FIELDS, fit_to_record, resolve_timing, span_text
-from .signals import frozen, frozen_note, require_moving_outputs, through_actuators
+from .held_values import frozen, frozen_note, require_moving_outputs
+from .signals import through_actuators
 from .timeaxis import seconds_of
 
 __all__ = ["DetectorConfig", "Detector", "DetectionResult", "detect", "make_config"]

@@ -59,7 +59,8 @@ from .compare import _finite
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import MIN_ROWS, require_rows
-from .signals import bridge_lost_outputs, complete_runs, frozen
+from .held_values import frozen
+from .signals import bridge_lost_outputs, complete_runs
 from .stretches import Stretches
 from .timeaxis import sample_grid, seconds_of
 

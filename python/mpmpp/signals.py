@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .held_values import require_moving_outputs
 from .timeaxis import seconds_of
 
 
@@ -157,80 +158,6 @@ def bridged_reach(sig: Signals, i: int, inverse_noise, lags: int) -> np.ndarray:
     for t in np.flatnonzero(sig.bridged[:, i]):
         reach[t:t + span] = True
     return reach
-
-
-def frozen(x: np.ndarray) -> bool:
-    """Whether a column holds one value wherever it is known: a tag the historian stopped
-    updating, or a transmitter or valve stuck for the whole record. Nothing about a channel
-    through it can be learnt from the record."""
-    known = np.asarray(x, dtype=float)
-    known = known[np.isfinite(known)]
-    return len(known) > 0 and bool(np.all(known == known[0]))
-
-
-def require_moving_outputs(names, y: np.ndarray) -> None:
-    """ValueError naming the first model output (column of y) that is ``frozen``: nothing about
-    the model can be checked against an output that never moves."""
-    for name, column in zip(names, np.asarray(y, dtype=float).T):
-        if frozen(column):
-            value = column[np.isfinite(column)][0]
-            raise ValueError(f"data: output '{name}' has one value throughout the record ({value:g}): a frozen tag "
-                             "or a stuck transmitter leaves nothing to check the model against (leave the output "
-                             "out of the model file, or bring a record where it moves)")
-
-
-def frozen_note(name: str) -> str:
-    """The note every analysis gives for a ``frozen`` model input."""
-    return (f"{name}: one value throughout the record (a frozen tag or a stuck signal): the channels from it "
-            "cannot be checked on these data")
-
-
-def frozen_inputs(sig: Signals, i: int | None = None) -> list[str]:
-    """The model inputs (of output i's channels, or all) that are ``frozen`` in the record."""
-    return [name for j, name in enumerate(sig.inputs)
-            if (i is None or sig.rows[i][j] is not None) and frozen(sig.u[:, j])]
-
-
-def unchecked_inputs(sig: Signals, i: int, start: int) -> list[str]:
-    """The inputs of output i's channels that are ``frozen``, or from row ``start`` on held at one
-    value (``held_stretches``) over most of the rest: their channels are not tested there."""
-    rows = held_stretch_rows(sig.sample_time_s)
-    return [name for j, name in enumerate(sig.inputs) if sig.rows[i][j] is not None
-            and (frozen(sig.u[:, j]) or held_rows(sig.u[start:, j], rows).mean() > 0.5)]
-
-
-# A model input that holds one value this long (manual mode with a fixed OP, a stuck valve, a
-# tag the historian stopped updating) is named: nothing about its channels is seen there.
-HELD_STRETCH_S = 3600.0
-
-
-def held_stretch_rows(sample_time_s: float) -> int:
-    """HELD_STRETCH_S in rows."""
-    return max(int(round(HELD_STRETCH_S / sample_time_s)), 2)
-
-
-def held_stretches(x: np.ndarray, min_rows: int) -> list[tuple[int, int]]:
-    """The row ranges [a, b) of at least ``min_rows`` rows over which x holds one value
-    (a missing value ends a stretch)."""
-    x = np.asarray(x, dtype=float)
-    same = np.isfinite(x[1:]) & (x[1:] == x[:-1])
-    return [(a, b + 1) for a, b in complete_runs(same) if b + 1 - a >= min_rows]
-
-
-def held_rows(x: np.ndarray, min_rows: int) -> np.ndarray:
-    """Per row: inside one of x's ``held_stretches``."""
-    held = np.zeros(len(x), bool)
-    for a, b in held_stretches(x, min_rows):
-        held[a:b] = True
-    return held
-
-
-def held_note(sig: Signals, name: str, stretch: tuple[int, int]) -> str:
-    """The note for a model input held at one value over ``stretch`` (not the whole record)."""
-    a, b = stretch
-    t = sig.time_s
-    return (f"{name}: one value from t={t[a] / 3600:.2f} h to t={t[b - 1] / 3600:.2f} h ({(b - a) * sig.sample_time_s / 3600:.1f} h: "
-            "at a limit, in manual, a stuck valve or a stale tag): no channel from it is checked there")
 
 
 def complete_runs(valid: np.ndarray, starts=()) -> list[tuple[int, int]]:

@@ -99,9 +99,9 @@ def test_an_input_held_for_hours_is_named_with_its_stretch():
 
 def test_held_stretches_match_a_plain_run_count():
     x = np.array([1.0, 1, 1, 2, 2, 2, 2, np.nan, 3, 3, 3, 3, 3, 4])
-    assert mpmpp.signals.held_stretches(x, 4) == [(3, 7), (8, 13)]
-    assert mpmpp.signals.held_stretches(x, 5) == [(8, 13)]
-    assert mpmpp.signals.held_rows(x, 4).tolist() == [False] * 3 + [True] * 4 + [False] + [True] * 5 + [False]
+    assert mpmpp.held_values.held_stretches(x, 4) == [(3, 7), (8, 13)]
+    assert mpmpp.held_values.held_stretches(x, 5) == [(8, 13)]
+    assert mpmpp.held_values.held_rows(x, 4).tolist() == [False] * 3 + [True] * 4 + [False] + [True] * 5 + [False]
 
 
 def test_check_lists_the_stretches_a_column_holds(tmp_path, capsys):

@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 
-from ..signals import frozen, held_stretch_rows, held_stretches
+from ..held_values import frozen, held_stretch_rows, held_stretches
 from ._pair import add_data_arguments, load_data_for, repair_lines
 
 
@@ -83,7 +83,7 @@ def _data_summary(path: str, df, model) -> dict:
 
 
 def _held(df, model) -> dict:
-    """Model column -> the stretches of an hour or more (signals.HELD_STRETCH_S) over which it holds one value
+    """Model column -> the stretches of an hour or more (held_values.HELD_STRETCH_S) over which it holds one value
     (columns frozen throughout, or with no such stretch, left out)."""
     rows = held_stretch_rows(model.sample_time_s)
     time = df["time"].to_numpy(dtype=float)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._core import TransferFunction
-from ..signals import unchecked_inputs
+from ..held_values import unchecked_inputs
 from .errors import held_out_error
 from .input_driven import input_driven_gain
 from .result import Finding, InsufficientData, ModelChange

@@ -8,8 +8,8 @@ import math
 import numpy as np
 
 from ..record_length import minimum_rows, require_rows, scaled_rows
-from ..signals import (Signals, extract, frozen_inputs, frozen_note, held_note, held_stretch_rows,
-                       held_stretches)
+from ..held_values import frozen_inputs, frozen_note, held_note, held_stretch_rows, held_stretches
+from ..signals import Signals, extract
 from ..timeaxis import seconds_of
 from .actuator import actuator_findings, rival_score
 from .changes import apply_changes

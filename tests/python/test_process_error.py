@@ -8,7 +8,7 @@ from scipy.signal import lfilter
 from mpmpp.diagnose import diagnose
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.laguerre import LAGUERRE_FUNCTIONS, laguerre_filters, laguerre_pole
-from mpmpp.diagnose.process_error import explanatory_columns, process_error
+from mpmpp.diagnose.process_error import explanatory_columns, held_out_rms, process_error, process_parts
 from mpmpp.diagnose.result import ModelChange
 from mpmpp.update import update
 
@@ -97,3 +97,25 @@ def test_too_short_after_the_onset_is_nan():
     sig = diagnosis_signals(loop.model(), data).sig
     _, columns = explanatory_columns(sig, [])
     assert np.isnan(process_error(sig, 0, [], 3990, 720, columns, laguerre_filters(0.9)))
+
+
+def test_a_noise_change_leaves_the_process_part_as_it_is():
+    """G u is all the process part depends on. Both sides are whitened with the noise model
+    after the change, so a noise-only change (a noise_change finding's update) shows the same
+    process part before and after, and the one with a channel change is the NumPy reference
+    under that noise model."""
+    onset, block = 3000, 720
+    data = loop.simulate(n=6000, seed=3, onset=onset, noise_den_after=[1.0, -0.9])
+    sig = diagnosis_signals(loop.model(), data).sig
+    new_noise = loop.mpmpp.TransferFunction(loop.H[0], [1.0, -0.9], 0)
+    before, after = process_parts(sig, 0, [ModelChange("y", noise=new_noise)], onset, block)
+    np.testing.assert_array_equal(before, after)
+    num, den, d = loop.G
+    doubled = ModelChange("y", "u", channel=loop.mpmpp.TransferFunction([2 * num[0]], den, d))
+    before, after = process_parts(sig, 0, [doubled, ModelChange("y", noise=new_noise)], onset, block)
+    pole = laguerre_pole(sig, 0)
+    noise = (loop.H[0], [1.0, -0.9])
+    for series, gain in ((before, 1.0), (after, 2.0)):
+        want = reference(sig.y[:, 0], sig.u[:, 0], ([num[0] * gain], den, d), noise, pole, LAGUERRE_FUNCTIONS,
+                         onset, block)
+        assert held_out_rms(series, block) == pytest.approx(want, rel=1e-5)

@@ -25,7 +25,7 @@ from . import _core
 from ._core import DetectorConfig
 from .disturbance import WHITENING_FLOOR, describe, disturbance_orders
 from .preset_timing import TIMING_FIELDS, fit_to_record, resolve_timing, span_text
-from .held_values import frozen, frozen_note, require_moving_outputs
+from .held_values import frozen_columns, frozen_note, require_moving_outputs
 from .signals import through_actuators
 from .timeaxis import seconds_of
 
@@ -235,7 +235,7 @@ class Detector:
         features = _core.WindowFeatures(model, config)
         series = features.extract_series(time_s, u, y)
         core = _core.train_detector(model, config, series, float(train_end_s))
-        still = [frozen_note(name) for j, name in enumerate(model.inputs) if frozen(u[:, j])]
+        still = [frozen_note(name) for name in frozen_columns(model.inputs, u)]
         return cls(core, still + timing + notes + _reference_notes(core, _channel_dicts(model, features.channels))), series
 
     def monitor(self, data: pd.DataFrame) -> DetectionResult:

@@ -38,10 +38,15 @@ def frozen_note(name: str) -> str:
             "cannot be checked on these data")
 
 
+def frozen_columns(names, columns: np.ndarray) -> list[str]:
+    """The names of the ``frozen`` columns of ``columns`` (rows x names)."""
+    return [name for name, x in zip(names, np.asarray(columns, dtype=float).T) if frozen(x)]
+
+
 def frozen_inputs(sig: Signals, i: int | None = None) -> list[str]:
     """The model inputs (of output i's channels, or all) that are ``frozen`` in the record."""
-    return [name for j, name in enumerate(sig.inputs)
-            if (i is None or sig.rows[i][j] is not None) and frozen(sig.u[:, j])]
+    return [name for name in frozen_columns(sig.inputs, sig.u)
+            if i is None or sig.rows[i][sig.inputs.index(name)] is not None]
 
 
 def unchecked_inputs(sig: Signals, i: int, start: int) -> list[str]:
@@ -70,6 +75,15 @@ def held_stretches(x: np.ndarray, min_rows: int) -> list[tuple[int, int]]:
     # same[k]: rows k - 1 and k are equal; a run of them over k = a + 1 .. b covers rows a .. b
     edges = np.flatnonzero(np.diff(same.astype(np.int8)))
     return [(int(a), int(b) + 1) for a, b in zip(edges[::2], edges[1::2]) if b + 1 - a >= min_rows]
+
+
+def held_columns(names, columns: np.ndarray, sample_time_s: float) -> dict[str, list[tuple[int, int]]]:
+    """Name -> the ``held_stretches`` of an hour or more of each column of ``columns`` (rows x
+    names); columns frozen throughout, or with no such stretch, left out."""
+    rows = held_stretch_rows(sample_time_s)
+    held = {name: held_stretches(x, rows) for name, x in zip(names, np.asarray(columns, dtype=float).T)
+            if not frozen(x)}
+    return {name: stretches for name, stretches in held.items() if stretches}
 
 
 def held_rows(x: np.ndarray, min_rows: int) -> np.ndarray:

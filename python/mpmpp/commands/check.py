@@ -10,7 +10,7 @@ import json
 
 import numpy as np
 
-from ..held_values import frozen, held_stretch_rows, held_stretches
+from ..held_values import frozen_columns, held_columns
 from ._pair import add_data_arguments, load_data_for, repair_lines
 
 
@@ -57,7 +57,8 @@ def _data_summary(path: str, df, model) -> dict:
 
     time = df["time"].to_numpy()
     clock = Clock.of(df, model.sample_time_s)
-    others = [c for c in df.columns if c != "time" and c not in model.inputs and c not in model.outputs]
+    modelled = [*model.inputs, *model.outputs]
+    others = [c for c in df.columns if c != "time" and c not in modelled]
     setpoints = [c for c in others if c.endswith("_sp") and c[:-3] in model.outputs]
     return {
         "path": path,
@@ -76,7 +77,7 @@ def _data_summary(path: str, df, model) -> dict:
         "setpoints": setpoints,
         "candidates": [c for c in others if c not in setpoints],
         "rows_with_missing": int(np.isnan(df.drop(columns="time").to_numpy()).any(axis=1).sum()),
-        "frozen": {c: float(df[c].dropna().iloc[0]) for c in [*model.inputs, *model.outputs] if frozen(df[c])},
+        "frozen": {c: float(df[c].dropna().iloc[0]) for c in frozen_columns(modelled, df[modelled])},
         "held": clock.stamp_fields(_held(df, model)),
         "interpolated": _interpolated(df, model),
     }
@@ -85,16 +86,10 @@ def _data_summary(path: str, df, model) -> dict:
 def _held(df, model) -> dict:
     """Model column -> the stretches of an hour or more (held_values.HELD_STRETCH_S) over which it holds one value
     (columns frozen throughout, or with no such stretch, left out)."""
-    rows = held_stretch_rows(model.sample_time_s)
     time = df["time"].to_numpy(dtype=float)
-    held = {}
-    for c in [*model.inputs, *model.outputs]:
-        x = df[c].to_numpy(dtype=float)
-        if not frozen(x):
-            stretches = [{"start_s": float(time[a]), "end_s": float(time[b - 1])} for a, b in held_stretches(x, rows)]
-            if stretches:
-                held[c] = stretches
-    return held
+    columns = [*model.inputs, *model.outputs]
+    return {c: [{"start_s": float(time[a]), "end_s": float(time[b - 1])} for a, b in stretches]
+            for c, stretches in held_columns(columns, df[columns], model.sample_time_s).items()}
 
 
 def _when(doc: dict, key: str) -> str:

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..record_length import minimum_rows, require_rows, scaled_rows
-from ..held_values import frozen_inputs, frozen_note, held_note, held_stretch_rows, held_stretches
+from ..held_values import frozen_inputs, frozen_note, held_columns, held_note
 from ..signals import Signals, extract
 from ..timeaxis import seconds_of
 from .actuator import actuator_findings, rival_score
@@ -99,10 +99,9 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
         if lost:
             notes.append(f"{name}: {lost} lost sample(s) ({100 * lost / len(time_s):.2g} % of the rows) interpolated "
                          "to keep the record in one piece; the errors that read them are left out of every fit")
-    frozen_names = frozen_inputs(sig)
-    notes += [frozen_note(name) for name in frozen_names]
-    notes += [held_note(sig, name, s) for j, name in enumerate(sig.inputs) if name not in frozen_names
-              for s in held_stretches(sig.u[:, j], held_stretch_rows(sig.sample_time_s))]
+    notes += [frozen_note(name) for name in frozen_inputs(sig)]
+    notes += [held_note(sig, name, s) for name, stretches in held_columns(sig.inputs, sig.u, sig.sample_time_s).items()
+              for s in stretches]
     for i, name in enumerate(sig.outputs):
         if has_noise_model(noise[i]):
             continue

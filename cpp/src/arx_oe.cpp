@@ -19,7 +19,25 @@ int fir_length_to_one_percent(const TransferFunction& nominal) {
   }
   throw InputError(
       "nominal impulse response does not fall below 1% of its peak within 1,000,000 samples "
-      "(integrating or unstable?): give fir_length");
+      "(unstable, or an integrator the FIR features cannot hold: the presets siso and mimo monitor "
+      "integrating channels; otherwise give fir_length)");
+}
+
+TransferFunction without_integrators(const TransferFunction& g) {
+  // A root at z = 1 of den(q^-1) = sum_k a_k q^-k is sum_k a_k = 0; synthetic division by
+  // (1 - q^-1) leaves the partial sums c_k = a_0 + ... + a_k.
+  Eigen::VectorXd den = g.den();
+  while (den.size() > 1 && std::abs(den.sum()) <= 1e-9 * den.cwiseAbs().sum()) {
+    Eigen::VectorXd quotient(den.size() - 1);
+    double partial = 0.0;
+    for (Eigen::Index k = 0; k + 1 < den.size(); ++k) quotient[k] = partial += den[k];
+    den = quotient;
+  }
+  return den.size() == g.den().size() ? g : TransferFunction(g.num(), den, g.delay());
+}
+
+int settling_samples(const TransferFunction& g) {
+  return fir_length_to_one_percent(without_integrators(g));
 }
 
 void detrend_in_place(Eigen::Ref<Eigen::VectorXd> x, Detrend mode) {

@@ -286,11 +286,16 @@ ResidualRegression::ResidualRegression(const Model& nominal, int output, std::ve
     const int other = g.delay() >= 2 ? g.delay() - 1 : g.delay() + 2;
     std::vector<TransferFunction> dirs{g, TransferFunction(g.num(), g.den(), g.delay() + 1),
                                        TransferFunction(g.num(), g.den(), other)};
-    const double p = laguerre_pole(g);
-    for (auto& l : laguerre_filters(p, config.laguerre_terms)) dirs.push_back(std::move(l));
+    // An integrating channel changes inside its integrators (a level's valve gain, a lag of
+    // the flow): its Laguerre directions are integrated too, on its stable part's time scale.
+    const TransferFunction stable = without_integrators(g);
+    const double p = laguerre_pole(stable);
+    const bool integrates = stable.den().size() < g.den().size();
+    for (auto& l : laguerre_filters(p, config.laguerre_terms))
+      dirs.push_back(integrates ? l.series(TransferFunction(stable.den(), g.den())) : std::move(l));
     directions_.push_back(std::move(dirs));
     settle_ = std::max(
-        {settle_, fir_length_to_one_percent(g) + 1, laguerre_settling(p, config.laguerre_terms)});
+        {settle_, mpmpp::settling_samples(g) + 1, laguerre_settling(p, config.laguerre_terms)});
   }
 }
 

@@ -51,7 +51,12 @@ ArxOeConfig output_problem_config(const Model& model, const DetectorConfig& conf
     c.arx.nb.push_back(config.arx_order_b + 1);  // b_0..b_nb: paper order n_b
     c.arx.delays.push_back(d);
     // FIR length with the delay's leading zeros (what ArxOeEstimator returns).
-    const int length = config.fir_length > 0 ? d + config.fir_length : fir_length_to_one_percent(g);
+    // The residual test takes no FIR features, so an integrating channel (whose impulse
+    // response never decays) is cut where its stable part has settled.
+    const int length = config.fir_length > 0 ? d + config.fir_length
+                       : config.process_test == ProcessTest::Residual
+                           ? settling_samples(g)
+                           : fir_length_to_one_percent(g);
     fir_after_delay.push_back(length - d);
     c.fir_length.push_back(length);
     c.structures.push_back(config.oe_structure == OeStructure::Foptd

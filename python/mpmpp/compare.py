@@ -23,6 +23,7 @@ import numpy as np
 from . import _core
 from .record_length import MIN_ROWS, require_rows, scaled_rows
 from .held_values import frozen_inputs, frozen_note
+from .integrating import integrating_notes, row_integrates, without_line
 from .signals import Signals, bridged_reach, extract, per_segment
 
 Z99 = 2.5758293035489  # two-sided 99 % normal quantile
@@ -93,6 +94,7 @@ class CompareResult:
     outputs: list[OutputComparison]
     interpolated_samples: int = 0   # lost output samples interpolated (signals.bridge_lost_outputs)
     frozen_inputs: list = field(default_factory=list)   # model inputs with one value throughout (held_values.frozen)
+    integrating: list = field(default_factory=list)     # notes on integrating channels (integrating.py)
     note: str = ("signals are deviations from the record mean; in closed loop, correlation at "
                  "negative lags (e leading the input) reflects feedback, not model error")
 
@@ -132,6 +134,7 @@ class CompareResult:
                 lines.append(f"    fails {stamp(p.start_s)} .. {stamp(p.end_s)} "
                              f"(one-step error up to {p.worst_rms_ratio:.2f}x the early level)")
         lines += [f"  note: {frozen_note(name)}" for name in self.frozen_inputs]
+        lines += [f"  note: {n}" for n in self.integrating]
         lines.append(f"  note: {self.note}")
         return "\n".join(lines)
 
@@ -171,6 +174,7 @@ def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float |
                  for i in range(len(sig.outputs))],
         interpolated_samples=int(sig.bridged.sum()),
         frozen_inputs=frozen_inputs(sig),
+        integrating=integrating_notes(model),
     )
 
 
@@ -180,6 +184,9 @@ def _compare_output(sig: Signals, i: int, horizon: int, max_lag: int, window: in
     sim = per_segment(sig, lambda yy, uu: _core.predict_output(row, noise, yy, uu, 0), y, sig.u)
     pred = per_segment(sig, lambda yy, uu: _core.predict_output(row, noise, yy, uu, horizon), y, sig.u)
     err = per_segment(sig, lambda yy, uu: _core.prediction_error(row, noise, yy, uu), y, sig.u)
+    if row_integrates(row):   # the level it started from and the input's balance, from the data
+        sim, pred = (y - per_segment(sig, without_line, y - x) for x in (sim, pred))
+        err = per_segment(sig, without_line, err)
     err[bridged_reach(sig, i, noise.inverse(), 0)] = np.nan   # errors that read an interpolated sample
     ok = np.isfinite(err)
     fit_one_step = float(100.0 * (1.0 - np.linalg.norm(err[ok]) / np.linalg.norm(y[ok] - y[ok].mean())))

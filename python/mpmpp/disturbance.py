@@ -88,12 +88,14 @@ def bic_ar(v: np.ndarray, begin: int, end: int, max_order: int) -> tuple[int, np
 
 def _settling_samples(row, length: int) -> int:
     """Samples until every channel's impulse response has fallen below 1 % of its peak: the
-    output error is filtered from rest, so its first samples are not the disturbance yet."""
+    output error is filtered from rest, so its first samples are not the disturbance yet. An
+    integrating channel's is its stable part's (``_core.without_integrators``): from there on
+    the inputs before the stretch leave a constant, which the level fitted beside takes."""
     settle = 0
     for g in row:
         if g is None:
             continue
-        h = np.abs(np.asarray(g.impulse(length), dtype=float).ravel())
+        h = np.abs(np.asarray(_core.without_integrators(g).impulse(length), dtype=float).ravel())
         above = np.flatnonzero(h >= IMPULSE_TOLERANCE * h.max()) if h.max() > 0 else np.array([0])
         settle = max(settle, int(above[-1]) + 1)
     return settle

@@ -54,6 +54,11 @@ class Family:
     # FOPTD values off by up to a third (gain), a half (time constant) and a sample (dead time),
     # rounded; the plant is the truth, so the model is wrong from the start besides the effect.
     hand_written: bool = False
+    # Every diagonal channel integrates (a level: the OP sets an outflow, the level is its
+    # integral): gain per sample (integrating_gains), the drawn time constant a lag before the
+    # integrator (a valve or a flow), discrete model files only (FOPTD cannot hold an integrator).
+    integrating: bool = False
+    integrating_gains: tuple = (0.01, 0.1)
     details: dict = field(default_factory=dict)
 
     def draw(self, seed: int, record_s: float | None = None, effect: str | None = None,
@@ -91,6 +96,13 @@ def _channel(gain, tau_samples, delay, ts):
     """Discrete FOPTD: K (1 - a) q^-d / (1 - a q^-1), a = exp(-1/tau); y responds at k + d."""
     a = math.exp(-1.0 / tau_samples)
     return {"num": [gain * (1 - a)], "den": [1.0, -a], "delay": int(delay)}
+
+
+def _integrating_channel(gain, tau_samples, delay, ts):
+    """A lag before an integrator: K (1 - a) q^-d / ((1 - a q^-1)(1 - q^-1)), K the level's rise
+    per sample per unit of input once the lag has settled; y responds at k + d."""
+    a = math.exp(-1.0 / tau_samples)
+    return {"num": [gain * (1 - a)], "den": [1.0, -(1.0 + a), a], "delay": int(delay)}
 
 
 def _foptd(gain, tau_samples, delay, ts):
@@ -147,7 +159,7 @@ def _plant(fam, rng, ts):
     lo_d, hi_d = fam.dead_time_samples
     chans = {}
     for i in range(n):
-        k_ii = _log_uniform(rng, 0.5, 5.0) * rng.choice([-1.0, 1.0])
+        k_ii = _log_uniform(rng, *(fam.integrating_gains if fam.integrating else (0.5, 5.0))) * rng.choice([-1.0, 1.0])
         for j in range(n):
             if i != j and (rng.uniform() > 0.6 or (i, j) == (0, n - 1)):
                 continue
@@ -158,13 +170,18 @@ def _plant(fam, rng, ts):
     return chans
 
 
-def _pid_tuning(k, tau, d, ts, rng, derivative):
+def _pid_tuning(k, tau, d, ts, rng, derivative, integrating=False):
     """SIMC rules (Skogestad 2003) for a FOPTD channel, tau_c = lambda * theta, lambda in [1, 3]:
-    Kc = tau / (K (tau_c + theta)), Ti = min(tau, 4 (tau_c + theta)); PID adds Td = theta / 3."""
-    theta = d * ts
+    Kc = tau / (K (tau_c + theta)), Ti = min(tau, 4 (tau_c + theta)); PID adds Td = theta / 3.
+    An integrating channel (K per sample, its lag counted into the effective dead time theta):
+    Kc = 1 / (K' (tau_c + theta)), K' = K / Ts, Ti = 4 (tau_c + theta)."""
+    theta = (d + tau if integrating else d) * ts
     tau_s = tau * ts
     tau_c = rng.uniform(1.0, 3.0) * theta
-    loop = {"gain": tau_s / (k * (tau_c + theta)), "integral_time_s": min(tau_s, 4 * (tau_c + theta))}
+    if integrating:
+        loop = {"gain": ts / (k * (tau_c + theta)), "integral_time_s": 4 * (tau_c + theta)}
+    else:
+        loop = {"gain": tau_s / (k * (tau_c + theta)), "integral_time_s": min(tau_s, 4 * (tau_c + theta))}
     if derivative:
         loop["derivative_time_s"] = theta / 3.0
     return loop
@@ -176,7 +193,7 @@ def _draw(fam: Family, rng, seed: int, record_s: float | None, forced_effect: st
     outs, ins = [f"y{i + 1}" for i in range(n)], [f"u{j + 1}" for j in range(n)]
     chans = _plant(fam, rng, ts)
     form = str(rng.choice(fam.model_forms))
-    make = _foptd if form == "foptd" else _channel
+    make = _foptd if form == "foptd" else _integrating_channel if fam.integrating else _channel
     process = {o: {} for o in outs}
     for (i, j), (k, tau, d) in chans.items():
         process[outs[i]][ins[j]] = make(k, tau, d, ts)
@@ -228,7 +245,7 @@ def _controller(fam, rng, ts, chans, outs, ins, y0, u0):
         loops = []
         for i in range(n):
             k, tau, d = chans[(i, i)]
-            loop = {"cv": outs[i], "mv": ins[i], **_pid_tuning(k, tau, d, ts, rng, fam.controller == "pid")}
+            loop = {"cv": outs[i], "mv": ins[i], **_pid_tuning(k, tau, d, ts, rng, fam.controller == "pid", fam.integrating)}
             if n > 1:  # multi-loop: detune against the interaction
                 loop["gain"] *= 0.7
             # Output saturation a few noise-compensating moves from the start: binds now and then.
@@ -467,6 +484,18 @@ FAMILIES = [
     Family("pi_siso_short", HELD_OUT, "single PI loop, records of 2-8 h (shorter than the presets' "
            "training plus a window: detect refuses the shortest)", "pi", 1, ("gain", "time_constant", "none"),
            sample_times_s=(1.0, 2.0, 5.0), model_forms=("foptd",), record_hours=(2.0, 8.0), setpoint_steps=True),
+    # Added 2026-11-30 (twenty-fifth session): integrating channels (levels, an MPC's ramp CVs),
+    # which detect refused until then. Nothing was chosen on either family.
+    Family("pi_level", TUNING, "PI level loop: a lag before an integrator, setpoint steps, 5-10 s, "
+           "discrete model with or without noise model", "pi", 1, ("gain", "delay", "none", "noise_change"),
+           sample_times_s=(5.0, 10.0), time_constant_samples=(1.0, 5.0), dead_time_samples=(1, 5),
+           model_forms=("discrete+noise", "discrete"), setpoint_steps=True, integrating=True),
+    Family("pi_level_fast", HELD_OUT, "PI level loop at 1-2 s, longer lags and dead times, "
+           "second-order / high-pass noise, step and ramp disturbances, discrete model without noise "
+           "model", "pi", 1, ("gain", "delay", "none", "noise_change"), sample_times_s=(1.0, 2.0),
+           time_constant_samples=(2.0, 10.0), dead_time_samples=(2, 10), noise_colours=("ar2", "arma22", "highpass"),
+           model_forms=("discrete",), record_hours=(14.0, 16.0), setpoint_steps=True, step_ramp_disturbances=True,
+           integrating=True),
 ]
 
 

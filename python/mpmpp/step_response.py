@@ -1,12 +1,15 @@
 """How far apart two channels are, in the terms a control engineer reads a model error: the
-step-response difference over the settling horizon, relative to the reference channel's gain."""
+step-response difference over the settling horizon, relative to the reference channel's gain.
+An integrating reference (a level) has no steady-state gain: its channels are compared by their
+rate responses, the step responses of (1 - q^-1) G, relative to the reference's rate gain."""
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
-from ._core import TransferFunction
+from ._core import TransferFunction, without_integrators
+from .integrating import integrates
 
 
 def step_response_error(channel: TransferFunction | None, reference: TransferFunction) -> float:
@@ -23,6 +26,10 @@ def step_response_deviation(channel: TransferFunction | None, reference: Transfe
 
 
 def _step_difference(channel: TransferFunction | None, reference: TransferFunction) -> np.ndarray:
+    if integrates(reference):
+        channel = None if channel is None else (without_integrators(channel) if integrates(channel)
+                                                else channel.series(TransferFunction([1.0, -1.0], [1.0])))
+        reference = without_integrators(reference)
     horizon = settling_samples(reference, channel)
     s_ref = np.asarray(reference.step(horizon))
     s = np.zeros(horizon) if channel is None else np.asarray(channel.step(horizon))

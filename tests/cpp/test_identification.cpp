@@ -145,3 +145,23 @@ TEST(ArxOe, NonInformativeWindowsThrowOrAreFlagged) {
 }
 
 }  // namespace
+
+TEST(FirLength, IntegratorsAreDividedOutOfTheSettlingTime) {
+  Eigen::VectorXd b(1), lag(2), level(3), twice(4);
+  b << 0.05;
+  lag << 1.0, -0.6;
+  level << 1.0, -1.6, 0.6;        // (1 - 0.6 q^-1)(1 - q^-1)
+  twice << 1.0, -2.6, 2.2, -0.6;  // (1 - 0.6 q^-1)(1 - q^-1)^2
+  const mpmpp::TransferFunction stable(b, lag, 2);
+  for (const auto& den : {level, twice}) {
+    const mpmpp::TransferFunction g(b, den, 2);
+    const mpmpp::TransferFunction part = mpmpp::without_integrators(g);
+    ASSERT_EQ(part.den().size(), 2);
+    EXPECT_NEAR(part.den()[1], -0.6, 1e-12);
+    EXPECT_EQ(part.delay(), 2);
+    EXPECT_EQ(mpmpp::settling_samples(g), mpmpp::fir_length_to_one_percent(stable));
+    EXPECT_THROW(mpmpp::fir_length_to_one_percent(g), mpmpp::InputError);
+  }
+  EXPECT_EQ(mpmpp::without_integrators(stable).den().size(), 2);  // nothing to divide out
+  EXPECT_EQ(mpmpp::settling_samples(stable), mpmpp::fir_length_to_one_percent(stable));
+}

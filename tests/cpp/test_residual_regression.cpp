@@ -3,6 +3,7 @@
 #include <cmath>
 #include <random>
 
+#include "mpmpp/arx_oe.hpp"
 #include "mpmpp/chi_square.hpp"
 #include "mpmpp/error.hpp"
 #include "mpmpp/residual_regression.hpp"
@@ -92,4 +93,38 @@ TEST(ResidualRegression, ALongWhiteningAbsorbsADeadTimeChangeUnderPureFeedback) 
   EXPECT_GT(changed_short, 100.0);                // measured 196
   EXPECT_GT(changed_short, 20.0 * changed_long);  // measured 1.3 with AR(18)
   EXPECT_LT(wald(g.delay(), 3), 22.5);            // chi-square(6) at 0.001
+}
+
+// A level: the paper loop's lag before an integrator, u in absolute units far from zero (an OP
+// at 40 %), so the integrated input ramps through every window. The window's level and ramp
+// carry what the integrator remembers of the time before and the input's offset; the test
+// sees the gain change and nothing without it.
+TEST(ResidualRegression, AnIntegratingChannelIsTestedLikeAStableOne) {
+  Eigen::VectorXd b(1), a(3);
+  b << 0.01;
+  a << 1.0, -1.9048, 0.9048;  // (1 - 0.9048 q^-1)(1 - q^-1)
+  const TransferFunction g(b, a, 3);
+  const Model m = make_model("level", 5.0, {"u"}, {"y"}, {{"y", {{"u", g}}}}, {});
+  DetectorConfig c = DetectorConfig::siso();
+  c.arx_order_a = 3;
+  const ResidualRegression r(m, 0, {0}, c);
+  // settled once the lag has: as the lag alone would be, not never
+  Eigen::VectorXd lag(2);
+  lag << 1.0, -0.9048;
+  EXPECT_LE(r.settling_samples(), fir_length_to_one_percent(TransferFunction(b, lag, 3)) + 200);
+  test_loops::LoopSamples s =
+      test_loops::random_step_samples(test_loops::small_siso_model(3), 4000, 11);
+  s.u.array() += 40.0;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> e(0.0, 0.05);
+  const Eigen::VectorXd noise = Eigen::VectorXd::NullaryExpr(4000, [&] { return e(rng); });
+  const Eigen::VectorXd y = g.filter(s.u.col(0)) + noise;
+  std::vector<Eigen::VectorXd> beta;
+  std::vector<Eigen::MatrixXd> cov;
+  ASSERT_TRUE(r.estimate(y, s.u, beta, cov));
+  EXPECT_LT(beta[0].dot(cov[0].ldlt().solve(beta[0])), 30.0);
+  const Eigen::VectorXd changed = y + 0.5 * g.filter(s.u.col(0));
+  ASSERT_TRUE(r.estimate(changed, s.u, beta, cov));
+  EXPECT_NEAR(beta[0][0], 0.5, 6 * std::sqrt(cov[0](0, 0)) + 0.05);
+  EXPECT_GT(beta[0].dot(cov[0].ldlt().solve(beta[0])), 200.0);
 }

@@ -67,7 +67,7 @@ def contract_delay(channel, ts):
     return int(round(channel["dead_time_s"] / ts)) + 1
 
 
-@pytest.mark.parametrize("name", ["mpc_siso", "pi_siso", "pid_siso_slow", "mpc_siso_fast"])
+@pytest.mark.parametrize("name", ["mpc_siso", "pi_siso", "pid_siso_slow", "mpc_siso_fast", "pi_level"])
 def test_delay_convention_matches_the_contract(name):
     """Noise off, one setpoint step at sample s: the controller moves u at s and y first
     responds at s + d, d the model file's delay (step at k -> response at k + d)."""

@@ -108,6 +108,16 @@ class ArxOeEstimator {
 // nominal response is zero or has not decayed within 1,000,000 samples.
 int fir_length_to_one_percent(const TransferFunction& nominal);
 
+// g with every integrator divided out: each root of den at z = 1 (a level's inflow-to-level
+// channel, a ramp CV of an MPC). An integrating channel filtered from rest never forgets the
+// inputs before it, but what it remembers is a constant once its stable part has settled: the
+// level every window fit and every disturbance fit carries takes it.
+TransferFunction without_integrators(const TransferFunction& g);
+
+// Samples until g's response, filtered from rest, differs from the true one by a constant at
+// most: fir_length_to_one_percent of g without its integrators (of g itself when it has none).
+int settling_samples(const TransferFunction& g);
+
 // Removes the mean (or the least-squares line a + b t) of x in place.
 void detrend_in_place(Eigen::Ref<Eigen::VectorXd> x, Detrend mode);
 

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _core
 from ..signals import Signals, per_segment, valve_input
 from .result import HeldOutError, ModelChange
-from .whitening import OutputResidual, disturbance_drives
+from .whitening import OutputResidual, disturbance_drives, output_error
 
 
 def one_step_errors(sig: Signals, i: int, changes: list[ModelChange]) -> np.ndarray:
@@ -31,7 +30,7 @@ def one_step_errors(sig: Signals, i: int, changes: list[ModelChange]) -> np.ndar
                 extra_cols.append((c.channel, sig.z[:, sig.extras.index(c.input)]))
             else:
                 row[sig.inputs.index(c.input)] = c.channel
-    v = per_segment(sig, lambda yy, uu: _core.output_error(row, yy, uu), sig.y[:, i], u)
+    v = output_error(sig, i, row, u)
     for g, z in extra_cols:
         v = v - per_segment(sig, g.filter, np.nan_to_num(z))
         v[~np.isfinite(z)] = np.nan
@@ -59,7 +58,7 @@ def held_out_error_beside(out: OutputResidual, onset: int, change: ModelChange, 
     outweigh what the update removes: mpc_siso_1s seed 15 (tuning), a time constant doubled
     at 9.0 h and a ramp disturbance from 10.8 h: the update (1.76x) raised the plain error after
     its onset 1.283 -> 1.299 and lowered it 1.009 -> 1.000 with the disturbances taken out."""
-    drives = disturbance_drives(len(out.e), onsets, out.sig.sample_time_s)
+    drives = disturbance_drives(out, onsets)
     x = np.column_stack([per_segment(out.sig, out.noise.inverse().filter, d) for d in drives])
     after_e = one_step_errors(out.sig, out.i, [change])
     rows = (out.weight > 0) & np.isfinite(out.e) & np.isfinite(after_e)

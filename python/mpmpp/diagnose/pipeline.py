@@ -9,6 +9,7 @@ import numpy as np
 
 from ..record_length import minimum_rows, require_rows, scaled_rows
 from ..held_values import frozen_inputs, frozen_note, held_columns, held_note
+from ..integrating import integrating_notes
 from ..signals import Signals, extract
 from ..timeaxis import seconds_of
 from .actuator import actuator_findings, rival_score
@@ -100,6 +101,7 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
             notes.append(f"{name}: {lost} lost sample(s) ({100 * lost / len(time_s):.2g} % of the rows) interpolated "
                          "to keep the record in one piece; the errors that read them are left out of every fit")
     notes += [frozen_note(name) for name in frozen_inputs(sig)]
+    notes += integrating_notes(model)
     notes += [held_note(sig, name, s) for name, stretches in held_columns(sig.inputs, sig.u, sig.sample_time_s).items()
               for s in stretches]
     for i, name in enumerate(sig.outputs):

@@ -26,6 +26,7 @@ import numpy as np
 
 from .. import _core
 from .._core import TransferFunction
+from ..integrating import row_integrates, without_line
 from ..signals import Signals, bridged_reach, per_segment
 from .laguerre import basis_responses, delayed_before, laguerre_filters, laguerre_pole
 from .result import InsufficientData
@@ -107,13 +108,22 @@ class OutputResidual:
         return np.nan_to_num(per_segment(self.sig, g.filter, x))
 
 
+def output_error(sig: Signals, i: int, row: list, u: np.ndarray) -> np.ndarray:
+    """y_i - sum_j G_ij u_j with the channels ``row``, filtered from rest in each data segment.
+    With an integrating channel in ``row`` each segment's least-squares line is taken out: an
+    input away from the operating point the record's mean guesses (a level loop's OP off its
+    balance) makes the integrator's error ramp, which is no model error (integrating.py)."""
+    v = per_segment(sig, lambda yy, uu: _core.output_error(row, yy, uu), sig.y[:, i], u)
+    return per_segment(sig, without_line, v) if row_integrates(row) else v
+
+
 def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, block: int,
                     noise_estimated: bool = False) -> OutputResidual:
     """Residuals of output i, its disturbance split and whitening, and the held-out blocks
     (even / odd blocks of ``block`` samples)."""
     n = len(sig.time_s)
     row, noise = sig.rows[i], sig.noise[i]
-    v = per_segment(sig, lambda yy, uu: _core.output_error(row, yy, uu), sig.y[:, i], sig.u)
+    v = output_error(sig, i, row, sig.u)
     e = per_segment(sig, lambda vv: noise.inverse().filter(vv), v)
     weight = np.zeros(n)
     for a, b in sig.segments:
@@ -273,16 +283,25 @@ def disturbance_onsets(out: OutputResidual, e: np.ndarray, first_onset: int, gri
                              max(first_onset, 2 * SETTLE), math.log(len(e)))[0]
 
 
-def disturbance_drives(n: int, onsets: list[int], sample_time_s: float) -> list[np.ndarray]:
-    """The level and, from each onset on, a step and a ramp (per hour), as output errors."""
-    hour = 3600.0 / sample_time_s
+def disturbance_drives(out: OutputResidual, onsets: list[int]) -> list[np.ndarray]:
+    """The level and, from each onset on, a step and a ramp (per hour), as output errors. An
+    output with an integrating channel also gets a ramp per segment and a level per later
+    segment: its channels are filtered from rest at each segment's start, and an input away
+    from the operating point the record's mean guesses makes the integrator's output error
+    ramp (any offset of a level loop's OP from its balance), which is no model error."""
+    n, hour = len(out.e), 3600.0 / out.sig.sample_time_s
     t = np.arange(n, dtype=float)
-    return [np.ones(n)] + [np.where(t >= k, d, 0.0) for k in onsets for d in (np.ones(n), (t - k) / hour)]
+    drives = [np.ones(n)] + [np.where(t >= k, d, 0.0) for k in onsets for d in (np.ones(n), (t - k) / hour)]
+    if row_integrates(out.row):
+        for k, (a, b) in enumerate(out.sig.segments):
+            inside = (t >= a) & (t < b)
+            drives += [np.where(inside, t - a, 0.0) / hour] + ([inside.astype(float)] if k else [])
+    return drives
 
 
 def disturbance_nuisance(out: OutputResidual, onsets: list[int]) -> Nuisance:
     """The output's level and steps + ramps from ``onsets`` on, whitened as its residual."""
-    columns = [out.whiten(d) for d in disturbance_drives(len(out.e), onsets, out.sig.sample_time_s)]
+    columns = [out.whiten(d) for d in disturbance_drives(out, onsets)]
     return Nuisance(list(onsets), np.column_stack(columns), out.weight)
 
 
@@ -308,7 +327,7 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray, beside_inputs:
     gets a root near 1 whose inverse differences the drift, and the controller's
     compensation of it, away before any candidate can explain it, and the compensation's
     leftovers then pose as a channel change."""
-    v = np.nan_to_num(per_segment(sig, lambda yy, uu: _core.output_error(sig.rows[i], yy, uu), sig.y[:, i], sig.u))
+    v = np.nan_to_num(output_error(sig, i, sig.rows[i], sig.u))
     usable = np.zeros(len(v), bool)
     for a, b in sig.segments:
         usable[a + SETTLE:b] = True

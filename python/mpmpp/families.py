@@ -258,7 +258,9 @@ def _controller(fam, rng, ts, chans, outs, ins, y0, u0):
     mv = {}
     for j, u in enumerate(ins):
         k = chans[(j, j)][0]
-        entry = {"target": u0[u], "move_weight": _log_uniform(rng, 0.3, 3.0) * k * k,
+        # a move's effect on the output: the gain, or for an integrator its rise over the horizon
+        effect = k * hp if fam.integrating else k
+        entry = {"target": u0[u], "move_weight": _log_uniform(rng, 0.3, 3.0) * effect * effect,
                  "min": u0[u] - 200 / abs(k), "max": u0[u] + 200 / abs(k)}
         if fam.controller == "mpc_move_limits":
             entry["max_move"] = rng.uniform(0.1, 0.3) / abs(k)  # binds on most noise-driven moves
@@ -490,6 +492,10 @@ FAMILIES = [
            "discrete model with or without noise model", "pi", 1, ("gain", "delay", "none", "noise_change"),
            sample_times_s=(5.0, 10.0), time_constant_samples=(1.0, 5.0), dead_time_samples=(1, 5),
            model_forms=("discrete+noise", "discrete"), setpoint_steps=True, integrating=True),
+    Family("mpc_level", TUNING, "the project's MPC on a level (a lag before an integrator), routine "
+           "operation without setpoint steps, 5-10 s, discrete model with or without noise model", "mpc", 1,
+           ("gain", "delay", "none", "noise_change"), sample_times_s=(5.0, 10.0), time_constant_samples=(1.0, 5.0),
+           dead_time_samples=(1, 5), model_forms=("discrete+noise", "discrete"), integrating=True),
     Family("pi_level_fast", HELD_OUT, "PI level loop at 1-2 s, longer lags and dead times, "
            "second-order / high-pass noise, step and ramp disturbances, discrete model without noise "
            "model", "pi", 1, ("gain", "delay", "none", "noise_change"), sample_times_s=(1.0, 2.0),

@@ -21,7 +21,7 @@ from ..signals import Signals, per_segment
 from ..stiction.valve import valve_position
 from .errors import held_out_error
 from .process import first_lag
-from .laguerre import delayed_before, laguerre_filters, laguerre_pole
+from .laguerre import delayed_before, laguerre_filters, laguerre_pole, output_basis
 from .refitted_noise import OnsetGains, RefittedNoise
 from .result import Finding, ModelChange
 from .scoring import confidence
@@ -253,8 +253,8 @@ def linear_change_statistic(out: OutputResidual, j: int, onset: int, correction:
     or dead-time change, or a mix, lies in its span)."""
     delayed = delayed_before(np.nan_to_num(out.sig.u[:, j]), first_lag(out.row[j]))
     after = np.arange(len(delayed)) >= onset
-    basis = np.column_stack([np.where(after, out.channel_response(f, delayed), 0.0)
-                             for f in laguerre_filters(laguerre_pole(out.sig, out.i))])
+    basis = np.column_stack([np.where(after, c, 0.0) for c in
+                             np.nan_to_num(output_basis(out.sig, out.i, delayed[:, None], laguerre_filters(laguerre_pole(out.sig, out.i)))).T])
     at = np.array([onset])
     hinv = out.noise.inverse()
     if correction == "refitted":

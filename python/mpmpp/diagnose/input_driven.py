@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..signals import per_segment
-from .laguerre import basis_responses, laguerre_filters, laguerre_pole
+from .laguerre import laguerre_filters, laguerre_pole, output_basis
 from .whitening import NOISE_ORDER, OutputResidual
 
 
@@ -38,7 +38,7 @@ def input_driven_gain(out: OutputResidual, folds: list[np.ndarray], order: int =
     hinv = out.noise.inverse()
     whitened_u = per_segment(sig, lambda xs: np.column_stack(
         [hinv.filter(xs[:, k]) for k in range(xs.shape[1])]), np.nan_to_num(sig.u))
-    x = np.nan_to_num(basis_responses(sig, whitened_u, laguerre_filters(laguerre_pole(sig, out.i))))
+    x = np.nan_to_num(output_basis(sig, out.i, whitened_u, laguerre_filters(laguerre_pole(sig, out.i))))
     lags = np.column_stack([np.r_[np.zeros(k), e[:-k]] for k in range(1, order + 1)])
     noise_side = np.column_stack([np.ones(len(e)), lags])
     both = np.column_stack([noise_side, x])

@@ -9,7 +9,8 @@ import math
 
 import numpy as np
 
-from .._core import TransferFunction
+from .._core import TransferFunction, without_integrators
+from ..integrating import row_integrates, without_line
 from ..signals import Signals, per_segment
 
 LAGUERRE_FUNCTIONS = 8
@@ -21,9 +22,10 @@ BASIS_LEAD = 3
 
 
 def laguerre_pole(sig: Signals, i: int) -> float:
-    """The slowest real pole among output i's channels (0.5..0.99): the basis then spans the
-    output's own dynamics with few functions."""
-    poles = [abs(p) for g in sig.rows[i] if g is not None for p in np.asarray(g.poles()) if 0.0 < abs(p) < 1.0]
+    """The slowest real pole among output i's channels (0.5..0.99), an integrator's left out:
+    the basis then spans the output's own dynamics with few functions."""
+    poles = [abs(p) for g in sig.rows[i] if g is not None for p in np.asarray(without_integrators(g).poles())
+             if 0.0 < abs(p) < 1.0]
     return float(np.clip(max(poles, default=DEFAULT_POLE), 0.5, 0.99))
 
 
@@ -49,3 +51,16 @@ def basis_responses(sig: Signals, columns: np.ndarray, filters: list[TransferFun
     raw = np.nan_to_num(columns)
     return per_segment(sig, lambda xs: np.column_stack(
         [g.filter(xs[:, k]) for k in range(xs.shape[1]) for g in filters]), raw)
+
+
+
+def output_basis(sig: Signals, i: int, columns: np.ndarray, filters: list[TransferFunction]) -> np.ndarray:
+    """``basis_responses`` for output i. An output with an integrating channel changes inside its
+    integrator (a level's valve gain, a lag of its flow), so each response is integrated too
+    (summed from each segment's start, after the stable filter: folded into a high-order filter
+    with poles near 1 the direct form overflows), and each segment's line is taken out of it,
+    as it is out of the output error (whitening.output_error)."""
+    x = basis_responses(sig, columns, filters)
+    if not row_integrates(sig.rows[i]):
+        return x
+    return per_segment(sig, lambda xs: np.column_stack([without_line(np.cumsum(c)) for c in xs.T]), x)

@@ -23,7 +23,7 @@ import numpy as np
 from .._core import TransferFunction
 from ..signals import Signals, bridged_reach, per_segment
 from .errors import one_step_errors
-from .laguerre import basis_responses, laguerre_filters, laguerre_pole
+from .laguerre import laguerre_filters, laguerre_pole, output_basis
 from .result import ModelChange
 
 MIN_FIT_ROWS = 50
@@ -45,10 +45,10 @@ class ProcessBasis:
     filters, a level term, and their whitening per noise model. They do not depend on the
     model being judged, so the fits before and after a change share them."""
 
-    def __init__(self, sig: Signals, columns: np.ndarray, filters: list[TransferFunction]):
+    def __init__(self, sig: Signals, i: int, columns: np.ndarray, filters: list[TransferFunction]):
         self.sig = sig
         self.columns = columns
-        self.x = basis_responses(sig, columns, filters)
+        self.x = output_basis(sig, i, columns, filters)
         # The level term: the step from each segment's start (an operating-point offset).
         self.regressors = np.column_stack([self.x, per_segment(sig, np.ones_like, np.ones(len(self.x)))])
         self._whitened: dict = {}
@@ -96,7 +96,7 @@ def process_error(sig: Signals, i: int, changes: list[ModelChange], onset: int, 
                   columns: np.ndarray, filters: list[TransferFunction]) -> float:
     """RMS on the odd blocks after ``onset`` of the input-explained part of y_i - G_i u, G the
     model after ``changes``; fitted on the even blocks after ``onset``."""
-    return held_out_rms(process_part(sig, i, changes, onset, block, ProcessBasis(sig, columns, filters)), block)
+    return held_out_rms(process_part(sig, i, changes, onset, block, ProcessBasis(sig, i, columns, filters)), block)
 
 
 def process_parts(sig: Signals, i: int, changes: list[ModelChange], onset: int,
@@ -109,7 +109,7 @@ def process_parts(sig: Signals, i: int, changes: list[ModelChange], onset: int,
     disturbance): examples/mimo_noise_change's noise change showed moisture's process part
     falling 0.0169 -> 0.0073 with G unchanged."""
     _, columns = explanatory_columns(sig, changes)
-    basis = ProcessBasis(sig, columns, laguerre_filters(laguerre_pole(sig, i)))
+    basis = ProcessBasis(sig, i, columns, laguerre_filters(laguerre_pole(sig, i)))
     noise_only = [ModelChange(c.output, noise=c.noise) for c in changes if c.noise is not None]
     return (process_part(sig, i, noise_only, onset, block, basis, end),
             process_part(sig, i, changes, onset, block, basis, end))

@@ -28,7 +28,7 @@ from .. import _core
 from .._core import TransferFunction
 from ..integrating import row_integrates, without_line
 from ..signals import Signals, bridged_reach, per_segment
-from .laguerre import basis_responses, delayed_before, laguerre_filters, laguerre_pole
+from .laguerre import delayed_before, laguerre_filters, laguerre_pole, output_basis
 from .result import InsufficientData
 from .trend import TrendScan, trend_fit
 
@@ -213,7 +213,7 @@ def input_basis(sig: Signals, i: int, prefilter: TransferFunction | None = None)
     for j, g in enumerate(sig.rows[i]):
         if g is None:
             continue
-        columns.append(basis_responses(sig, delayed_before(np.nan_to_num(sig.u[:, j]), g.delay)[:, None], filters))
+        columns.append(output_basis(sig, i, delayed_before(np.nan_to_num(sig.u[:, j]), g.delay)[:, None], filters))
     if not columns:
         return np.zeros((len(sig.time_s), 0))
     x = np.nan_to_num(np.column_stack(columns))

@@ -487,7 +487,8 @@ FAMILIES = [
            "training plus a window: detect refuses the shortest)", "pi", 1, ("gain", "time_constant", "none"),
            sample_times_s=(1.0, 2.0, 5.0), model_forms=("foptd",), record_hours=(2.0, 8.0), setpoint_steps=True),
     # Added 2026-11-30 (twenty-fifth session): integrating channels (levels, an MPC's ramp CVs),
-    # which detect refused until then. Nothing was chosen on either family.
+    # which detect refused until then. diagnose's handling of them was built looking at the
+    # tuning pi_level and mpc_level; nothing was chosen on the held-out pi_level_fast.
     Family("pi_level", TUNING, "PI level loop: a lag before an integrator, setpoint steps, 5-10 s, "
            "discrete model with or without noise model", "pi", 1, ("gain", "delay", "none", "noise_change"),
            sample_times_s=(5.0, 10.0), time_constant_samples=(1.0, 5.0), dead_time_samples=(1, 5),

@@ -253,8 +253,8 @@ def linear_change_statistic(out: OutputResidual, j: int, onset: int, correction:
     or dead-time change, or a mix, lies in its span)."""
     delayed = delayed_before(np.nan_to_num(out.sig.u[:, j]), first_lag(out.row[j]))
     after = np.arange(len(delayed)) >= onset
-    basis = np.column_stack([np.where(after, c, 0.0) for c in
-                             np.nan_to_num(output_basis(out.sig, out.i, delayed[:, None], laguerre_filters(laguerre_pole(out.sig, out.i)))).T])
+    responses = output_basis(out.sig, out.i, delayed[:, None], laguerre_filters(laguerre_pole(out.sig, out.i)))
+    basis = np.where(after[:, None], np.nan_to_num(responses), 0.0)
     at = np.array([onset])
     hinv = out.noise.inverse()
     if correction == "refitted":

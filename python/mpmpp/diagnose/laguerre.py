@@ -53,7 +53,6 @@ def basis_responses(sig: Signals, columns: np.ndarray, filters: list[TransferFun
         [g.filter(xs[:, k]) for k in range(xs.shape[1]) for g in filters]), raw)
 
 
-
 def output_basis(sig: Signals, i: int, columns: np.ndarray, filters: list[TransferFunction]) -> np.ndarray:
     """``basis_responses`` for output i. An output with an integrating channel changes inside its
     integrator (a level's valve gain, a lag of its flow), so each response is integrated too

@@ -151,7 +151,6 @@ void bind_identification(py::module_& m) {
            py::arg("window"), py::arg("step"), py::call_guard<py::gil_scoped_release>());
 
   m.def("fir_length_to_one_percent", &fir_length_to_one_percent, py::arg("nominal"));
-  m.def("settling_samples", &settling_samples, py::arg("nominal"));
   m.def("without_integrators", &without_integrators, py::arg("g"));
 }
 

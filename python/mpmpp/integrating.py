@@ -8,11 +8,12 @@ for an integrator turns any offset of the input from its balance (a level loop's
 an integrating output's error has each data segment's least-squares line taken out, and every
 candidate is fitted beside a ramp and a level per segment (diagnose/whitening.py `output_error`,
 `disturbance_drives`); the inputs' Laguerre bases are integrated like the channel
-(diagnose/laguerre.py `output_basis`). Step-response errors of an integrating channel compare rate responses
-(step_response.py): with an infinite steady-state gain no change of one was ever material, and
-a gain x 1.6 on a PI level loop gave "consistent with the data"; with rate responses alone most
-records of such a loop got an `output_drift` from their first hour. `compare` takes each segment's
-line out of an integrating output's simulation, prediction and one-step errors the same way.
+(diagnose/laguerre.py `output_basis`). Step-response errors of an integrating channel compare
+rate responses (step_response.py): with an infinite steady-state gain no change of one was ever
+material, and a gain x 1.6 on a PI level loop gave "consistent with the data"; with rate
+responses alone most records of such a loop got an `output_drift` from their first hour.
+`compare` takes each segment's line out of an integrating output's simulation, prediction and
+one-step errors the same way.
 """
 from __future__ import annotations
 

@@ -78,18 +78,17 @@ def _data_summary(path: str, df, model) -> dict:
         "candidates": [c for c in others if c not in setpoints],
         "rows_with_missing": int(np.isnan(df.drop(columns="time").to_numpy()).any(axis=1).sum()),
         "frozen": {c: float(df[c].dropna().iloc[0]) for c in frozen_columns(modelled, df[modelled])},
-        "held": clock.stamp_fields(_held(df, model)),
+        "held": clock.stamp_fields(_held(df, modelled, model.sample_time_s)),
         "interpolated": _interpolated(df, model),
     }
 
 
-def _held(df, model) -> dict:
+def _held(df, columns: list, sample_time_s: float) -> dict:
     """Model column -> the stretches of an hour or more (held_values.HELD_STRETCH_S) over which it holds one value
     (columns frozen throughout, or with no such stretch, left out)."""
     time = df["time"].to_numpy(dtype=float)
-    columns = [*model.inputs, *model.outputs]
     return {c: [{"start_s": float(time[a]), "end_s": float(time[b - 1])} for a, b in stretches]
-            for c, stretches in held_columns(columns, df[columns], model.sample_time_s).items()}
+            for c, stretches in held_columns(columns, df[columns], sample_time_s).items()}
 
 
 def _when(doc: dict, key: str) -> str:

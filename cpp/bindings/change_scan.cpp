@@ -48,7 +48,10 @@ void bind_change_scan(py::module_& m) {
            py::arg("begin"), py::arg("min_segment"), py::arg("step"),
            py::arg("onset_penalty") = 0.0)
       .def("fit", &ProjectedOnsetScan::fit, py::arg("x"), py::arg("nominal") = py::none(),
-           py::arg("weight") = py::none(), py::call_guard<py::gil_scoped_release>());
+           py::arg("weight") = py::none(), py::call_guard<py::gil_scoped_release>())
+      .def("fit_holding_scale", &ProjectedOnsetScan::fit_holding_scale, py::arg("x"),
+           py::arg("nominal") = py::none(), py::arg("weight") = py::none(), py::arg("scale") = 1.0,
+           py::call_guard<py::gil_scoped_release>());
   m.def("fit_at_onset", &fit_at_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"),
         py::arg("weight"), py::arg("onset"));
   m.def("fit_ar", &fit_ar, py::arg("e"), py::arg("order"), py::arg("begin"), py::arg("end"),

@@ -19,13 +19,18 @@ void check_same_length(Eigen::Index a, Eigen::Index b, Eigen::Index c, Eigen::In
     throw InputError("r, r_without, psi and weight must have the same length");
 }
 
-OnsetFit make_fit(Eigen::Index k, double drop, double rp, double pp) {
+// With `held` the channel scale is not fitted but held at *held (a dynamics change that keeps
+// the model's gain): the statistic is the drop at that scale, drop + 2 theta rp - theta^2 pp;
+// theta_se stays the free estimate's, for the caller's test of the held value.
+OnsetFit make_fit(Eigen::Index k, double drop, double rp, double pp,
+                  std::optional<double> held = std::nullopt) {
   OnsetFit f;
   f.onset = k;
   f.statistic = drop;
+  f.theta = held.value_or(0.0);
   if (pp <= 0.0) return f;
-  f.theta = rp / pp;
-  f.statistic += rp * rp / pp;
+  if (!held) f.theta = rp / pp;
+  f.statistic += held ? 2.0 * f.theta * rp - f.theta * f.theta * pp : rp * rp / pp;
   f.theta_se = 1.0 / std::sqrt(pp);
   return f;
 }
@@ -74,6 +79,10 @@ Eigen::Index first_nonzero(const Eigen::Ref<const Eigen::VectorXd>& x) {
   while (t < n && x[t] == 0.0) ++t;
   return t;
 }
+
+}  // namespace
+
+namespace detail {
 
 // Suffix sums over t >= k of the statistic's three terms, kept only at the onsets a scan
 // considers, for the weighting `weight` (column 0) and, with a fold assignment, for the even
@@ -154,27 +163,29 @@ class GridSums {
   // fold for a change applied before it happened).
   // An onset after the first grid onset competes with its statistic less `onset_penalty`.
   OnsetFit scan(int j, Eigen::Index* row = nullptr, bool latest_tie = false,
-                double onset_penalty = 0.0) const {
+                double onset_penalty = 0.0, std::optional<double> held = std::nullopt) const {
     Eigen::Index best_row = 0;
-    double best = statistic(0, j), s = best - onset_penalty;
+    double best = statistic(0, j, held), s = best - onset_penalty;
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
       // a fold's sums stand still through the other fold's blocks: same sums, same statistic
       if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) ||
           pp_(i, j) != pp_(i - 1, j))
-        s = statistic(i, j) - onset_penalty;
+        s = statistic(i, j, held) - onset_penalty;
       if (s > best || (latest_tie && s == best)) {
         best = s;
         best_row = i;
       }
     }
     if (row) *row = best_row;
-    return make_fit((*onsets_)[best_row], drop_(best_row, j), rp_(best_row, j), pp_(best_row, j));
+    return make_fit((*onsets_)[best_row], drop_(best_row, j), rp_(best_row, j), pp_(best_row, j),
+                    held);
   }
 
   // make_fit's statistic without the rest of the fit
-  double statistic(Eigen::Index i, int j) const {
+  double statistic(Eigen::Index i, int j, std::optional<double> held = std::nullopt) const {
     const double pp = pp_(i, j), rp = rp_(i, j);
-    return pp <= 0.0 ? drop_(i, j) : drop_(i, j) + rp * rp / pp;
+    if (pp <= 0.0) return drop_(i, j);
+    return held ? drop_with(j, i, *held) : drop_(i, j) + rp * rp / pp;
   }
 
   // Drop of the squared error after the grid onset `row` with channel scale theta, weighting j:
@@ -183,13 +194,15 @@ class GridSums {
     return drop_(row, j) + 2.0 * theta * rp_(row, j) - theta * theta * pp_(row, j);
   }
 
-  // The full scan, each fold's scan and each fold's fit scored on the other fold.
-  CrossValidatedOnset cross_validated(double onset_penalty = 0.0) const {
+  // The full scan, each fold's scan and each fold's fit scored on the other fold; with `held`
+  // the channel scale is held at that value throughout.
+  CrossValidatedOnset cross_validated(double onset_penalty = 0.0,
+                                      std::optional<double> held = std::nullopt) const {
     CrossValidatedOnset out;
-    out.full = scan(0, nullptr, false, onset_penalty);
+    out.full = scan(0, nullptr, false, onset_penalty, held);
     for (int k = 0; k < 2; ++k) {
       Eigen::Index row = 0;
-      out.fold[k] = scan(1 + k, &row, true, onset_penalty);
+      out.fold[k] = scan(1 + k, &row, true, onset_penalty, held);
       out.heldout[k] = drop_with(2 - k, row, out.fold[k].theta);
     }
     return out;
@@ -199,6 +212,12 @@ class GridSums {
   std::shared_ptr<const std::vector<Eigen::Index>> onsets_;
   Eigen::MatrixXd drop_, rp_, pp_;
 };
+
+}  // namespace detail
+
+namespace {
+
+using detail::GridSums;
 
 // Sums of the unprojected candidate's terms: before the first sample where the candidate
 // differs from the nominal model (psi != 0 or r != r_without: a drift that starts late) every
@@ -348,6 +367,20 @@ ProjectedOnsetScan::ProjectedOnsetScan(const Eigen::Ref<const Eigen::VectorXd>& 
 CrossValidatedOnset ProjectedOnsetScan::fit(const Eigen::Ref<const Eigen::VectorXd>& x,
                                             const std::optional<Eigen::VectorXd>& nominal,
                                             const std::optional<Eigen::VectorXd>& weight) const {
+  return sums(x, nominal, weight).cross_validated(onset_penalty_);
+}
+
+std::pair<CrossValidatedOnset, CrossValidatedOnset> ProjectedOnsetScan::fit_holding_scale(
+    const Eigen::Ref<const Eigen::VectorXd>& x, const std::optional<Eigen::VectorXd>& nominal,
+    const std::optional<Eigen::VectorXd>& weight, double scale) const {
+  if (!std::isfinite(scale)) throw InputError("the held channel scale must be finite");
+  const GridSums s = sums(x, nominal, weight);
+  return {s.cross_validated(onset_penalty_), s.cross_validated(onset_penalty_, scale)};
+}
+
+GridSums ProjectedOnsetScan::sums(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                  const std::optional<Eigen::VectorXd>& nominal,
+                                  const std::optional<Eigen::VectorXd>& weight) const {
   const Eigen::Index n = r_.size(), m = columns_.cols();
   if (x.size() != n || (nominal && nominal->size() != n) || (weight && weight->size() != n))
     throw InputError("x, nominal and weight must have the length of r");
@@ -397,7 +430,7 @@ CrossValidatedOnset ProjectedOnsetScan::fit(const Eigen::Ref<const Eigen::Vector
     }
   }
   sums.sum_folds();
-  return sums.cross_validated(onset_penalty_);
+  return sums;
 }
 
 Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,

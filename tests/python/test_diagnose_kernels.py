@@ -21,13 +21,14 @@ import closed_loop_case as loop
 from trend_reference import brute_trend
 
 
-def brute_fits(r, r_without, psi, weight, min_segment, step):
-    """(onset, statistic, theta) for every grid onset."""
+def brute_fits(r, r_without, psi, weight, min_segment, step, held=None):
+    """(onset, statistic, theta) for every grid onset; with ``held`` theta is not fitted but
+    held at that value."""
     for k in [0, *range(min_segment, len(r) - min_segment + 1, step)]:
         w = weight[k:]
         pp = np.sum(w * psi[k:] ** 2)
-        theta = np.sum(w * r_without[k:] * psi[k:]) / pp if pp > 0 else 0.0
-        yield k, np.sum(w * (r[k:] ** 2 - r_without[k:] ** 2)) + pp * theta**2, theta
+        theta = held if held is not None else (np.sum(w * r_without[k:] * psi[k:]) / pp if pp > 0 else 0.0)
+        yield k, np.sum(w * (r[k:] ** 2 - (r_without[k:] - theta * psi[k:]) ** 2)), theta
 
 
 def brute_statistics(r, r_without, psi, weight, min_segment, step):
@@ -78,21 +79,22 @@ def test_cross_validated_scan_matches_numpy(late_start):
         assert cv.heldout[k] == pytest.approx(heldout, rel=1e-9, abs=1e-9)
 
 
-def numpy_cross_validated(r, r_without, psi, weight, odd, begin, min_segment, step, penalty=0.0):
+def numpy_cross_validated(r, r_without, psi, weight, odd, begin, min_segment, step, penalty=0.0, held=None):
     """(full (onset, statistic, theta), per fold (onset, statistic, theta, held-out drop)) of
     the scan on samples from ``begin`` on, onsets as sample indices (latest of tied onsets); an
-    onset after ``begin`` competes with its statistic less ``penalty``."""
+    onset after ``begin`` competes with its statistic less ``penalty``; ``held``: theta held at
+    that value."""
     tail = slice(begin, None)
     folds = [weight * (odd == 0), weight * (odd != 0)]
 
     def charged(fit):
         return fit[1] - (penalty if fit[0] > 0 else 0.0)
 
-    fits = list(brute_fits(r[tail], r_without[tail], psi[tail], weight[tail], min_segment, step))
+    fits = list(brute_fits(r[tail], r_without[tail], psi[tail], weight[tail], min_segment, step, held))
     onset, stat, theta = max(fits, key=charged)    # the first of tied maxima
     per_fold = []
     for k in (0, 1):
-        fits = list(brute_fits(r[tail], r_without[tail], psi[tail], folds[k][tail], min_segment, step))
+        fits = list(brute_fits(r[tail], r_without[tail], psi[tail], folds[k][tail], min_segment, step, held))
         best = max(charged(f) for f in fits)
         on, s, th = max((f for f in fits if charged(f) == pytest.approx(best, rel=1e-10)), key=lambda f: f[0])
         on += begin
@@ -102,12 +104,14 @@ def numpy_cross_validated(r, r_without, psi, weight, odd, begin, min_segment, st
     return (begin + onset, stat, theta), per_fold
 
 
+@pytest.mark.parametrize("held", [None, 1.0, 0.7])
 @pytest.mark.parametrize("case", ["full", "late_start", "nominal", "own_weight", "begin", "penalty", "snap"])
 @pytest.mark.parametrize("width", [1, 5])
-def test_projected_scan_matches_numpy(case, width):
+def test_projected_scan_matches_numpy(case, width, held):
     """ProjectedOnsetScan: the candidate projected beside nuisance columns Z inside the scan
     (psi = x - Z S x), against NumPy projecting it first and scanning by brute force; the
-    late start exercises the sums taken from the nuisance's own before the candidate starts."""
+    late start exercises the sums taken from the nuisance's own before the candidate starts.
+    ``held``: fit_holding_scale, whose first fit is ``fit``'s and whose second holds theta."""
     rng = np.random.default_rng(width)
     n, begin = 900, (130 if case == "begin" else 0)
     t = np.arange(n)
@@ -135,11 +139,15 @@ def test_projected_scan_matches_numpy(case, width):
         assert penalty > 1.0
     scan = _core.ProjectedOnsetScan(r, weight, odd, z, solve, begin, 60, 7, penalty)
     cv = scan.fit(x, nominal, own)
+    if held is not None:
+        free, held_fit = scan.fit_holding_scale(x, nominal, own, held)
+        assert (free.full.onset, free.full.statistic, free.heldout) == (cv.full.onset, cv.full.statistic, cv.heldout)
+        cv = held_fit
     w = weight if own is None else own
-    full, folds = numpy_cross_validated(r, r_without, psi, w, odd, begin, 60, 7, penalty)
+    full, folds = numpy_cross_validated(r, r_without, psi, w, odd, begin, 60, 7, penalty, held)
     if case == "late_start":
         assert full[0] < 430 and max(f[0] for f in folds) < 430
-    if case in ("penalty", "snap"):
+    if case in ("penalty", "snap") and held is None:
         assert (full[0] == begin) == (case == "snap")
     assert cv.full.onset == full[0]
     assert cv.full.statistic == pytest.approx(full[1], rel=1e-9)

@@ -17,8 +17,11 @@ import math
 import pytest
 
 import mpmpp
+from mpmpp import families
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 from mpmpp.diagnose.process import COUPLING_POLES, TIME_CONSTANT_FACTORS
+from mpmpp.diagnosis_study import true_change, update_quality
+from mpmpp.evaluate import nominal_model
 
 import diagnose_eval as suite
 from example_cases import MISSING_COUPLING, load_case
@@ -107,3 +110,23 @@ def test_example_coupling_gain():
     assert top.estimate["gain"] == pytest.approx(hidden["gain"], rel=0.05)
     lo, hi = top.estimate["ci95"]
     assert lo <= hidden["gain"] <= hi
+
+
+@pytest.mark.parametrize("name,seed,factor", [("mpc_siso_clip", 1, 0.5), ("mpc_siso_move_limits", 19, 2.0)])
+def test_a_time_constant_is_not_read_as_a_gain(name, seed, factor):
+    """MPC loops in routine operation, whose input moves fast against the channel's time
+    constant: there a shorter time constant looks like a larger gain (and a longer one like a
+    smaller gain). Until 2026-11-30 a new time constant needed one parameter more than a gain
+    (its scale theta was fitted) and both draws were named as gains (1.66x and 0.69x), each
+    update moving the step response further from the truth (true error 0.12 -> 0.50 and 0.27).
+    With the gain held, the time constant competes on the likelihood at the gain's parameter
+    count (process._fits_of_shape). Draws of tuning families."""
+    spec, expect = families.family(name).draw(seed, effect="time_constant")
+    assert expect["size"] == factor
+    model, data = nominal_model(spec), mpmpp.simulate(spec)
+    top = [f for f in diagnose(model, data).findings if f.effect in PROCESS_EFFECTS][0]
+    assert (top.effect, [top.output, top.input]) == ("time_constant", expect["channels"][0])
+    assert top.estimate["time_constant_ratio"] == pytest.approx(factor, rel=0.1)
+    assert top.estimate["gain_ratio"] == 1.0
+    quality = update_quality(model, data, top, true_change(spec, expect))
+    assert quality["true_after"] < 0.25 * quality["true_before"]

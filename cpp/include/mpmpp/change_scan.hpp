@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "mpmpp/eigen_types.hpp"
@@ -67,6 +68,10 @@ CrossValidatedOnset scan_onset_cross_validated(const Eigen::Ref<const Eigen::Vec
 // from `begin` is the simpler hypothesis, and without the charge a stretch that shows the
 // change weakly (no excitation) is cut off by chance, dating an error of the model from the
 // start an hour or more into the record.
+namespace detail {
+class GridSums;
+}
+
 class ProjectedOnsetScan {
  public:
   ProjectedOnsetScan(const Eigen::Ref<const Eigen::VectorXd>& r,
@@ -81,8 +86,16 @@ class ProjectedOnsetScan {
   CrossValidatedOnset fit(const Eigen::Ref<const Eigen::VectorXd>& x,
                           const std::optional<Eigen::VectorXd>& nominal = std::nullopt,
                           const std::optional<Eigen::VectorXd>& weight = std::nullopt) const;
+  // The same fit, and from the same sums the fit with the channel scale theta held at `scale`
+  // (one parameter fewer: a new dynamics that keeps the model's gain, scale 1).
+  std::pair<CrossValidatedOnset, CrossValidatedOnset> fit_holding_scale(
+      const Eigen::Ref<const Eigen::VectorXd>& x, const std::optional<Eigen::VectorXd>& nominal,
+      const std::optional<Eigen::VectorXd>& weight, double scale) const;
 
  private:
+  detail::GridSums sums(const Eigen::Ref<const Eigen::VectorXd>& x,
+                        const std::optional<Eigen::VectorXd>& nominal,
+                        const std::optional<Eigen::VectorXd>& weight) const;
   Eigen::VectorXd r_, weight_, odd_;
   RowMatrixXd columns_, solve_;
   Eigen::Index begin_;

@@ -91,6 +91,11 @@ class Shape:
     params: int                   # fitted parameters incl. the grid choice (onset counted later)
     drive: np.ndarray = field(repr=False, default=None)   # the column the channel filters
     drift_form: str = ""          # "ramp" or "step" for an output drift (its drive is built on demand)
+    scale_held: bool = False      # theta held at 1: a new dynamics that keeps the model's gain
+
+    def holding_scale(self) -> "Shape":
+        """The same new dynamics with the model's gain kept (theta held at 1): one parameter fewer."""
+        return dataclasses.replace(self, scale_held=True, params=self.params - 1)
 
     def scaled(self, theta: float) -> TransferFunction:
         """The channel theta * shape."""
@@ -410,8 +415,32 @@ def _params(fit: Fit) -> int:
 
 def _fit_shape(scan: _core.ProjectedOnsetScan, shape: Shape, responses: ShapeResponses) -> Fit:
     """Onset scan of one shape on all data and on each fold (the folds feed the held-out test)."""
-    cv = scan.fit(responses.response(shape), responses.nominal_response(shape),
-                  responses.weight(shape) if shape.kind == "extra" else None)
+    args = _scan_arguments(shape, responses)
+    return _as_fit(shape, scan.fit_holding_scale(*args, 1.0)[1] if shape.scale_held else scan.fit(*args))
+
+
+def _fits_of_shape(scan: _core.ProjectedOnsetScan, shape: Shape, responses: ShapeResponses) -> list[Fit]:
+    """``_fit_shape``, and for a new time constant or dead time also the same dynamics with the
+    model's gain kept, from the same scan. "For a dynamics change, the gain stays unless the data
+    say otherwise": with theta free, a dynamics change needs one parameter more than a gain
+    change, and where the input moves fast against the channel's time constant a shorter time
+    constant looks like a larger gain (tuning families, seeds 0-19: 10 of 260 time-constant
+    changes were named as gains, the update moving the step response away from the truth).
+    Held at 1, the dynamics competes with the gain at the same count, on the likelihood."""
+    if shape.effect not in ("time_constant", "delay"):
+        return [_fit_shape(scan, shape, responses)]
+    free, held = scan.fit_holding_scale(*_scan_arguments(shape, responses), 1.0)
+    return [_as_fit(shape, free), _as_fit(shape.holding_scale(), held)]
+
+
+def _scan_arguments(shape: Shape, responses: ShapeResponses) -> tuple:
+    """The candidate's whitened response, the nominal channel's it replaces, and its own
+    weighting where its drive (an extra data column) has gaps."""
+    return (responses.response(shape), responses.nominal_response(shape),
+            responses.weight(shape) if shape.kind == "extra" else None)
+
+
+def _as_fit(shape: Shape, cv) -> Fit:
     folds = [FoldFit(f.statistic, h, f.theta) for f, h in zip(cv.folds, cv.heldout)]
     return Fit(shape, cv.full.onset, cv.full.statistic, 0.0, cv.full.theta, cv.full.theta_se, folds, 0.0)
 
@@ -423,7 +452,7 @@ def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
     The reported fit is the best shape on all data."""
     groups: dict = {}
     for f in fits:
-        groups.setdefault((f.shape.effect, f.shape.column), []).append(f)
+        groups.setdefault((f.shape.effect, f.shape.column, f.shape.scale_held), []).append(f)
     out = []
     for group in groups.values():
         top = max(group, key=lambda f: f.statistic)
@@ -497,7 +526,8 @@ class _Search:
     def best(self, r: np.ndarray, responses: ShapeResponses) -> Fit | None:
         """The preferred fit of a round on residual r (None when every candidate is refused)."""
         scan = self.scan(r, responses)
-        fits = [_fit_shape(scan, s, responses) for s in self.shapes if s.column not in self.taken and s.kind != "drift"]
+        fits = [f for s in self.shapes if s.column not in self.taken and s.kind != "drift"
+                for f in _fits_of_shape(scan, s, responses)]
         if DRIFT_COLUMN not in self.taken:
             fits += self._drift_fits(scan, responses)
         fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]

@@ -160,7 +160,7 @@ def test_projected_scan_matches_numpy(case, width, held):
         assert cv.heldout[k] == pytest.approx(heldout, rel=1e-8, abs=1e-8)
 
 
-def test_projected_scan_rejects_mismatched_lengths():
+def test_projected_scan_rejects_mismatched_lengths_and_a_non_finite_scale():
     n = 300
     z, solve = np.ones((n, 1)), np.full((1, n), 1.0 / n)
     with pytest.raises(ValueError, match="same length"):
@@ -168,6 +168,8 @@ def test_projected_scan_rejects_mismatched_lengths():
     scan = _core.ProjectedOnsetScan(np.zeros(n), np.ones(n), np.zeros(n), z, solve, 0, 60, 7)
     with pytest.raises(ValueError, match="length of r"):
         scan.fit(np.zeros(n + 1))
+    with pytest.raises(ValueError, match="held channel scale must be finite"):
+        scan.fit_holding_scale(np.zeros(n), scale=float("nan"))
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -426,11 +426,15 @@ def _fits_of_shape(scan: _core.ProjectedOnsetScan, shape: Shape, responses: Shap
     change, and where the input moves fast against the channel's time constant a shorter time
     constant looks like a larger gain (tuning families, seeds 0-19: 10 of 260 time-constant
     changes were named as gains, the update moving the step response away from the truth).
-    Held at 1, the dynamics competes with the gain at the same count, on the likelihood."""
+    Held at 1, the dynamics competes with the gain at the same count, on the likelihood. The
+    gain is held only for a change with an onset: a model wrong from the first row has its gain
+    and dynamics both unknown (a hand-written level model's gain 1.6x the plant's, 2 h at 10 s:
+    a held 1.7x time constant tied with the gain, 30.6 against 30.4)."""
     if shape.effect not in ("time_constant", "delay"):
         return [_fit_shape(scan, shape, responses)]
     free, held = scan.fit_holding_scale(*_scan_arguments(shape, responses), 1.0)
-    return [_as_fit(shape, free), _as_fit(shape.holding_scale(), held)]
+    fits = [_as_fit(shape, free), _as_fit(shape.holding_scale(), held)]
+    return fits if fits[1].onset > 0 else fits[:1]
 
 
 def _scan_arguments(shape: Shape, responses: ShapeResponses) -> tuple:
@@ -530,11 +534,7 @@ class _Search:
                 for f in _fits_of_shape(scan, s, responses)]
         if DRIFT_COLUMN not in self.taken:
             fits += self._drift_fits(scan, responses)
-        # The gain is kept for a change with an onset; a model wrong from the first row has its
-        # gain and dynamics both unknown (a hand-written level model's gain 1.6x the plant's,
-        # 2 h at 10 s: a held 1.7x time constant tied with the gain, 30.6 against 30.4).
-        fits = [f for f in fits if not (f.shape.scale_held and f.onset == 0)
-                and not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]
+        fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]
         fits = [f for f in _best_per_channel(fits, self.logn) if f.score > 0.0]
         fits = [f for f in fits if _present_in_both_halves(self.out, r, f, responses)]
         # Materiality is judged per candidate, before the best is picked: a best fit that moves

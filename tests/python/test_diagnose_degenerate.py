@@ -11,7 +11,11 @@ from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.result import InsufficientData
 from mpmpp.diagnose.laguerre import BASIS_LEAD
-from mpmpp.diagnose.whitening import INPUT_BASIS_FUNCTIONS, NOISE_ORDER, TREND_GRID, masked_ar
+from mpmpp.diagnose.whitening import (AMPLIFYING, INPUT_BASIS_FUNCTIONS, NOISE_ORDER, TREND_GRID, disturbance_ar,
+                                      masked_ar)
+from mpmpp.evaluate import nominal_model
+from mpmpp.simulate import simulate
+from mpmpp import families
 from mpmpp.update import update
 
 import closed_loop_case as loop
@@ -189,6 +193,43 @@ def test_masked_ar_beside_an_input_that_never_moves_is_the_plain_ar():
     ref = np.linalg.lstsq(np.column_stack([lagged, moving[rows]]), e[rows], rcond=None)[0]
     assert np.allclose(with_still[1:], -ref[:3], atol=1e-10)
     assert with_still[1] == pytest.approx(-0.6, abs=0.05)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_disturbance_ar_is_the_plain_ar_where_the_one_beside_the_inputs_amplifies(seed):
+    """An input that is mostly the error's last sample and a little of the one to come (the
+    split of a loop whose input's past is a filter of the error's past, made extreme): the ARX
+    puts a_1 near -50 beside it, an AR that alone multiplies the error's variance some 2,500
+    times; disturbance_ar gives the plain AR then (NumPy least squares on the lags alone). An
+    input independent of the error keeps the AR fitted beside it."""
+    rng = np.random.default_rng(seed)
+    n = 3000
+    s, w = rng.standard_normal(n), rng.standard_normal(n)
+    e = s + w
+    inputs = (50.0 * np.r_[0.0, e[:-1]] + s)[:, None]
+    mask = np.arange(n) >= 20
+    rows = np.flatnonzero(mask)
+    lagged, target = e[rows[:, None] - np.arange(1, NOISE_ORDER + 1)], e[rows]
+    beside = np.linalg.lstsq(np.column_stack([lagged, inputs[rows]]), target, rcond=None)[0][:NOISE_ORDER]
+    assert np.sum((target - lagged @ beside) ** 2) > 100 * AMPLIFYING * np.sum(target**2)
+    plain = np.linalg.lstsq(lagged, target, rcond=None)[0]
+    assert np.allclose(disturbance_ar(e, mask, inputs)[1:], -plain, atol=1e-10)
+    independent = rng.standard_normal((n, 2))
+    assert np.allclose(disturbance_ar(e, mask, independent), masked_ar(e, mask, NOISE_ORDER, independent), atol=1e-12)
+    assert not np.allclose(masked_ar(e, mask, NOISE_ORDER, independent), np.r_[1.0, -plain], atol=1e-10)
+
+
+def test_an_exact_level_model_under_mpc_without_a_noise_model_gives_no_process_finding():
+    """Tuning family mpc_level, seed 8: an exact model with no noise model, an MPC and no
+    excitation, the disturbance changes at 9.9 h. The AR(10) estimated beside the input's basis
+    left 4.4 times the output error's squared sum and the corrections up to 106 times; the
+    whitened error then confirmed a dead time of 3 samples instead of 1 throughout, at 0.99.
+    With the plain AR in its place, the noise change alone is named."""
+    spec, expect = families.family("mpc_level").draw(8, effect="noise_change")
+    res = diagnose(nominal_model(spec), simulate(spec))
+    assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS]
+    assert res.findings[0].effect == "noise_change"
+    assert abs(res.findings[0].onset_s - expect["onset_s"]) <= 3600
 
 
 def test_change_in_the_last_block_leaves_a_note_not_an_error():

@@ -470,13 +470,17 @@ def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
 
 
 def process_findings(out: OutputResidual, first_onset: int, min_segment: int, step: int, logn: float,
-                     min_effect: float, actions: dict | None = None) -> list[Finding]:
+                     min_effect: float, actions: dict | None = None, later_only: bool = False,
+                     refused: frozenset = frozenset()) -> list[Finding]:
     """Greedy: up to MAX_FINDINGS_PER_OUTPUT channel changes, each accepted change kept in the
     residual the next candidates are fitted to. ``actions``: input name -> the controller action
     of the single loop it forms with this output (``loops``), for the sign guard. Sets
     ``out.nuisance``, the disturbances the candidates are fitted beside (``_Search.disturbances``),
-    for the actuator candidates."""
-    search = _Search(out, process_shapes(out.sig, out.i), first_onset, min_segment, step, logn, actions or {}, min_effect)
+    for the actuator candidates. ``later_only``: only channel changes the onset scan dates inside
+    the record (a shape whose best onset is the first row is left out, not moved to a later
+    one); ``refused``: (effect, input) pairs not searched (pipeline._later_changes_than_refused)."""
+    shapes = [s for s in process_shapes(out.sig, out.i) if (s.effect, s.column) not in refused]
+    search = _Search(out, shapes, first_onset, min_segment, step, logn, actions or {}, min_effect, later_only)
     first = search.disturbances()
     nuisance = out.nuisance = first.nuisance
     r = nuisance.project(out.r)
@@ -504,7 +508,10 @@ def process_findings(out: OutputResidual, first_onset: int, min_segment: int, st
             top = _with_gain_kept(_refined_time_constant(top, search.scan(r, responses), responses))
             finding = _process_finding(out, top)
             if not (finding.error_after < finding.error_before or _carried_beside_disturbances(out, top, finding)):
-                # the whitened-domain gain does not carry over to the model the update would write
+                # the whitened-domain gain does not carry over to the model the update would write;
+                # a change from the first row so dropped is refused (pipeline._later_changes_than_refused)
+                if top.onset == first_onset:
+                    out.refused = out.refused | {(top.shape.effect, top.shape.column)}
                 break
             found.append(finding)
         w = responses.whitened(top.shape)
@@ -524,6 +531,7 @@ class _Search:
     logn: float
     actions: dict
     min_effect: float
+    later_only: bool = False
     taken: set = field(default_factory=set)
     unprojected: ShapeResponses | None = None   # the responses every disturbance set shares
 
@@ -532,6 +540,8 @@ class _Search:
         scan = self.scan(r, responses)
         fits = [f for s in self.shapes if s.column not in self.taken and s.kind != "drift"
                 for f in _fits_of_shape(scan, s, responses)]
+        if self.later_only:
+            fits = [f for f in fits if f.onset > self.first_onset]
         if DRIFT_COLUMN not in self.taken:
             fits += self._drift_fits(scan, responses)
         fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]

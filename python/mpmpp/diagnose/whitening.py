@@ -73,6 +73,8 @@ class OutputResidual:
     disturbance_onsets: list[int] = field(default_factory=list)   # step + ramp breakpoints in e
     free: np.ndarray | None = field(repr=False, default=None)      # e less those steps + ramps
     nuisance: "Nuisance | None" = field(repr=False, default=None)  # what candidates are fitted beside
+    # (effect, input) of a change from the first row whose update the search dropped (process.py)
+    refused: frozenset = frozenset()
     inputs: np.ndarray | None = field(repr=False, default=None)    # H^-1-filtered input basis (ARX fits)
 
     @property

@@ -9,7 +9,9 @@ Per output:
   loop the negative lags mostly show feedback (the controller reacting to e), not model error;
 - "where it fails": the fit in moving windows and the periods where it drops;
 - per-channel attribution: the share of the one-step error variance that lags 1..L of each
-  input (and extra column) explain by least squares, with a 99 % chi-square test.
+  input (and extra column) explain by least squares, with a 99 % chi-square test;
+- per modelled channel, the hysteresis check (``hysteresis_test``): does the input through a
+  play of some width (a sticking or slack valve) explain the error beyond its linear lags.
 
 Signals are deviations from the record's mean (see ``mpmpp.signals``).
 """
@@ -23,6 +25,7 @@ import numpy as np
 from . import _core
 from .record_length import MIN_ROWS, require_rows, scaled_rows
 from .held_values import frozen_inputs, frozen_note
+from .hysteresis_test import HysteresisCheck, hysteresis_check
 from .integrating import integrating_notes, row_integrates, without_line
 from .signals import Signals, bridged_reach, extract, per_segment
 
@@ -76,6 +79,7 @@ class OutputComparison:
     window_fit_prediction: list[float]
     window_rms_error: list[float]        # RMS of the one-step error per window
     failing: list[FailingPeriod]
+    hysteresis: list[HysteresisCheck] = field(default_factory=list)   # per modelled input (hysteresis_test.py)
     # the series behind the plots (not in to_dict)
     time_s: np.ndarray = field(repr=False, default=None)
     measured: np.ndarray = field(repr=False, default=None)
@@ -130,6 +134,11 @@ class CompareResult:
                     what = "modelled channel" if a.modeled else (
                         "channel the model lacks" if a.kind == "input" else "extra column")
                     lines.append(f"    {a.column} ({what}) explains {100 * a.explained:.1f} % of the error")
+            for h in oc.hysteresis:
+                if h.significant:
+                    lines.append(f"    {h.column} through a play (backlash) of about {h.width:.3g} explains "
+                                 f"{100 * h.explained:.1f} % of what no linear change explains: the valve may stick "
+                                 f"or have play, which a linear model cannot hold (mpmpp stiction, mpmpp diagnose)")
             for p in oc.failing:
                 lines.append(f"    fails {stamp(p.start_s)} .. {stamp(p.end_s)} "
                              f"(one-step error up to {p.worst_rms_ratio:.2f}x the early level)")
@@ -201,6 +210,8 @@ def _compare_output(sig: Signals, i: int, horizon: int, max_lag: int, window: in
         both = ok & np.isfinite(x)
         cross.append(_correlation(name, err[both], x[both], max_lag))
         attribution.append(_attribute(name, kind, modeled, err, x, both, lags))
+    hysteresis = [c for j in range(len(sig.inputs))
+                  if (c := hysteresis_check(sig, i, j, err, ok & np.isfinite(sig.u[:, j]))) is not None]
     # Window fits on the kept rows (a window never spans a gap: windows are per segment).
     starts, fit_s, fit_p, rms = [], [], [], []
     for a, b in sig.segments:
@@ -224,6 +235,7 @@ def _compare_output(sig: Signals, i: int, horizon: int, max_lag: int, window: in
         window_start_s=[float(s) for s in starts], window_fit_simulation=fit_s,
         window_fit_prediction=fit_p, window_rms_error=rms,
         failing=_failing_periods(np.array(starts), np.array(rms), window, sig.sample_time_s),
+        hysteresis=hysteresis,
         time_s=sig.time_s, measured=y, simulated=sim, predicted=pred, residual=err,
     )
 

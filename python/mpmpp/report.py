@@ -135,11 +135,13 @@ def _compare_section(page: _Page, model, data, clock, origin) -> None:
               f"0 % is no better than the mean. Prediction {result.horizon} samples "
               f"({format_duration(result.horizon * model.sample_time_s)}) ahead.")
     page.table(["output", "fit, inputs only", f"fit, {result.horizon} samples ahead", "one-step error (RMS)",
-                "error white?", "where it fails"],
+                "error white?", "where it fails", "valve hysteresis"],
                [[oc.output, f"{oc.fit_simulation:.1f} %", f"{oc.fit_prediction:.1f} %", oc.rms_prediction_error,
                  "yes" if not oc.whiteness.positive_lag_violations else "no",
                  "; ".join(f"{clock.stamp(p.start_s)} to {clock.stamp(p.end_s)}" for p in oc.failing)
-                 or "nowhere"]
+                 or "nowhere",
+                 "; ".join(f"{h.column}: a play of about {h.width:.3g} explains {100 * h.explained:.0f} %"
+                           for h in oc.hysteresis if h.significant) or "not seen"]
                 for oc in result.outputs])
     with tempfile.TemporaryDirectory() as tmp:
         for path in plot_compare(result, Path(tmp), origin):

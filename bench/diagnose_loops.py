@@ -41,6 +41,29 @@ FAMILIES = {"tuning": sb.TUNING, "held_out": sb.HELD_OUT}
 REAL_STICTION, REAL_OTHER = 35, 45
 
 
+def at_real_mix(recall: float, false_rate: float) -> tuple[float, float]:
+    """Precision and accuracy a detector with this recall and false-call rate has on records
+    mixed as the real ones are (REAL_STICTION sticking, REAL_OTHER not)."""
+    hits, false_calls = REAL_STICTION * recall, REAL_OTHER * false_rate
+    precision = hits / (hits + false_calls) if hits + false_calls else float("nan")
+    return precision, (hits + REAL_OTHER - false_calls) / (REAL_STICTION + REAL_OTHER)
+
+
+def identified_records(families: list[str], seeds: int, first_seed: int):
+    """Per record of the benchmark's loops: its key (family, loop, case), the record as a data
+    frame, and the model ``identify`` fits on it (None where it refuses the record)."""
+    for family in families:
+        for dyn in FAMILIES[family]:
+            for case, s in CASES:
+                for seed in range(seeds):
+                    data = frame(sb.make_record(family, dyn, case, s, 0.5 * s, first_seed + seed))
+                    try:
+                        model = model_from_data(data, ["OP"], ["PV"]).model
+                    except ValueError:
+                        model = None
+                    yield (family, dyn.name, case if case != "stiction" else f"stiction S={s:g}"), data, model
+
+
 def frame(rec: dict) -> pd.DataFrame:
     n = len(rec["op"])
     return pd.DataFrame({"time": 10.0 * np.arange(n), "OP": rec["op"], "PV": rec["pv"] + 20.0,
@@ -59,26 +82,18 @@ def main() -> None:
     parser.add_argument("--families", default="tuning,held_out", help="comma-separated: tuning, held_out")
     args = parser.parse_args()
     rows = defaultdict(lambda: {"records": 0, "refused": 0, "named": 0, "flips": 0, "before": [], "after": []})
-    for family in args.families.split(","):
-        for dyn in FAMILIES[family]:
-            for case, s in CASES:
-                for seed in range(args.seeds):
-                    rec = sb.make_record(family, dyn, case, s, 0.5 * s, args.first_seed + seed)
-                    key = (family, dyn.name, case if case != "stiction" else f"stiction S={s:g}")
-                    row = rows[key]
-                    row["records"] += 1
-                    data = frame(rec)
-                    try:
-                        model = model_from_data(data, ["OP"], ["PV"]).model
-                    except ValueError:
-                        row["refused"] += 1
-                        continue
-                    found = diagnose(model, data).findings
-                    row["flips"] += sign_flips(found)
-                    if found and found[0].effect == "input_nonlinearity":
-                        row["named"] += 1
-                        row["before"].append(found[0].error_before)
-                        row["after"].append(found[0].error_after)
+    for key, data, model in identified_records(args.families.split(","), args.seeds, args.first_seed):
+        row = rows[key]
+        row["records"] += 1
+        if model is None:
+            row["refused"] += 1
+            continue
+        found = diagnose(model, data).findings
+        row["flips"] += sign_flips(found)
+        if found and found[0].effect == "input_nonlinearity":
+            row["named"] += 1
+            row["before"].append(found[0].error_before)
+            row["after"].append(found[0].error_after)
     print("| family | loop | case | records | not identified | input_nonlinearity | sign flips | error before -> after |")
     print("|---|---|---|---|---|---|---|---|")
     for (family, loop, case), r in rows.items():
@@ -102,9 +117,7 @@ def main() -> None:
     for (family, loop), t in totals.items():
         if loop == "all":
             recall, false_rate = t[0] / t[1], t[2] / t[3]
-            hits, false_calls = REAL_STICTION * recall, REAL_OTHER * false_rate
-            precision = hits / (hits + false_calls) if hits + false_calls else float("nan")
-            accuracy = (hits + REAL_OTHER - false_calls) / (REAL_STICTION + REAL_OTHER)
+            precision, accuracy = at_real_mix(recall, false_rate)
             print(f"| {family} | {recall:.2f} | {false_rate:.3f} | {precision:.2f} | {accuracy:.2f} |")
 
 

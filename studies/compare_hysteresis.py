@@ -29,13 +29,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "studies"))
 sys.path.insert(0, str(ROOT / "bench"))
 
-import stiction_benchmark as sb  # noqa: E402
-from diagnose_loops import CASES, FAMILIES, REAL_OTHER, REAL_STICTION, frame  # noqa: E402
+from diagnose_loops import at_real_mix, identified_records  # noqa: E402
 
 from mpmpp import families as scenario_families  # noqa: E402
 from mpmpp.compare import compare  # noqa: E402
 from mpmpp.evaluate import nominal_model  # noqa: E402
-from mpmpp.identify import model_from_data  # noqa: E402
 from mpmpp.simulate import simulate  # noqa: E402
 
 EFFECTS = scenario_families.CONTROL_EFFECTS + scenario_families.MPM_EFFECTS
@@ -75,22 +73,15 @@ def main() -> None:
         scenario_table(args.scenario_families.split(","), range(args.first_seed, args.first_seed + args.seeds))
         return
     rows = defaultdict(lambda: {"records": 0, "refused": 0, "hysteresis": 0, "cross": 0})
-    for family in args.families.split(","):
-        for dyn in FAMILIES[family]:
-            for case, s in CASES:
-                for seed in range(args.seeds):
-                    rec = sb.make_record(family, dyn, case, s, 0.5 * s, args.first_seed + seed)
-                    row = rows[(family, dyn.name, case if case != "stiction" else f"stiction S={s:g}")]
-                    row["records"] += 1
-                    data = frame(rec)
-                    try:
-                        model = model_from_data(data, ["OP"], ["PV"]).model
-                    except ValueError:
-                        row["refused"] += 1
-                        continue
-                    out = compare(model, data).outputs[0]
-                    row["hysteresis"] += any(c.significant for c in out.hysteresis)
-                    row["cross"] += any(c.positive_lag_violations for c in out.cross if c.column == "OP")
+    for key, data, model in identified_records(args.families.split(","), args.seeds, args.first_seed):
+        row = rows[key]
+        row["records"] += 1
+        if model is None:
+            row["refused"] += 1
+            continue
+        out = compare(model, data).outputs[0]
+        row["hysteresis"] += any(c.significant for c in out.hysteresis)
+        row["cross"] += any(c.positive_lag_violations for c in out.cross if c.column == "OP")
     print("| split | loop | case | records | refused | hysteresis flagged | OP cross-correlation flagged |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for (family, loop, case), r in sorted(rows.items()):
@@ -104,9 +95,7 @@ def main() -> None:
             others = [r for (f, _, c), r in rows.items() if f == family and not c.startswith("stiction")]
             recall = sum(r[test] for r in sticking) / sum(r["records"] for r in sticking)
             false = sum(r[test] for r in others) / sum(r["records"] for r in others)
-            hits, wrong = REAL_STICTION * recall, REAL_OTHER * false
-            precision = hits / (hits + wrong) if hits + wrong else float("nan")
-            accuracy = (hits + REAL_OTHER - wrong) / (REAL_STICTION + REAL_OTHER)
+            precision, accuracy = at_real_mix(recall, false)
             print(f"| {family} | {test} | {recall:.2f} | {false:.2f} | {precision:.2f} | {accuracy:.2f} |")
 
 

@@ -11,7 +11,8 @@ Per output:
 - per-channel attribution: the share of the one-step error variance that lags 1..L of each
   input (and extra column) explain by least squares, with a 99 % chi-square test;
 - per modelled channel, the hysteresis check (``hysteresis_test``): does the input through a
-  play of some width (a sticking or slack valve) explain the error beyond its linear lags.
+  play of some width (a sticking or slack valve) explain the error beyond any linear change of
+  the channel.
 
 Signals are deviations from the record's mean (see ``mpmpp.signals``).
 """

@@ -61,7 +61,7 @@ class HysteresisCheck:
 def hysteresis_check(sig: Signals, i: int, j: int, err: np.ndarray, valid: np.ndarray) -> HysteresisCheck | None:
     """The test for output i's channel from input j; ``err``: the output's one-step error as
     compare takes it, ``valid``: its usable rows. None when the channel is not modelled, the
-    input does not move, or too few rows remain."""
+    input does not move, too few rows remain or the error is zero or overflows."""
     from scipy.special import chdtri   # the chi-square quantile (scipy.stats costs 0.7 s to import)
 
     row, name = sig.rows[i], sig.inputs[j]
@@ -88,6 +88,8 @@ def hysteresis_check(sig: Signals, i: int, j: int, err: np.ndarray, valid: np.nd
     phi /= np.where(norms > 0, norms, 1.0)
     e = err[rows]
     gram, cross, total = phi.T @ phi, phi.T @ e, float(e @ e)
+    if not (np.all(np.isfinite(gram)) and np.all(np.isfinite(cross)) and total > 0.0):
+        return None   # an error that overflows or vanishes: nothing to judge
 
     def rss(cols) -> float:
         c = cross[cols]

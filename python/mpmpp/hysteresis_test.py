@@ -28,8 +28,7 @@ import numpy as np
 
 from . import _core
 from .integrating import row_integrates, without_line
-from .signals import Signals, per_segment
-from .stiction.valve import valve_position
+from .signals import Signals, per_segment, valve_positions
 
 # Play widths in multiples of the input's spread (its standard deviation over the record): a
 # valve's dead zone is a fraction of the OP's travel in the record. Widths, level, share and
@@ -71,7 +70,7 @@ def hysteresis_check(sig: Signals, i: int, j: int, err: np.ndarray, valid: np.nd
     if not spread > 0.0:
         return None
     widths = spread * np.asarray(WIDTHS)
-    z = np.column_stack([_direction(sig, i, j, w) for w in widths])
+    z = _play_directions(sig, i, j, widths)
     basis = _linear_change_basis(sig, i, j)
     rows = np.flatnonzero(valid & np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(basis), axis=1))
     rows = rows[rows >= ERROR_LAGS]
@@ -107,40 +106,41 @@ def hysteresis_check(sig: Signals, i: int, j: int, err: np.ndarray, valid: np.nd
 
 
 def _linear_change_basis(sig: Signals, i: int, j: int) -> np.ndarray:
-    """H^-1 applied to the Laguerre basis of input j (the output's slowest pole, from a few
-    samples before the channel's first lag): a gain, time-constant or dead-time error of the
-    channel lies in its span on every time scale with a few functions. A wide play, nearly a
-    valve that stopped moving, looks like a lower gain; beside this basis it counts only for
-    what no linear change explains."""
-    from .diagnose.laguerre import delayed_before, laguerre_filters, laguerre_pole, output_basis
+    """H^-1 applied to the channel's Laguerre basis (``laguerre.channel_basis``): a gain,
+    time-constant or dead-time error of the channel lies in its span on every time scale with a
+    few functions. A wide play, nearly a valve that stopped moving, looks like a lower gain;
+    beside this basis it counts only for what no linear change explains."""
+    from .diagnose.laguerre import channel_basis
     from .diagnose.process import first_lag
 
     row, hinv = sig.rows[i], sig.noise[i].inverse()
-    delayed = delayed_before(np.nan_to_num(sig.u[:, j]), first_lag(row[j]))
-    basis = output_basis(sig, i, delayed[:, None], laguerre_filters(laguerre_pole(sig, i)))
+    basis = channel_basis(sig, i, j, first_lag(row[j]))
     white = per_segment(sig, lambda b: np.column_stack([hinv.filter(c) for c in b.T]), basis)
     return per_segment(sig, lambda b: np.column_stack([without_line(c) for c in b.T]), white) \
         if row_integrates(row) else white
 
 
-def _direction(sig: Signals, i: int, j: int, width: float) -> np.ndarray:
-    """z_w = e(y, u) - e(y, u with input j through a play of ``width``) = H^-1 G (p_w - u), per
-    segment (the play starts at rest at each segment's first row), taken as compare takes the
-    error of an integrating output (each segment's line removed); one sample later when the
-    channel has a lag-0 term, so that z_w(t) never reads u(t)."""
+def _play_directions(sig: Signals, i: int, j: int, widths) -> np.ndarray:
+    """One column per width w: z_w = e(y, u) - e(y, u with input j through a play of width w)
+    = H^-1 G (p_w - u), per segment (the play starts at rest at each segment's first row),
+    taken as compare takes the error of an integrating output (each segment's line removed);
+    one sample later when the channel has a lag-0 term, so that z_w(t) never reads u(t)."""
     from .diagnose.process import first_lag   # (diagnose imports compare)
 
-    row, noise, name = sig.rows[i], sig.noise[i], sig.inputs[j]
-    op = sig.u[:, j] + sig.operating_point[name]
-    played = per_segment(sig, lambda v: valve_position({"kind": "backlash", "S": width}, v), op)
-    moved = sig.u.copy()
-    moved[:, j] = played - sig.operating_point[name]
+    row, noise = sig.rows[i], sig.noise[i]
     zero = np.zeros(len(sig.time_s))
-    z = per_segment(sig, lambda uu, mm, yy: _core.prediction_error(row, noise, yy, uu)
-                    - _core.prediction_error(row, noise, yy, mm), sig.u, moved, zero)
-    if row_integrates(row):
-        z = per_segment(sig, without_line, z)
-    if first_lag(row[j]) == 0:
-        z = np.r_[np.nan, z[:-1]]
-    return z
 
+    def error(u):
+        e = per_segment(sig, lambda uu, yy: _core.prediction_error(row, noise, yy, uu), u, zero)
+        return per_segment(sig, without_line, e) if row_integrates(row) else e
+
+    nominal = error(sig.u)
+    columns = []
+    for width in widths:
+        moved = sig.u.copy()
+        moved[:, j] = valve_positions(sig, j, {"kind": "backlash", "S": width}) - sig.operating_point[sig.inputs[j]]
+        columns.append(nominal - error(moved))
+    z = np.column_stack(columns)
+    if first_lag(row[j]) == 0:
+        z = np.vstack([np.full((1, z.shape[1]), np.nan), z[:-1]])
+    return z

@@ -203,12 +203,18 @@ def per_segment(signals: Signals, fn, *arrays) -> np.ndarray:
     return out
 
 
-def valve_input(signals: Signals, j: int, actuator: dict) -> np.ndarray:
-    """Input j's deviation after the valve ``actuator`` (the model file's actuator block): the
-    valve is simulated on the absolute OP of each segment (it starts at rest at each segment's
-    first row), and the position's mean over the segments is the operating point removed."""
+def valve_positions(signals: Signals, j: int, actuator: dict) -> np.ndarray:
+    """Input j's valve position under ``actuator`` (the model file's actuator block), in
+    absolute input units: the valve is simulated on the absolute OP of each segment (it starts
+    at rest at each segment's first row); NaN outside the segments."""
     from .stiction.valve import valve_position
 
     op = signals.u[:, j] + signals.operating_point[signals.inputs[j]]
-    position = per_segment(signals, lambda x: valve_position(actuator, x), op)
+    return per_segment(signals, lambda x: valve_position(actuator, x), op)
+
+
+def valve_input(signals: Signals, j: int, actuator: dict) -> np.ndarray:
+    """Input j's deviation after the valve ``actuator`` (``valve_positions``), the position's
+    mean over the segments as its operating point."""
+    position = valve_positions(signals, j, actuator)
     return position - np.nanmean(position)

@@ -47,7 +47,7 @@ def test_direction_is_the_play_through_the_model_and_its_noise_inverse(delay):
     u = data["u"].to_numpy()
     moved = _play(u, 1.5) - u
     ref = lfilter([1.0, -0.9], [1.0, -0.3], lfilter(np.r_[np.zeros(delay), 0.2, 0.1], [1.0, -0.7], moved))
-    z = ht._direction(sig, 0, 0, 1.5)
+    z = ht._play_directions(sig, 0, 0, [1.5])[:, 0]
     if delay == 0:   # a lag-0 channel's direction is taken one sample later
         assert np.isnan(z[0])
         ref = np.r_[np.nan, ref[:-1]]
@@ -55,13 +55,13 @@ def test_direction_is_the_play_through_the_model_and_its_noise_inverse(delay):
 
 
 def test_statistic_is_the_nested_least_squares_drop():
-    """The QR shortcut against plain least squares on the design itself: a level, the error's
+    """The Gram-matrix shortcut against plain least squares on the design itself: a level, the error's
     own lags and the whitened Laguerre basis, then the plays."""
     model, data = _open_loop(2)
     sig = extract(model, data, min_segment=MIN_ROWS)
     e = np.random.default_rng(9).standard_normal(len(data))
     check = ht.hysteresis_check(sig, 0, 0, e, np.ones(len(data), bool))
-    z = np.column_stack([ht._direction(sig, 0, 0, w * np.std(sig.u[:, 0])) for w in ht.WIDTHS])
+    z = ht._play_directions(sig, 0, 0, np.std(sig.u[:, 0]) * np.asarray(ht.WIDTHS))
     rows = np.arange(ht.ERROR_LAGS, len(e))
     lin = np.column_stack([np.ones(len(rows)), e[rows[:, None] - np.arange(1, ht.ERROR_LAGS + 1)],
                            ht._linear_change_basis(sig, 0, 0)[rows]])

@@ -17,11 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..signals import Signals, per_segment
-from ..stiction.valve import valve_position
+from ..signals import Signals, valve_positions
 from .errors import held_out_error
 from .process import first_lag
-from .laguerre import delayed_before, laguerre_filters, laguerre_pole, output_basis
+from .laguerre import channel_basis
 from .refitted_noise import OnsetGains, RefittedNoise
 from .result import Finding, ModelChange
 from .scoring import confidence
@@ -97,7 +96,7 @@ class ActuatorSearch:
         key = tuple(sorted(block.items()))
         if key in self._cache:
             return self._cache[key]
-        position = per_segment(self.sig, lambda x: valve_position(block, x), self.op)
+        position = valve_positions(self.sig, self.j, block)
         moved = np.nan_to_num(position - self.op)
         responses = [out.channel_response(out.row[self.j], moved) for out in self.driven]
         allowed = np.ones(len(self.onsets), bool)
@@ -251,9 +250,8 @@ def linear_change_statistic(out: OutputResidual, j: int, onset: int, correction:
     output's slowest pole) of the input delayed to a few samples before the channel's first
     lag, its coefficients fitted on each fold and scored on the other (a gain, time-constant
     or dead-time change, or a mix, lies in its span)."""
-    delayed = delayed_before(np.nan_to_num(out.sig.u[:, j]), first_lag(out.row[j]))
-    after = np.arange(len(delayed)) >= onset
-    responses = output_basis(out.sig, out.i, delayed[:, None], laguerre_filters(laguerre_pole(out.sig, out.i)))
+    responses = channel_basis(out.sig, out.i, j, first_lag(out.row[j]))
+    after = np.arange(len(responses)) >= onset
     basis = np.where(after[:, None], np.nan_to_num(responses), 0.0)
     at = np.array([onset])
     hinv = out.noise.inverse()

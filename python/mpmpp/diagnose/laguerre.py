@@ -63,3 +63,12 @@ def output_basis(sig: Signals, i: int, columns: np.ndarray, filters: list[Transf
     if not row_integrates(sig.rows[i]):
         return x
     return per_segment(sig, lambda xs: np.column_stack([without_line(np.cumsum(c)) for c in xs.T]), x)
+
+
+def channel_basis(sig: Signals, i: int, j: int, lag: int) -> np.ndarray:
+    """The basis of a change of output i's channel from input j, whose first lag is ``lag``:
+    the input delayed to BASIS_LEAD samples before it, through the Laguerre filters on the
+    output's slowest pole (``output_basis``). A gain, time-constant or dead-time change, or a
+    mix, lies in its span."""
+    delayed = delayed_before(np.nan_to_num(sig.u[:, j]), lag)
+    return output_basis(sig, i, delayed[:, None], laguerre_filters(laguerre_pole(sig, i)))

@@ -4,7 +4,7 @@ how often diagnose names ``input_nonlinearity`` on sticking valves and on the co
 Records from studies/stiction_benchmark.py (TUNING: flow, level, level with a load and
 temperature-like loops, Choudhury's valve; HELD-OUT: pressure-like, slow-flow, analyser-like
 and surge-tank loops, He's valve; confounders: linear, aggressive tuning, an external
-oscillation, a noisy linear valve). Per record the model comes from
+oscillation, a noisy linear valve, a controller output that meets a limit). Per record the model comes from
 ``model_from_data`` (records it refuses as not identified are counted apart), then
 ``diagnose``; a stiction record is a hit when the top finding is ``input_nonlinearity``.
 A sign flip is a ``gain`` or ``delay`` finding whose gain ratio is negative. The error
@@ -34,7 +34,7 @@ from mpmpp.diagnose import diagnose  # noqa: E402
 from mpmpp.identify import model_from_data  # noqa: E402
 
 CASES = (("stiction", 1.5), ("stiction", 3.0), ("linear", 0.0), ("aggressive", 0.0),
-         ("external_oscillation", 0.0), ("noisy_valve", 0.0))
+         ("external_oscillation", 0.0), ("noisy_valve", 0.0), ("saturated_op", 0.0))
 FAMILIES = {"tuning": sb.TUNING, "held_out": sb.HELD_OUT}
 # The real records: 35 loops with a sticking valve, 45 without; the benchmark's rates
 # are read at that mix (each split's recall and confounder false-call rate).

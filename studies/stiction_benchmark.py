@@ -1,7 +1,8 @@
 """Synthetic stiction benchmark: mpmpp's Hammerstein fit against the literature baselines.
 
 PI loops at 10 s, 751 samples (2.1 h), with and without a sticking valve, plus the classic
-confounders (aggressive tuning, an external oscillating disturbance, a noisy but linear valve).
+confounders (aggressive tuning, an external oscillating disturbance, a noisy but linear valve, a
+controller output that meets a limit of its range).
 TUNING families: flow, level, level with a load disturbance and temperature-like loops, AR(1)
 disturbance, Choudhury's stick-slip valve. HELD-OUT families: pressure-like second-order,
 slow-flow, analyser-like (reverse acting) and surge-tank (integrating, load) loops with dead
@@ -34,7 +35,8 @@ from scipy.signal import lfilter
 N = 751
 STICTION_S = (1.0, 2.0, 4.0, 6.0)       # % OP
 J_RATIOS = (0.3, 0.8)
-CONFOUNDERS = ("linear", "aggressive", "external_oscillation", "noisy_valve")
+CONFOUNDERS = ("linear", "aggressive", "external_oscillation", "noisy_valve", "saturated_op")
+SATURATED_SHARE = 0.2   # saturated_op: the share of the free loop's OP samples beyond the limit
 
 
 @dataclass(frozen=True)
@@ -113,8 +115,16 @@ def make_record(family: str, dyn: Dynamics, case: str, s: float, j: float, seed:
         d = d + 1.0 * np.sin(2 * np.pi * np.arange(N) / period + rng.uniform(0, 2 * np.pi))
     elif case == "noisy_valve":
         valve_noise = 1.0 * rng.standard_normal(N)
+    limits = (-np.inf, np.inf)
+    if case == "saturated_op":
+        # a linear loop whose controller output meets a limit of its range on the side it leans
+        # to: the OP sits flat at the limit while the PV wanders, as a stuck valve's OP never does
+        op = simulate_pi_loop(dyn.process, kc, ti, N, disturbance=d)["op"]
+        up = np.median(op) >= 50.0
+        limit = float(np.quantile(op, 1.0 - SATURATED_SHARE if up else SATURATED_SHARE))
+        limits = (-np.inf, limit) if up else (limit, np.inf)
     return simulate_pi_loop(dyn.process, kc, ti, N, valve=valve, disturbance=d,
-                            valve_noise=valve_noise)
+                            valve_noise=valve_noise, op_limits=limits)
 
 
 def records(family: str, dynamics: list, seeds: int, held_out_base: int = 5000):

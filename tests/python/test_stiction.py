@@ -182,6 +182,23 @@ def test_loop_valve_is_the_actuator_at_rest_at_the_bias_plus_noise():
         simulate_pi_loop(FLOW, 0.7, 1.5, 500, disturbance=np.r_[np.nan, d[1:]])
 
 
+def test_the_controller_output_stops_at_its_limit_without_windup():
+    """op_limits: the velocity-form PI of pid_controller.cpp, OP(t) = clip(OP(t-1) + Kc (e(t) -
+    e(t-1) + e(t) / Ti)), replayed on the recorded PV; the OP sits at the limit for a while and
+    leaves it at the first sample whose increment points back inside."""
+    rng = np.random.default_rng(8)
+    d = coloured_noise(rng, 751, 0.3, 0.8) + np.where(np.arange(751) > 300, -2.0, 0.0)
+    rec = simulate_pi_loop(FLOW, 0.7, 1.5, 751, disturbance=d, op_limits=(-np.inf, 51.0))
+    e = rec["sp"] - rec["pv"]
+    step = 0.7 * (np.diff(e) + e[1:] / 1.5)
+    np.testing.assert_allclose(rec["op"][1:], np.minimum(rec["op"][:-1] + step, 51.0), atol=1e-10)
+    pinned = rec["op"] == 51.0
+    assert 0.05 < pinned.mean() < 0.95 and rec["op"].max() == 51.0
+    x = lfilter(np.r_[0.0, FLOW.b], FLOW.a, rec["position"] - 50.0)
+    np.testing.assert_allclose(rec["pv"] - d, x, atol=1e-10)
+    np.testing.assert_allclose(rec["position"], rec["op"], atol=1e-12)
+
+
 def loop(seed, sticky=None, n=751):
     rng = np.random.default_rng(seed)
     d = coloured_noise(rng, n, 0.3, 0.8) + 0.05 * rng.standard_normal(n)

@@ -40,12 +40,14 @@ class Process:
 
 def simulate_pi_loop(process: Process, kc: float, ti_samples: float, n: int, *,
                      valve: ActuatorNonlinearity | None = None, disturbance=None, setpoint=None,
-                     valve_noise=None, op_bias: float = 50.0) -> dict:
+                     valve_noise=None, op_bias: float = 50.0,
+                     op_limits: tuple[float, float] = (-np.inf, np.inf)) -> dict:
     """Closed-loop run of n samples; returns op, pv, sp, position arrays.
 
     valve: the valve's nonlinearity (default linear); disturbance: additive at the PV
     (length n); valve_noise: added to the valve position (a noisy but linear valve); OP is in %
-    around op_bias.
+    around op_bias; op_limits: the controller output's range (the velocity-form PI stops at a
+    limit and leaves it as soon as the error reverses: no windup).
     """
     def lead_in(x):  # one sample at rest before the record
         return np.r_[0.0, np.asarray(x, float)].reshape(n + 1, 1)
@@ -62,6 +64,7 @@ def simulate_pi_loop(process: Process, kc: float, ti_samples: float, n: int, *,
     cfg.plant = plant
     loop = PidLoop()
     loop.gain, loop.integral_time_s = kc, ti_samples   # sample time 1
+    loop.min, loop.max = op_limits
     cfg.pid_loops = [loop]
     cfg.u_operating = np.array([op_bias])
     cfg.y_operating = np.zeros(1)

@@ -120,7 +120,7 @@ def make_record(family: str, dyn: Dynamics, case: str, s: float, j: float, seed:
         # a linear loop whose controller output meets a limit of its range on the side it leans
         # to: the OP sits flat at the limit while the PV wanders, as a stuck valve's OP never does
         op = simulate_pi_loop(dyn.process, kc, ti, N, disturbance=d)["op"]
-        up = np.median(op) >= 50.0
+        up = np.median(op) >= 50.0   # leans above the OP bias (simulate_pi_loop)
         limit = float(np.quantile(op, 1.0 - SATURATED_SHARE if up else SATURATED_SHARE))
         limits = (-np.inf, limit) if up else (limit, np.inf)
     return simulate_pi_loop(dyn.process, kc, ti, N, valve=valve, disturbance=d,

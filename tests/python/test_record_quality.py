@@ -7,7 +7,8 @@ import pytest
 
 from mpmpp.cli import main
 from mpmpp.stiction import fit_valve
-from mpmpp.stiction.record_quality import interpolated_share, rate_limited_share, record_notes, repeated_share
+from mpmpp.stiction.record_quality import (interpolated_share, pinned_share, rate_limited_share, record_notes,
+                                           repeated_share)
 
 
 def noisy(n=751, seed=0):
@@ -40,7 +41,27 @@ def test_holding_every_fourth_sample_and_a_saturated_op():
     op = noisy(seed=1)
     op[200:500] = op.max()                       # at its limit (the record's largest value) for long
     assert np.mean(np.diff(op) == 0.0) > 0.2
-    assert repeated_share(op) == 0.0 and record_notes({"OP": op}) == []
+    assert repeated_share(op) == 0.0
+    (note,) = record_notes({"OP": op})           # not a quantized record: a limit
+    assert note.startswith(f"OP sits at {op.max():.6g}, its largest value, in 40 % of the samples")
+
+
+def test_an_op_that_returns_to_its_limit_is_named_and_quantization_is_not():
+    """The stiction benchmark's saturated_op loops (the PI's output at a limit of its range,
+    leaving it whenever the error reverses): the share is that of the samples at the limit; the
+    benchmark's other loops, as sampled or quantized to 0.1 or 1 % OP, have no pile-up."""
+    import stiction_benchmark as sb
+
+    for dyn in sb.TUNING:
+        rec = sb.make_record("tuning", dyn, "saturated_op", 0.0, 0.0, 11)
+        share, value = pinned_share(rec["op"])
+        assert value in (rec["op"].max(), rec["op"].min())
+        assert share == pytest.approx(np.mean(rec["op"] == value)) and share > 0.05, dyn.name
+        assert any(n.startswith(f"OP sits at {value:.6g}") for n in record_notes({"OP": rec["op"]}))
+        for case in ("linear", "stiction", "external_oscillation"):
+            op = sb.make_record("tuning", dyn, case, 3.0, 1.5, 11)["op"]
+            for x in (op, np.round(op, 1), np.round(op)):
+                assert pinned_share(x)[0] < 0.05, (dyn.name, case)
 
 
 def test_an_op_ramping_at_its_rate_limit_is_not_compression():

@@ -1,4 +1,5 @@
-"""What a loop record's storage hides: historian compression and coarse quantization.
+"""What a loop record's storage hides (historian compression, coarse quantization) and where
+it holds no closed loop (a signal pinned at a limit).
 
 A historian that stores a value only when it moves by more than a deviation and rebuilds the
 record by holding or by straight lines between the stored points (boxcar / swinging-door
@@ -19,6 +20,10 @@ import numpy as np
 # stored as sampled has ~0 of either; compression at a deviation of 0.1 standard deviations
 # already interpolates about a quarter of the samples).
 NOTABLE_SHARE = 0.2
+# Share of samples pinned at a limit above which the record says so: a noisy signal repeats its
+# extreme value never; an OP saturated for a twentieth of a 2 h record is an open loop for 6 min.
+PINNED_SHARE = 0.05
+MIN_LEVELS = 20
 
 
 def repeated_share(x: np.ndarray) -> float:
@@ -28,6 +33,20 @@ def repeated_share(x: np.ndarray) -> float:
         return 0.0
     inside = (x[1:] > x.min()) & (x[1:] < x.max())
     return float(np.mean((np.diff(x) == 0.0) & inside))
+
+
+def pinned_share(x: np.ndarray) -> tuple[float, float]:
+    """(share, value): the share of samples at the record's largest or smallest value, on the
+    side where it is larger, and that value; 0 where that value is not a pile-up (held no more
+    often than twice the next value inward) or the record has fewer than MIN_LEVELS values (too
+    coarse to tell a limit from a quantization step). A controller output saturated at a limit
+    of its range (or a transmitter at the end of its range) returns to it again and again, and
+    the loop is open while it sits there; a noisy signal reaches its exact extreme once."""
+    levels, counts = np.unique(x, return_counts=True)
+    if len(levels) < MIN_LEVELS:
+        return 0.0, float("nan")
+    sides = [(counts[k] / len(x), levels[k]) for k, inward in ((-1, -2), (0, 1)) if counts[k] > 2 * counts[inward]]
+    return max(sides, default=(0.0, float("nan")))
 
 
 def _at_largest_move(x: np.ndarray) -> np.ndarray:
@@ -65,7 +84,8 @@ def interpolated_share(x: np.ndarray) -> float:
 
 
 def record_notes(signals: dict) -> list[str]:
-    """One note per signal (name -> values) that looks held, quantized or interpolated."""
+    """One note per signal (name -> values) that looks held, quantized, interpolated, rate
+    limited or pinned at a limit."""
     notes = []
     for name, x in signals.items():
         x = np.asarray(x, dtype=float)
@@ -79,6 +99,12 @@ def record_notes(signals: dict) -> list[str]:
             notes.append(f"{name} moves by its largest step in {100 * limited:.0f} % of the samples: a rate or move "
                          f"limit (an MPC's move limit, a positioner's slew rate); a valve fit reads such moves as "
                          f"stick-slip, so no valve fault is reported from this record")
+        pinned, value = pinned_share(x)
+        if pinned > PINNED_SHARE:
+            side = "largest" if value == x.max() else "smallest"
+            notes.append(f"{name} sits at {value:.6g}, its {side} value, in {100 * pinned:.0f} % of the samples: a "
+                         f"limit (a controller output saturated, a transmitter at the end of its range); the loop "
+                         f"is open there and those rows tell nothing of the valve")
         if held > NOTABLE_SHARE:
             notes.append(f"{name} repeats its previous value in {100 * held:.0f} % of the samples: a quantized "
                          f"or hold-compressed record; small valve moves are not visible in it")

@@ -20,8 +20,9 @@ import numpy as np
 # stored as sampled has ~0 of either; compression at a deviation of 0.1 standard deviations
 # already interpolates about a quarter of the samples).
 NOTABLE_SHARE = 0.2
-# Share of samples pinned at a limit above which the record says so: a noisy signal repeats its
-# extreme value never; an OP saturated for a twentieth of a 2 h record is an open loop for 6 min.
+# Share of samples pinned at a limit above which the record says so: a noisy signal never
+# returns to its exact extreme; an OP saturated for a twentieth of a 2 h record is an open loop
+# for 6 min.
 PINNED_SHARE = 0.05
 MIN_LEVELS = 20
 

@@ -64,6 +64,18 @@ def identified_records(families: list[str], seeds: int, first_seed: int):
                     yield (family, dyn.name, case if case != "stiction" else f"stiction S={s:g}"), data, model
 
 
+def tallied_records(rows: dict, families: list[str], seeds: int, first_seed: int):
+    """``identified_records``, each record counted in ``rows[key]["records"]`` and each refused
+    one in ``rows[key]["refused"]``; yields (row, data, model) for the identified ones."""
+    for key, data, model in identified_records(families, seeds, first_seed):
+        row = rows[key]
+        row["records"] += 1
+        if model is None:
+            row["refused"] += 1
+            continue
+        yield row, data, model
+
+
 def frame(rec: dict) -> pd.DataFrame:
     n = len(rec["op"])
     return pd.DataFrame({"time": 10.0 * np.arange(n), "OP": rec["op"], "PV": rec["pv"] + 20.0,
@@ -82,12 +94,7 @@ def main() -> None:
     parser.add_argument("--families", default="tuning,held_out", help="comma-separated: tuning, held_out")
     args = parser.parse_args()
     rows = defaultdict(lambda: {"records": 0, "refused": 0, "named": 0, "flips": 0, "before": [], "after": []})
-    for key, data, model in identified_records(args.families.split(","), args.seeds, args.first_seed):
-        row = rows[key]
-        row["records"] += 1
-        if model is None:
-            row["refused"] += 1
-            continue
+    for row, data, model in tallied_records(rows, args.families.split(","), args.seeds, args.first_seed):
         found = diagnose(model, data).findings
         row["flips"] += sign_flips(found)
         if found and found[0].effect == "input_nonlinearity":

@@ -29,7 +29,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "studies"))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from diagnose_loops import at_real_mix, identified_records  # noqa: E402
+from diagnose_loops import at_real_mix, tallied_records  # noqa: E402
 
 from mpmpp import families as scenario_families  # noqa: E402
 from mpmpp.compare import compare  # noqa: E402
@@ -73,12 +73,7 @@ def main() -> None:
         scenario_table(args.scenario_families.split(","), range(args.first_seed, args.first_seed + args.seeds))
         return
     rows = defaultdict(lambda: {"records": 0, "refused": 0, "hysteresis": 0, "cross": 0})
-    for key, data, model in identified_records(args.families.split(","), args.seeds, args.first_seed):
-        row = rows[key]
-        row["records"] += 1
-        if model is None:
-            row["refused"] += 1
-            continue
+    for row, data, model in tallied_records(rows, args.families.split(","), args.seeds, args.first_seed):
         out = compare(model, data).outputs[0]
         row["hysteresis"] += any(c.significant for c in out.hysteresis)
         row["cross"] += any(c.positive_lag_violations for c in out.cross if c.column == "OP")

@@ -450,6 +450,16 @@ FAMILIES = [
            "model a user writes by hand, without noise model", "pi", 1, _EFFECTS_SISO + ("none", "noise_change"),
            sample_times_s=(5.0, 10.0), model_forms=("foptd",), record_hours=(3.0, 6.0), setpoint_steps=True,
            hand_written=True),
+    # Added 2026-12-01 (thirty-second session): a 3x3 plant among the tuning families. Until then
+    # only held-out families had three outputs, and their controls got false delay and
+    # time-constant findings that no tuning family showed (docs/diagnose.md "A 3x3 tuning
+    # family"). The held-out 3x3 families keep their controllers (binding move limits, clipped
+    # moves), 15 s sampling and second-order / high-pass noise.
+    Family("mpc_3x3", TUNING, "project MPC, 3x3, setpoint steps, 5-10 s, white / AR(1) / ARMA(1,1) "
+           "noise, discrete model with or without noise model; no change, noise change and drift "
+           "among the effects", "mpc", 3, _EFFECTS_MIMO + ("none", "noise_change", "output_drift"),
+           time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0),
+           model_forms=("discrete+noise", "discrete"), setpoint_steps=True),
     Family("pid_siso_slow", HELD_OUT, "PID (derivative on measurement), 30-60 s sampling, 2-3 day "
            "records, second-order noise, FOPTD or discrete model without noise model", "pid", 1,
            _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(30.0, 60.0),

@@ -11,6 +11,7 @@ from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.result import InsufficientData
 from mpmpp.diagnose.laguerre import BASIS_LEAD
+from mpmpp.diagnose import whitening
 from mpmpp.diagnose.whitening import (AMPLIFYING, INPUT_BASIS_FUNCTIONS, NOISE_ORDER, TREND_GRID, disturbance_ar,
                                       masked_ar)
 from mpmpp.evaluate import nominal_model
@@ -167,6 +168,22 @@ def test_estimated_noise_model_does_not_absorb_a_drift(rate):
     res = diagnose(model_without_noise(), data)
     assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS]
     assert [f.effect for f in res.findings] == ["output_drift"]
+
+@pytest.mark.parametrize("gain", [3.0, 0.5])
+def test_estimated_noise_model_is_not_taken_by_a_later_process_change(gain, monkeypatch):
+    """A gain change at 10,000 of 16,000 rows, no noise model: the AR of the whole record takes up
+    the changed channel's error (its coefficients 0.26-0.33 off the true H^-1 = (1 + 0.5q^-1) /
+    (1 - 0.3q^-1) = 1 + 0.8 sum_k (0.3 q^-1)^k), the first part's AR keeps the disturbance's
+    own (whitening.first_part_ar), and the gain change is named."""
+    truth = np.r_[1.0, [0.8 * 0.3**k for k in range(NOISE_ORDER)]]
+    data = loop.simulate(n=16000, seed=0, onset=10000, gain=gain)
+    h = diagnosis_signals(model_without_noise(), data).sig.noise[0]
+    assert np.max(np.abs(np.asarray(h.den) - truth)) < 0.08
+    assert diagnose(model_without_noise(), data).findings[0].effect == "gain"
+    monkeypatch.setattr(whitening, "REFERENCE_PARTS", 1)
+    whole = diagnosis_signals(model_without_noise(), data).sig.noise[0]
+    assert np.max(np.abs(np.asarray(whole.den) - truth)) > 0.2
+
 
 # ---- degenerate folds and singular fits --------------------------------------------------------
 

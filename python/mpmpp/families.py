@@ -452,9 +452,10 @@ FAMILIES = [
            hand_written=True),
     # Added 2026-12-01 (thirty-second session): a 3x3 plant among the tuning families. Until then
     # only held-out families had three outputs, and their controls got false delay and
-    # time-constant findings that no tuning family showed (docs/diagnose.md "A 3x3 tuning
-    # family"). The held-out 3x3 families keep their controllers (binding move limits, clipped
-    # moves), 15 s sampling and second-order / high-pass noise.
+    # time-constant findings that no tuning family showed (docs/families.md; what it found:
+    # docs/diagnose.md "The disturbance model of the record's first part"). The held-out 3x3
+    # families keep their controllers (binding move limits, clipped moves), 15 s sampling and
+    # second-order / high-pass noise.
     Family("mpc_3x3", TUNING, "project MPC, 3x3, setpoint steps, 5-10 s, white / AR(1) / ARMA(1,1) "
            "noise, discrete model with or without noise model; no change, noise change and drift "
            "among the effects", "mpc", 3, _EFFECTS_MIMO + ("none", "noise_change", "output_drift"),

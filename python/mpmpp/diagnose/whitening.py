@@ -44,11 +44,11 @@ TREND_GRID = 60              # onset grid (samples) of the step + ramp removed b
 # model, MPC) left 4.4 times; those of hand-written PI-loop models with a gain error, which
 # the plain AR would bias (it takes up the input's part), 0.03-1.07 times.
 AMPLIFYING = 2.0
-# An estimated disturbance model is fitted on the first of up to this many parts of the record,
-# each at least this many usable rows, when the record's AR is this decisively wrong there
+# An estimated disturbance model is fitted on the first of this many parts of the record, each at
+# least this many usable rows, when the record's AR is this decisively wrong there
 # (first_part_ar).
 REFERENCE_PARTS = 4
-REFERENCE_PART_ROWS = 1000
+REFERENCE_PART_ROWS = 1500
 REFERENCE_EVIDENCE = 100.0
 # Unmeasured step / ramp disturbances on an output: up to this many breakpoints are fitted
 # before a disturbance model or its corrections are estimated (each kept while it beats BIC).
@@ -354,8 +354,10 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray, beside_inputs:
 
 def first_part_ar(free: np.ndarray, usable: np.ndarray, basis: np.ndarray | None) -> np.ndarray:
     """The disturbance AR (``disturbance_ar``) of the record, or of its first part when the
-    record's AR is decisively wrong there: the first of up to REFERENCE_PARTS consecutive parts
-    of the usable rows (each at least REFERENCE_PART_ROWS), taken about its own level, is the
+    record's AR is decisively wrong there: the first of REFERENCE_PARTS consecutive parts of the
+    usable rows (a record of fewer than REFERENCE_PART_ROWS per part keeps the record's AR: a
+    short hand-written loop's noise-change control, pi_siso_brief seed 15, got a false dead time
+    at 0.95 from a first part of 1069 rows), taken about its own level, is the
     reference period (as a model file's noise model describes the plant before any change), and
     its AR replaces the record's when the record's leaves more one-step error A(q) e on it by
     REFERENCE_EVIDENCE chi-square units (n log of the variance ratio; decisive, the bound of the
@@ -368,11 +370,10 @@ def first_part_ar(free: np.ndarray, usable: np.ndarray, basis: np.ndarray | None
     disturbance model of the record's first part")."""
     whole = disturbance_ar(free, usable, basis)
     rows = np.flatnonzero(usable)
-    parts = int(np.clip(len(rows) // REFERENCE_PART_ROWS, 1, REFERENCE_PARTS))
-    if parts == 1:
+    if len(rows) < REFERENCE_PARTS * REFERENCE_PART_ROWS:
         return whole
     mask = np.zeros(len(free), bool)
-    mask[np.array_split(rows, parts)[0]] = True
+    mask[np.array_split(rows, REFERENCE_PARTS)[0]] = True
     # about the part's own level: the trend fitted to the whole record leaves the part an
     # offset, which an AR fitted to it reads as low-frequency noise
     part = free - free[mask].mean()

@@ -354,20 +354,19 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray, beside_inputs:
 
 def first_part_ar(free: np.ndarray, usable: np.ndarray, basis: np.ndarray | None) -> np.ndarray:
     """The disturbance AR (``disturbance_ar``) of the record, or of its first part when the
-    record's AR is decisively wrong there: the first of REFERENCE_PARTS consecutive parts of the
-    usable rows (a record of fewer than REFERENCE_PART_ROWS per part keeps the record's AR: a
-    short hand-written loop's noise-change control, pi_siso_brief seed 15, got a false dead time
-    at 0.95 from a first part of 1069 rows), taken about its own level, is the
-    reference period (as a model file's noise model describes the plant before any change), and
-    its AR replaces the record's when the record's leaves more one-step error A(q) e on it by
-    REFERENCE_EVIDENCE chi-square units (n log of the variance ratio; decisive, the bound of the
-    studies' top evidence bin). Fitted on the whole
-    record, the AR takes up a process change from its onset on (one set of basis coefficients
-    cannot follow a channel that changes mid-record) and whitens away most of the evidence for
-    it: on the tuning family mpc_3x3 (seeds 0-39, no noise model) the true change's one-step
-    evidence kept a median 28 % of what the true disturbance model gives it; six runs named the
-    wrong effect or none, all six right with the true disturbance model (docs/diagnose.md "The
-    disturbance model of the record's first part")."""
+    record's AR is decisively wrong there. The first of REFERENCE_PARTS consecutive parts of the
+    usable rows, about its own level, is the reference period (what a model file's noise model
+    describes: the plant before any change); its AR replaces the record's when the record's
+    leaves more one-step error A(q) e on it by REFERENCE_EVIDENCE chi-square units (n log of the
+    variance ratio; the bound of the studies' top evidence bin). Fitted on the whole record, the
+    AR takes up a process change from its onset on (one set of basis coefficients cannot follow
+    a channel that changes mid-record) and whitens away most of the evidence for it: on the
+    tuning family mpc_3x3 (seeds 0-39, no noise model) the true change kept a median 28 % of the
+    one-step evidence the true disturbance model gives it; six runs named the wrong effect or
+    none, all six right with the true disturbance model (docs/diagnose.md "The disturbance model
+    of the record's first part"). A record under REFERENCE_PART_ROWS per part keeps the record's
+    AR: a short hand-written loop's noise-change control (pi_siso_brief seed 15) got a false
+    dead time at 0.95 from a first part of 1069 rows."""
     whole = disturbance_ar(free, usable, basis)
     rows = np.flatnonzero(usable)
     if len(rows) < REFERENCE_PARTS * REFERENCE_PART_ROWS:

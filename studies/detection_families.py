@@ -47,7 +47,7 @@ def main(argv=None) -> int:
             raise ValueError(f"--record-hours must be > 0, got {args.record_hours}")
         study = run_study(names, seeds, 3600 * args.record_hours if args.record_hours else None,
                           scheduler=args.scheduler, workers=args.workers, configs=configs,
-                          channel_switch=args.channel_switch)
+                          channel_switch=args.channel_switch, earlier_noise_change=args.earlier_noise_change)
     except ValueError as exc:
         print(f"detection_families: error: {exc}", file=sys.stderr)
         return 2

@@ -28,7 +28,7 @@ def main(argv=None) -> int:
     names, seeds = study_selection(p, args)
     try:
         study = run_study(names, seeds, scheduler=args.scheduler, workers=args.workers,
-                          channel_switch=args.channel_switch)
+                          channel_switch=args.channel_switch, earlier_noise_change=args.earlier_noise_change)
     except ValueError as exc:
         print(f"diagnosis_families: error: {exc}", file=sys.stderr)
         return 2

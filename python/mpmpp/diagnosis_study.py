@@ -103,6 +103,20 @@ def drifting_outputs(spec: dict) -> set:
     return {ev["output"] for ev in spec["events"] if ev["type"] == "drift"}
 
 
+def noise_changes(spec: dict) -> list[tuple[str, float]]:
+    """(output, time) of every disturbance change of a draw (its noise_change control's, or the
+    earlier one ``--earlier-noise-change`` adds)."""
+    return [(ev["output"], float(ev["time_s"])) for ev in spec["events"] if ev["type"] in ("noise", "sigma")]
+
+
+def names_a_noise_change(f, changes: list[tuple[str, float]], within_s: float = 3600.0) -> bool:
+    """A noise_change finding on the output of one of ``changes``, dated within ``within_s`` of
+    it: right whatever the run's effect (an earlier noise change is a real one; a process change
+    hours later read as a noise change is not dated at it)."""
+    return f.effect == "noise_change" and any(
+        f.output == output and abs(f.onset_s - t) <= within_s for output, t in changes)
+
+
 def standing_error_named(model, plant, f) -> bool:
     """For a model wrong from the start (a hand-written one): whether linear channel finding
     ``f`` names part of that error, i.e. its update lowers its channel's step-response error
@@ -119,7 +133,7 @@ def standing_error_named(model, plant, f) -> bool:
 
 
 def _finding_record(f, effect: str, change: dict | None, drifting: set = frozenset(),
-                    standing_named: bool = False) -> dict:
+                    standing_named: bool = False, noises: list = ()) -> dict:
     d = f.to_dict()
     d["score"] = float(f.score)
     d["evidence_confidence"] = float(f.evidence_confidence)
@@ -127,16 +141,16 @@ def _finding_record(f, effect: str, change: dict | None, drifting: set = frozens
     d["calibrated"] = f.calibrated   # scored by its own calibration, not the family map
     d["process"] = f.effect in PROCESS_EFFECTS
     d["right"] = (finding_right(d, effect, change) or (f.effect == "output_drift" and f.output in drifting)
-                  or standing_named)
+                  or names_a_noise_change(f, noises) or standing_named)
     return d
 
 
 def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None = None,
-                       channel_switch: str = "replay") -> dict:
+                       channel_switch: str = "replay", earlier_noise_change: bool = False) -> dict:
     """One draw of family ``name`` with ``effect`` forced: diagnose, update with the top
     process finding, and score both against the truth."""
     family = fam.family(name)
-    spec, expect = family.draw(seed, record_s, effect, channel_switch)
+    spec, expect = family.draw(seed, record_s, effect, channel_switch, earlier_noise_change)
     change = true_change(spec, expect)
     model = nominal_model(spec)
     t0 = time.perf_counter()
@@ -158,7 +172,7 @@ def run_diagnosis_seed(name: str, seed: int, effect: str, record_s: float | None
         return (family.hand_written and f.effect in LINEAR_EFFECTS and f.onset_s <= start
                 and standing_error_named(model, plant, f))
 
-    run["findings"] = [_finding_record(f, effect, change, drifting_outputs(spec), standing_named(f))
+    run["findings"] = [_finding_record(f, effect, change, drifting_outputs(spec), standing_named(f), noise_changes(spec))
                        for f in diagnosis.findings]
     process = [f for f in diagnosis.findings if f.effect in PROCESS_EFFECTS]
     if family.hand_written:
@@ -232,14 +246,16 @@ def update_quality(model, data, top, change: dict) -> dict:
 
 
 def run_study(names=None, seeds=range(4), record_s=None, scheduler=None, workers=None,
-              progress: bool = True, channel_switch: str = "replay") -> dict:
+              progress: bool = True, channel_switch: str = "replay", earlier_noise_change: bool = False) -> dict:
     """Every (family, effect, seed) run in parallel (``parallel.run_tasks``)."""
     names = [f.name for f in fam.FAMILIES] if names is None else list(names)
-    tasks = [(n, s, e, record_s, channel_switch) for n in names for e in fam.family(n).effects for s in seeds]
+    tasks = [(n, s, e, record_s, channel_switch, earlier_noise_change)
+             for n in names for e in fam.family(n).effects for s in seeds]
     started = time.perf_counter()
     runs, where = run_tasks(run_diagnosis_seed, tasks, scheduler, workers, progress, unit="runs")
     runs.sort(key=lambda r: (names.index(r["family"]), r["effect"], r["seed"]))
-    return {"runs": runs, "seeds": list(seeds), "where": where, "wall_seconds": time.perf_counter() - started}
+    return {"runs": runs, "seeds": list(seeds), "where": where, "wall_seconds": time.perf_counter() - started,
+            "channel_switch": channel_switch, "earlier_noise_change": earlier_noise_change}
 
 
 # ---- tables --------------------------------------------------------------------------------
@@ -411,5 +427,5 @@ def format_tables(study: dict) -> str:
                   [[r["split"], r["family"], _frac(r["right"], r["changes"]), _frac(r["false"], r["controls"]),
                     _frac(r["right_high"], r["n_high"])] for r in family_rows(runs)])
     out.append(f"\n{len(runs)} runs, seeds {study['seeds'][0]}-{study['seeds'][-1]}, "
-               f"{study['wall_seconds']:.0f} s wall on {study['where']}")
+               f"{study['wall_seconds']:.0f} s wall on {study['where']}{fam.variant_note(study)}")
     return "\n".join(out)

@@ -28,6 +28,7 @@ TUNING, HELD_OUT = "tuning", "held_out"
 LATEST_TRAINING_S = 8 * HOUR
 MPM_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "input_nonlinearity")
 CONTROL_EFFECTS = ("none", "noise_change", "output_drift")
+EARLIER_NOISE_STREAM = 1      # the random stream of Family.draw's earlier_noise_change
 
 
 @dataclass(frozen=True)
@@ -62,12 +63,15 @@ class Family:
     details: dict = field(default_factory=dict)
 
     def draw(self, seed: int, record_s: float | None = None, effect: str | None = None,
-             channel_switch: str = "replay") -> tuple[dict, dict]:
+             channel_switch: str = "replay", earlier_noise_change: bool = False) -> tuple[dict, dict]:
         """(scenario document, expectation) for `seed`; the scenario's noise seed derives from
         it too. record_s shortens the record (and moves the onset into it) for quick checks;
         effect forces one of the family's effects instead of drawing it; channel_switch is how
         a changed channel takes over (docs/scenario.md: "replay", or "fresh" as a simulator that
-        swaps the channel's filter), the same draw otherwise.
+        swaps the channel's filter), the same draw otherwise; earlier_noise_change adds a
+        harmless disturbance change hours before the effect (``_earlier_noise_change``; its
+        time is the expectation's `earlier_noise_change_s`), drawn from a stream of its own so
+        the rest of the draw is the same.
         Expectation: kind "mpm" (an MPM alarm on one of `channels` at or after `onset_s` is a
         detection), "none" (a control: any MPM alarm is false) or "any" (an unmodelled input:
         an MPM or noise alarm on `output` counts); `effect` and `size` name what changed."""
@@ -80,6 +84,9 @@ class Family:
         if channel_switch != "replay":
             spec["events"] = [{**ev, "switch": channel_switch} if ev["type"] in CHANNEL_EVENTS else ev
                               for ev in spec["events"]]
+        if earlier_noise_change:
+            _earlier_noise_change(np.random.default_rng([zlib.crc32(self.name.encode()), int(seed), EARLIER_NOISE_STREAM]),
+                                  spec, expect)
         return spec, expect
 
     def scenario(self, seed: int, record_s: float | None = None) -> dict:
@@ -303,6 +310,26 @@ def _step_ramp(rng, ts, record, outs, events):
             events.append({"time_s": stop, "type": "drift", "output": o, "rate_per_s": 0.0})
 
 
+def _noise_event(rng, time_s: float, output: str) -> dict:
+    """A change of an output's disturbance: a new ARMA(1,1) colour, or its level x 0.5 or x 2."""
+    if rng.uniform() < 0.5:
+        return {"time_s": time_s, "type": "noise", "output": output, "model": _noise(rng, "arma11")}
+    return {"time_s": time_s, "type": "sigma", "output": output, "value": float(rng.choice([0.5, 2.0]))}
+
+
+def _earlier_noise_change(rng, spec: dict, expect: dict) -> None:
+    """Adds a harmless disturbance change before the effect: on the effect's output (a random
+    one for a control without one), at 35-70 % of the effect's onset (of 60 % of the record for
+    a run without an onset)."""
+    ts = spec["sample_time_s"]
+    reference = expect["onset_s"] if expect.get("onset_s") else 0.6 * spec["duration_s"]
+    time_s = ts * max(math.floor(reference * rng.uniform(0.35, 0.7) / ts), 1)
+    output = expect["channels"][0][0] if expect.get("channels") else expect.get("output")
+    event = _noise_event(rng, time_s, str(output or rng.choice(spec["outputs"])))
+    spec["events"] = sorted(spec["events"] + [event], key=lambda ev: ev["time_s"])
+    expect["earlier_noise_change_s"] = time_s
+
+
 def _effect(effect, rng, spec, chans, diag_gain, onset, ts) -> dict:
     """Schedules the family's effect at `onset`; returns the expectation for scoring."""
     outs, ins, events = spec["outputs"], spec["inputs"], spec["events"]
@@ -311,10 +338,7 @@ def _effect(effect, rng, spec, chans, diag_gain, onset, ts) -> dict:
         return {"kind": "none", "onset_s": None, "channels": []}
     if effect == "noise_change":
         o = str(rng.choice(outs))
-        if rng.uniform() < 0.5:
-            events.append({"time_s": onset, "type": "noise", "output": o, "model": _noise(rng, "arma11")})
-        else:
-            events.append({"time_s": onset, "type": "sigma", "output": o, "value": float(rng.choice([0.5, 2.0]))})
+        events.append(_noise_event(rng, onset, o))
         return {"kind": "none", "onset_s": onset, "channels": [], "output": o}
     if effect == "output_drift":
         o = str(rng.choice(outs))
@@ -534,9 +558,23 @@ def add_study_arguments(parser, runs_per: str, first_seed: int) -> None:
     parser.add_argument("--channel-switch", choices=CHANNEL_SWITCHES, default="replay",
                         help="a changed channel replayed over the input history (default) or started "
                              "fresh from its onset, the old one fading (docs/scenario.md)")
+    parser.add_argument("--earlier-noise-change", action="store_true",
+                        help="add a harmless disturbance change on the effect's output hours before it "
+                             "(docs/families.md)")
     parser.add_argument("--workers", type=int, help="local processes (default: all cores)")
     parser.add_argument("--scheduler", help="Dask scheduler address instead of local processes")
     parser.add_argument("--json", metavar="OUT.json", help="also write every run as JSON")
+
+
+def variant_note(study: dict) -> str:
+    """What a study's draws had beside the family's own (its channel switch, an earlier noise
+    change), as the end of its summary line."""
+    parts = []
+    if study.get("channel_switch", "replay") != "replay":
+        parts.append(f"channels switched {study['channel_switch']}")
+    if study.get("earlier_noise_change"):
+        parts.append("an earlier noise change in every draw")
+    return "".join(f"; {p}" for p in parts)
 
 
 def study_selection(parser, args):

@@ -105,13 +105,13 @@ def evidence(spec: dict, expect: dict, data, change: dict | None) -> float | Non
 
 
 def run_family_seed(name: str, seed: int, record_s: float | None = None, configs: dict | None = None,
-                    effect: str | None = None, channel_switch: str = "replay") -> dict:
+                    effect: str | None = None, channel_switch: str = "replay",
+                    earlier_noise_change: bool = False) -> dict:
     """Simulate one draw of family `name` and score every preset of its size on it, or every
     detector config of `configs` ({label: preset name, config dict or file}). effect forces
-    one of the family's effects and channel_switch sets how a changed channel takes over
-    (Family.draw)."""
+    one of the family's effects; channel_switch and earlier_noise_change are Family.draw's."""
     family = fam.family(name)
-    spec, expect = family.draw(seed, record_s, effect, channel_switch)
+    spec, expect = family.draw(seed, record_s, effect, channel_switch, earlier_noise_change)
     model = nominal_model(spec)
     t0 = time.perf_counter()
     data = simulate(spec)
@@ -138,7 +138,8 @@ def run_family_seed(name: str, seed: int, record_s: float | None = None, configs
 
 
 def run_study(names=None, seeds=range(4), record_s=None, scheduler=None, workers=None,
-              progress: bool = True, configs: dict | None = None, channel_switch: str = "replay") -> dict:
+              progress: bool = True, configs: dict | None = None, channel_switch: str = "replay",
+              earlier_noise_change: bool = False) -> dict:
     """Every (family, seed) run in parallel (``parallel.run_tasks``); rows per family and
     preset (or per label of `configs`, see run_family_seed)."""
     names = [f.name for f in fam.FAMILIES] if names is None else list(names)
@@ -146,12 +147,13 @@ def run_study(names=None, seeds=range(4), record_s=None, scheduler=None, workers
         fam.family(n)  # unknown names fail before any work starts
     seeds = list(seeds)
     started = time.perf_counter()
-    runs, where = run_tasks(run_family_seed, [(n, s, record_s, configs, None, channel_switch)
+    runs, where = run_tasks(run_family_seed, [(n, s, record_s, configs, None, channel_switch, earlier_noise_change)
                                               for n in names for s in seeds],
                             scheduler, workers, progress, unit="runs")
     runs.sort(key=lambda r: (names.index(r["family"]), r["seed"]))
     return {"rows": summarise(runs, names, configs), "runs": runs, "seeds": seeds, "where": where,
-            "wall_seconds": time.perf_counter() - started}
+            "wall_seconds": time.perf_counter() - started, "channel_switch": channel_switch,
+            "earlier_noise_change": earlier_noise_change}
 
 
 def summarise(runs: list, names: list, configs: dict | None = None) -> list:
@@ -232,7 +234,7 @@ def format_table(study: dict) -> str:
     effect pooled over the families of each split."""
     seeds = study["seeds"]
     lines = [f"scenario families, seeds {min(seeds)}-{max(seeds)}: {study['wall_seconds']:.0f} s wall on "
-             f"{study['where']}", "",
+             f"{study['where']}{fam.variant_note(study)}", "",
              "| split | family | preset | detected | false MPM alarm | false noise alarm | mislocated only | "
              "detect refused | delay median (h) | delay p90 (h) |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]

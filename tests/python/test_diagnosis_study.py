@@ -1,5 +1,7 @@
 """The diagnosis study's scoring (python/mpmpp/diagnosis_study.py): the truth it reads from a
 scenario, the tables' counts."""
+from types import SimpleNamespace
+
 import pytest
 
 import mpmpp
@@ -34,6 +36,25 @@ def test_true_change_reads_the_scheduled_event(effect):
     else:
         assert change["output"] == ev["output"] and change["input"] is None
         assert ds.finding_right({"effect": "output_drift", "output": ev["output"]}, effect, change)
+
+
+def test_a_noise_change_finding_is_right_at_an_earlier_noise_change():
+    """With ``earlier_noise_change`` the added disturbance change is real: a noise_change finding
+    on its output dated within an hour of it is right; one dated at the process change hours
+    later (the change misread) and one on another output are not."""
+    spec, expect = fam.family("mpc_2x2").draw(3, None, "gain", earlier_noise_change=True)
+    changes = ds.noise_changes(spec)
+    t, output = expect["earlier_noise_change_s"], expect["channels"][0][0]
+    assert changes == [(output, t)]
+    other = next(o for o in spec["outputs"] if o != output)
+
+    def finding(effect, out, onset_s):
+        return SimpleNamespace(effect=effect, output=out, onset_s=onset_s)
+    assert ds.names_a_noise_change(finding("noise_change", output, t + 1800.0), changes)
+    assert not ds.names_a_noise_change(finding("noise_change", output, expect["onset_s"]), changes)
+    assert not ds.names_a_noise_change(finding("noise_change", other, t), changes)
+    assert not ds.names_a_noise_change(finding("output_drift", output, t), changes)
+    assert ds.noise_changes(fam.family("mpc_2x2").draw(3, None, "gain")[0]) == []
 
 
 def test_tables_count_what_the_runs_say():

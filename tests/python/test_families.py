@@ -144,6 +144,29 @@ def test_channel_switch_changes_only_the_record_after_the_onset():
         fam.draw(3, channel_switch="swap")
 
 
+@pytest.mark.parametrize("name,effect", [("mpc_2x2", "gain"), ("mpc_3x3", "none"), ("mpc_siso_controls", "output_drift")])
+def test_earlier_noise_change_adds_one_disturbance_change_before_the_effect(name, effect):
+    """The same draw with one noise or level change added on the effect's output (a random one
+    for a control without an output), at 35-70 % of the effect's onset or of 60 % of the record."""
+    fam = families.family(name)
+    spec, expect = fam.draw(4, None, effect)
+    earlier, expect_earlier = fam.draw(4, None, effect, earlier_noise_change=True)
+    added = [ev for ev in earlier["events"] if ev not in spec["events"]]
+    assert len(added) == 1 and len(earlier["events"]) == len(spec["events"]) + 1
+    assert [ev for ev in earlier["events"] if ev is not added[0]] == spec["events"]
+    assert {k: v for k, v in expect_earlier.items() if k != "earlier_noise_change_s"} == expect
+    ev = added[0]
+    assert ev["type"] in ("noise", "sigma") and ev["time_s"] == expect_earlier["earlier_noise_change_s"]
+    assert ev["time_s"] % spec["sample_time_s"] == 0
+    reference = expect["onset_s"] or 0.6 * spec["duration_s"]
+    assert 0.35 * reference - spec["sample_time_s"] <= ev["time_s"] <= 0.7 * reference
+    if expect["channels"]:
+        assert ev["output"] == expect["channels"][0][0]
+    elif "output" in expect:
+        assert ev["output"] == expect["output"]
+    assert [e["time_s"] for e in earlier["events"]] == sorted(e["time_s"] for e in earlier["events"])
+
+
 def test_cli_simulate_family_writes_data_and_a_model_file(tmp_path, capsys):
     from mpmpp.cli import main
     from mpmpp.io import load_data, load_model

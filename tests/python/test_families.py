@@ -231,3 +231,10 @@ def test_evidence_rows_bin_the_recommended_presets_runs():
                           run(None, None, None)])
     assert rows == [{"split": "tuning", "bin": "[0, 10)", "changes": 1, "detected": 0, "read_as_noise": 0},
                     {"split": "tuning", "bin": "[100, 1000)", "changes": 2, "detected": 1, "read_as_noise": 1}]
+
+
+def test_a_study_summary_names_what_its_draws_had_beside_the_family():
+    assert families.variant_note({}) == ""
+    assert families.variant_note({"channel_switch": "replay", "earlier_noise_change": False}) == ""
+    assert families.variant_note({"channel_switch": "fresh", "earlier_noise_change": True}) == (
+        "; channels switched fresh; an earlier noise change in every draw")

@@ -85,17 +85,21 @@ def test_an_op_ramping_at_its_rate_limit_is_not_compression():
     assert interpolated_share(compressed) > 0.3 and "straight lines" in record_notes({"OP": compressed})[0]
 
 
-def test_no_valve_verdict_on_a_rate_limited_op():
+def test_no_valve_verdict_on_a_rate_limited_op(monkeypatch):
     """A DMC clipping its moves (tuning family mpc_siso_clip, seed 7, no change: a linear valve):
-    the OP moves by its limit in most samples and the valve fit, free, calls a backlash; held to
-    the limit, it calls nothing, and a free OP's largest move is rare."""
+    the OP moves by its limit in most samples and the valve fit with N_Y PV lags, free, calls a
+    backlash; held to the limit, it calls nothing, and a free OP's largest move is rare. (With
+    LONG_N_Y PV lags as well the fit itself finds the valve linear on this record.)"""
     from mpmpp import families
     from mpmpp.simulate import simulate
+    from mpmpp.stiction import hammerstein
 
     spec, _ = families.family("mpc_siso_clip").draw(7, effect="none")
     data = simulate(spec)
     op, pv = data["u1"].to_numpy(), data["y1"].to_numpy()
     assert rate_limited_share(op) > 0.7
+    assert fit_valve(op, pv).kind == "linear"
+    monkeypatch.setattr(hammerstein, "LONG_N_Y", hammerstein.N_Y)
     fit = fit_valve(op, pv)
     assert fit.kind == "backlash" and fit.confidence > 0.5   # what the fit alone would say
     assert not fit.verdict

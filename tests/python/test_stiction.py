@@ -389,10 +389,14 @@ def test_stretches_fit_each_piece_and_one_stretch_is_the_record():
     y = (pv - pv[inside].mean()) / pv[inside].std()
     top = next(c for c in cut.ranking if c.kind == "stick_slip")
     valve = ActuatorNonlinearity(stiction_s=top.params["S"], stiction_j=top.params["J"])
-    parts = [hammerstein._lagged(y[a:b], actuator_positions(op[a:b], valve, op[a]), None, hammerstein.N_U, a)
-             for a, b in pieces]
-    by_hand = hammerstein.held_out_losses(np.vstack([q for q, _ in parts]), np.concatenate([t for _, t in parts]))
-    assert top.cv_sse == pytest.approx(by_hand.sum(), rel=1e-12)
+    start = max(hammerstein.LONG_N_Y, hammerstein.N_U)
+    by_hand = []
+    for n_y in (hammerstein.N_Y, hammerstein.LONG_N_Y):   # the better of the two output orders
+        parts = [hammerstein._lagged(y[a:b], actuator_positions(op[a:b], valve, op[a]), None, hammerstein.N_U, a,
+                                     start=start, output_lags=n_y) for a, b in pieces]
+        by_hand.append(hammerstein.held_out_losses(np.vstack([q for q, _ in parts]),
+                                                   np.concatenate([t for _, t in parts])).sum())
+    assert top.cv_sse == pytest.approx(min(by_hand), rel=1e-12)
     with pytest.raises(ValueError, match="too short"):
         fit_valve(op, pv, [(0, 50), (60, 99)])
     for bad in ([(0, 700)], [(300, 400), (350, 600)], [(10, 10)], [(400, 600), (0, 300)]):
@@ -400,18 +404,23 @@ def test_stretches_fit_each_piece_and_one_stretch_is_the_record():
             fit_valve(op, pv, bad)
 
 
-def test_a_dead_time_beyond_the_valve_lags_is_no_valve():
+def test_a_dead_time_beyond_the_valve_lags_is_no_valve(monkeypatch):
     """A linear PI loop whose dead time (70 s at 10 s) lies beyond the valve lags 1..N_U: a
     hysteresis candidate, which delays the OP's reversals, stood in for the lags the ARX lacks
-    (a valve verdict on this record). Given the channel's first lag, every structure is also
-    fitted with the valve lags around it, and the linear valve explains the loop."""
+    (a valve verdict on this record with N_Y output lags). Given the channel's first lag, every
+    structure is also fitted with the valve lags around it, and the linear valve explains the
+    loop; so it does with LONG_N_Y output lags."""
     import pi_loop
 
     loop = pi_loop.Loop("long dead time", 1.0, 100.0, 70.0, 0.05, 0.9)
     data = pi_loop.simulate(loop, 8, rows=2000, ts=10.0, setpoint_steps=True)
     op, pv = data["OP"].to_numpy(), data["PV"].to_numpy()
-    assert fit_valve(op, pv).verdict
-    assert not fit_valve(op, pv, first_lag=8).verdict
+    with monkeypatch.context() as m:   # the ARX with N_Y output lags only
+        m.setattr(hammerstein, "LONG_N_Y", hammerstein.N_Y)
+        assert fit_valve(op, pv).verdict
+        assert not fit_valve(op, pv, first_lag=8).verdict
+    # with LONG_N_Y output lags as well, the PV's own past carries the lags the valve's lack
+    assert not fit_valve(op, pv).verdict and not fit_valve(op, pv, first_lag=8).verdict
     # a window within 1..N_U adds no structure: the same fit as without it
     assert hammerstein.dead_time_window(2) == () and hammerstein.dead_time_window(3) == (2, 3, 4, 5, 6, 7)
     assert fit_valve(op, pv, first_lag=2).gain_per_sample == fit_valve(op, pv).gain_per_sample
@@ -419,3 +428,22 @@ def test_a_dead_time_beyond_the_valve_lags_is_no_valve():
     phi_short, t_short = hammerstein._lagged(pv, op, start=12)
     phi_wide, t_wide = hammerstein._lagged(pv, op, window=hammerstein.dead_time_window(8), start=12)
     assert np.array_equal(t_short, t_wide) and phi_wide.shape[1] == phi_short.shape[1] + 6
+
+
+def test_a_disturbance_with_a_slow_moving_average_zero_is_no_valve(monkeypatch):
+    """A linear PI loop of two (the held-out multi_pi_2x2 family, seed 632: y1 <- u1, dead time
+    6 samples, a disturbance (1 - 0.73 q^-1) / (1 + 0.11 q^-1) e). 1/A(q) with N_Y lags cannot
+    whiten it, and a backlash stood in for the missing lags at confidence 0.99; with LONG_N_Y
+    output lags the linear valve explains the loop."""
+    from mpmpp import families
+    from mpmpp.simulate import simulate
+
+    spec, _ = families.family("multi_pi_2x2").draw(632, effect="output_drift")   # the drift is on y2
+    data = simulate(spec)
+    op, pv = data["u1"].to_numpy(), data["y1"].to_numpy()
+    with monkeypatch.context() as m:
+        m.setattr(hammerstein, "LONG_N_Y", hammerstein.N_Y)
+        short = fit_valve(op, pv, first_lag=7)
+    assert short.verdict and short.confidence > 0.9
+    both = fit_valve(op, pv, first_lag=7)
+    assert not both.verdict and both.gain_per_sample < 0

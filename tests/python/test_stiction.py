@@ -447,3 +447,25 @@ def test_a_disturbance_with_a_slow_moving_average_zero_is_no_valve(monkeypatch):
     assert short.verdict and short.confidence > 0.9
     both = fit_valve(op, pv, first_lag=7)
     assert not both.verdict and both.gain_per_sample < 0
+
+
+def test_held_out_losses_match_one_least_squares_fit_per_fold():
+    """The folds' normal equations (the record's less each fold's own) against plain lstsq on
+    the other folds' rows: ARX regressors of a slow PI loop with an oscillation's sine and
+    cosine, and with a column that is zero outside one fold (minimum-norm answers both ways)."""
+    rng = np.random.default_rng(11)
+    p = np.exp(-10 / 300)
+    rec = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p), delay=3), 0.4, 30.0, 1200,
+                           disturbance=coloured_noise(rng, 1200, 0.5, 0.95))
+    y = (rec["pv"] - rec["pv"].mean()) / rec["pv"].std()
+    phi, target = hammerstein._lagged(y, rec["op"], 0.013, output_lags=hammerstein.LONG_N_Y)
+    lonely = np.zeros(len(target))
+    lonely[:100] = rng.standard_normal(100)          # inside the first of the five folds only
+    for x in (phi, np.column_stack([phi, lonely])):
+        edges = np.linspace(0, len(target), hammerstein.N_FOLDS + 1).astype(int)
+        expected = np.empty(len(target))
+        for a, b in zip(edges[:-1], edges[1:]):
+            keep = np.r_[0:a, b:len(target)]
+            theta = np.linalg.lstsq(x[keep], target[keep], rcond=None)[0]
+            expected[a:b] = (target[a:b] - x[a:b] @ theta) ** 2
+        np.testing.assert_allclose(hammerstein.held_out_losses(x, target), expected, rtol=1e-7, atol=1e-12)

@@ -121,14 +121,26 @@ def dominant_frequency(x: np.ndarray) -> float:
 
 
 def held_out_losses(phi: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Squared one-step errors of each row, predicted by the ARX fitted on the other folds."""
+    """Squared one-step errors of each row, predicted by the ARX fitted on the other folds.
+    Each fold's normal equations are the record's less the fold's own (one pass over the rows
+    for all folds instead of a factorisation of 4/5 of them per fold: a week of a 10 s loop
+    costs the valve fit 12 s CPU otherwise), solved with the columns scaled to unit norm (the
+    Gram matrix of unscaled PV lags and a constant squares a needless condition number)."""
     n = len(target)
     edges = np.linspace(0, n, N_FOLDS + 1).astype(int)
+    folds = [(a, b) for a, b in zip(edges[:-1], edges[1:])]
+    grams = [phi[a:b].T @ phi[a:b] for a, b in folds]
+    moments = [phi[a:b].T @ target[a:b] for a, b in folds]
+    gram, moment = sum(grams), sum(moments)
     out = np.empty(n)
-    for a, b in zip(edges[:-1], edges[1:]):
-        keep = np.r_[0:a, b:n]
-        theta, *_ = np.linalg.lstsq(phi[keep], target[keep], rcond=None)
-        out[a:b] = (target[a:b] - phi[a:b] @ theta) ** 2
+    for (a, b), g, m in zip(folds, grams, moments):
+        kept = gram - g
+        scale = np.sqrt(np.diag(kept))
+        scale[scale == 0] = 1.0
+        # lstsq on the scaled normal equations: a column without variation in the kept rows
+        # (the oscillation's sine over a short stretch) has the minimum-norm answer, as before
+        z, *_ = np.linalg.lstsq(kept / np.outer(scale, scale), (moment - m) / scale, rcond=None)
+        out[a:b] = (target[a:b] - phi[a:b] @ (z / scale)) ** 2
     return out
 
 
@@ -218,7 +230,7 @@ def fit_valve(op, pv, stretches=None, first_lag: int = 0) -> HammersteinResult:
         positions = [actuator_positions(u[a:b], actuator, u[a]) for a, b in stretches]
         sse = []
         for w in windows:
-            for n_y in (N_Y, LONG_N_Y):
+            for n_y in dict.fromkeys((N_Y, LONG_N_Y)):
                 parts = [_lagged(y_s[a:b], v, frequency, valve_lags, a, w, lags, n_y)
                          for (a, b), v in zip(stretches, positions)]
                 phi, target = np.vstack([p for p, _ in parts]), np.concatenate([t for _, t in parts])

@@ -396,7 +396,7 @@ def test_stretches_fit_each_piece_and_one_stretch_is_the_record():
                                      start=start, output_lags=n_y) for a, b in pieces]
         by_hand.append(hammerstein.held_out_losses(np.vstack([q for q, _ in parts]),
                                                    np.concatenate([t for _, t in parts])).sum())
-    assert top.cv_sse == pytest.approx(min(by_hand), rel=1e-12)
+    assert top.cv_sse == pytest.approx(min(by_hand), rel=1e-9)   # from the folds' Gram matrices
     with pytest.raises(ValueError, match="too short"):
         fit_valve(op, pv, [(0, 50), (60, 99)])
     for bad in ([(0, 700)], [(300, 400), (350, 600)], [(10, 10)], [(400, 600), (0, 300)]):
@@ -449,10 +449,22 @@ def test_a_disturbance_with_a_slow_moving_average_zero_is_no_valve(monkeypatch):
     assert not both.verdict and both.gain_per_sample < 0
 
 
+def _per_fold_lstsq(x, target):
+    edges = np.linspace(0, len(target), hammerstein.N_FOLDS + 1).astype(int)
+    losses = np.empty(len(target))
+    for a, b in zip(edges[:-1], edges[1:]):
+        keep = np.r_[0:a, b:len(target)]
+        theta = np.linalg.lstsq(x[keep], target[keep], rcond=None)[0]
+        losses[a:b] = (target[a:b] - x[a:b] @ theta) ** 2
+    return losses
+
+
 def test_held_out_losses_match_one_least_squares_fit_per_fold():
     """The folds' normal equations (the record's less each fold's own) against plain lstsq on
     the other folds' rows: ARX regressors of a slow PI loop with an oscillation's sine and
-    cosine, and with a column that is zero outside one fold (minimum-norm answers both ways)."""
+    cosine, and with a column that is zero outside one fold (minimum-norm answers both ways);
+    and the held-out error of every structure the fit compares, read from the Gram matrices of
+    the widest one, against lstsq on that structure's own columns."""
     rng = np.random.default_rng(11)
     p = np.exp(-10 / 300)
     rec = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p), delay=3), 0.4, 30.0, 1200,
@@ -462,10 +474,16 @@ def test_held_out_losses_match_one_least_squares_fit_per_fold():
     lonely = np.zeros(len(target))
     lonely[:100] = rng.standard_normal(100)          # inside the first of the five folds only
     for x in (phi, np.column_stack([phi, lonely])):
-        edges = np.linspace(0, len(target), hammerstein.N_FOLDS + 1).astype(int)
-        expected = np.empty(len(target))
-        for a, b in zip(edges[:-1], edges[1:]):
-            keep = np.r_[0:a, b:len(target)]
-            theta = np.linalg.lstsq(x[keep], target[keep], rcond=None)[0]
-            expected[a:b] = (target[a:b] - x[a:b] @ theta) ** 2
-        np.testing.assert_allclose(hammerstein.held_out_losses(x, target), expected, rtol=1e-7, atol=1e-12)
+        np.testing.assert_allclose(hammerstein.held_out_losses(x, target), _per_fold_lstsq(x, target),
+                                   rtol=1e-7, atol=1e-12)
+    window = hammerstein.dead_time_window(5)
+    wide, target = hammerstein._lagged(y, rec["op"], 0.013, hammerstein.N_U, 0, window, 12, hammerstein.LONG_N_Y)
+    grams = hammerstein.FoldGrams(wide, target)
+    for n_y in (hammerstein.N_Y, hammerstein.LONG_N_Y):
+        for valve_lags in (0, 3, hammerstein.N_U):
+            for own in ((), window):
+                for periodic in (False, True):
+                    cols = hammerstein._structure_columns(n_y, valve_lags, own, periodic, window)
+                    x, t = hammerstein._lagged(y, rec["op"], 0.013 if periodic else None, valve_lags, 0, own, 12, n_y)
+                    np.testing.assert_array_equal(wide[:, cols], x)
+                    assert grams.held_out_sse(cols) == pytest.approx(_per_fold_lstsq(x, t).sum(), rel=1e-9)

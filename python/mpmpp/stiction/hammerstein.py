@@ -120,28 +120,63 @@ def dominant_frequency(x: np.ndarray) -> float:
     return float(f[band][np.argmax(power[band])])
 
 
+class FoldGrams:
+    """The normal equations of an ARX on N_FOLDS contiguous blocks of its rows: per fold the
+    Gram matrix of [phi, target]. A fold's least squares is the record's less the fold's own (one
+    pass over the rows for all folds and every subset of phi's columns, where one factorisation
+    of 4/5 of the rows per fold and structure cost a week of a 10 s loop's valve fit 12 s CPU),
+    solved with the columns scaled to unit norm (the Gram matrix of unscaled PV lags and a
+    constant squares a needless condition number)."""
+
+    def __init__(self, phi: np.ndarray, target: np.ndarray):
+        self.edges = np.linspace(0, len(target), N_FOLDS + 1).astype(int)
+        x = np.column_stack([phi, target])
+        self.grams = [x[a:b].T @ x[a:b] for a, b in zip(self.edges[:-1], self.edges[1:])]
+        self.total = sum(self.grams)
+
+    def coefficients(self, cols: np.ndarray) -> list[np.ndarray]:
+        """Per fold, the coefficients on phi's columns ``cols`` fitted on the other folds (the
+        minimum-norm answer where a column does not vary there, as lstsq gives)."""
+        thetas = []
+        for g in self.grams:
+            kept = self.total - g
+            a, b = kept[np.ix_(cols, cols)], kept[cols, -1]
+            scale = np.sqrt(np.diag(a))
+            scale[scale == 0] = 1.0
+            z, *_ = np.linalg.lstsq(a / np.outer(scale, scale), b / scale, rcond=None)
+            thetas.append(z / scale)
+        return thetas
+
+    def held_out_sse(self, cols: np.ndarray) -> float:
+        """Sum of the held-out squared one-step errors of the ARX on columns ``cols``, each
+        fold's from its own Gram matrix: y'y - 2 theta'X'y + theta'X'X theta."""
+        total = 0.0
+        for g, theta in zip(self.grams, self.coefficients(cols)):
+            xy = g[cols, -1]
+            total += g[-1, -1] - 2.0 * theta @ xy + theta @ g[np.ix_(cols, cols)] @ theta
+        return max(float(total), 0.0)
+
+
 def held_out_losses(phi: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Squared one-step errors of each row, predicted by the ARX fitted on the other folds.
-    Each fold's normal equations are the record's less the fold's own (one pass over the rows
-    for all folds instead of a factorisation of 4/5 of them per fold: a week of a 10 s loop
-    costs the valve fit 12 s CPU otherwise), solved with the columns scaled to unit norm (the
-    Gram matrix of unscaled PV lags and a constant squares a needless condition number)."""
-    n = len(target)
-    edges = np.linspace(0, n, N_FOLDS + 1).astype(int)
-    folds = [(a, b) for a, b in zip(edges[:-1], edges[1:])]
-    grams = [phi[a:b].T @ phi[a:b] for a, b in folds]
-    moments = [phi[a:b].T @ target[a:b] for a, b in folds]
-    gram, moment = sum(grams), sum(moments)
-    out = np.empty(n)
-    for (a, b), g, m in zip(folds, grams, moments):
-        kept = gram - g
-        scale = np.sqrt(np.diag(kept))
-        scale[scale == 0] = 1.0
-        # lstsq on the scaled normal equations: a column without variation in the kept rows
-        # (the oscillation's sine over a short stretch) has the minimum-norm answer, as before
-        z, *_ = np.linalg.lstsq(kept / np.outer(scale, scale), (moment - m) / scale, rcond=None)
-        out[a:b] = (target[a:b] - phi[a:b] @ (z / scale)) ** 2
+    """Squared one-step errors of each row, predicted by the ARX fitted on the other folds."""
+    folds = FoldGrams(phi, target)
+    out = np.empty(len(target))
+    cols = np.arange(phi.shape[1])
+    for a, b, theta in zip(folds.edges[:-1], folds.edges[1:], folds.coefficients(cols)):
+        out[a:b] = (target[a:b] - phi[a:b] @ theta) ** 2
     return out
+
+
+def _structure_columns(n_y: int, valve_lags: int, window: tuple, periodic: bool, layout_window: tuple) -> np.ndarray:
+    """The columns of one ARX structure (n_y PV lags, valve lags 1..valve_lags and those of
+    ``window``, the constant, and with ``periodic`` the sine and cosine) in ``_lagged``'s widest
+    layout: PV lags 1..LONG_N_Y, valve lags 1..N_U and those of ``layout_window``, the constant,
+    the sine and cosine."""
+    widest = sorted(set(range(1, N_U + 1)) | set(layout_window))
+    own = set(range(1, valve_lags + 1)) | set(window)
+    valve = [LONG_N_Y + k for k, lag in enumerate(widest) if lag in own]
+    const = LONG_N_Y + len(widest)
+    return np.array(list(range(n_y)) + valve + [const] + ([const + 1, const + 2] if periodic else []))
 
 
 def _candidate_grid(u: np.ndarray) -> list[tuple[str, ActuatorNonlinearity, dict]]:
@@ -224,23 +259,24 @@ def fit_valve(op, pv, stretches=None, first_lag: int = 0) -> HammersteinResult:
     y_s = (y - y_in.mean()) / np.std(y_in)
     widest = slice(*longest(stretches))
 
-    def evaluate(kind, actuator, params, frequency=None, valve_lags=N_U):
+    frequency = dominant_frequency(y_s[widest])
+
+    def fold_grams(actuator, periodic=False) -> FoldGrams:
         # the valve is taken at rest at each stretch's first OP (what it did before is unknown),
         # and no lag reaches across a gap; every structure predicts the rows from `lags` on
-        positions = [actuator_positions(u[a:b], actuator, u[a]) for a, b in stretches]
-        sse = []
-        for w in windows:
-            for n_y in dict.fromkeys((N_Y, LONG_N_Y)):
-                parts = [_lagged(y_s[a:b], v, frequency, valve_lags, a, w, lags, n_y)
-                         for (a, b), v in zip(stretches, positions)]
-                phi, target = np.vstack([p for p, _ in parts]), np.concatenate([t for _, t in parts])
-                sse.append(float(held_out_losses(phi, target).sum()))
-        return Candidate(kind, params, min(sse))
+        parts = [_lagged(y_s[a:b], actuator_positions(u[a:b], actuator, u[a]), frequency if periodic else None,
+                         N_U, a, window, lags, LONG_N_Y) for a, b in stretches]
+        return FoldGrams(np.vstack([p for p, _ in parts]), np.concatenate([t for _, t in parts]))
 
-    frequency = dominant_frequency(y_s[widest])
-    linears = [evaluate("linear", ActuatorNonlinearity(),
-                        {"valve_lags": k} | ({"disturbance_period": 1.0 / f} if f else {}), f, k)
-               for k in range(N_U + 1) for f in (None, frequency)]
+    def evaluate(kind, actuator, params, grams=None, valve_lags=N_U, periodic=False):
+        grams = grams or fold_grams(actuator)
+        return Candidate(kind, params, min(grams.held_out_sse(_structure_columns(n_y, valve_lags, w, periodic, window))
+                                           for w in windows for n_y in dict.fromkeys((N_Y, LONG_N_Y))))
+
+    plain = fold_grams(ActuatorNonlinearity(), periodic=True)   # the linear valve: every structure from one
+    linears = [evaluate("linear", None, {"valve_lags": k} | ({"disturbance_period": 1.0 / frequency} if p else {}),
+                        plain, k, p)
+               for k in range(N_U + 1) for p in (False, True)]
     linear = min(linears, key=lambda c: c.cv_sse)
     with_sine = min((c for c in linears if "disturbance_period" in c.params), key=lambda c: c.cv_sse)
     without = min((c for c in linears if "disturbance_period" not in c.params), key=lambda c: c.cv_sse)

@@ -1,6 +1,8 @@
 """Stiction analysis speed: mpmpp's C++ actuator model against the plain Python reference of the
-same equations (tests/python/valve_reference.py), and the whole Hammerstein fit of one
-751-sample record against the baselines.
+same equations (tests/python/valve_reference.py), the whole Hammerstein fit of one
+751-sample record against the baselines, and on a week of a 10 s loop the fit's held-out
+errors of every ARX structure from the folds' Gram matrices against one numpy.linalg.lstsq per
+fold and structure (peer).
 
     python bench/bench_stiction.py [--repeat N]
 """
@@ -15,9 +17,9 @@ sys.path[:0] = [str(ROOT / "python"), str(ROOT / "tests" / "python")]
 
 # the imports below need the paths above
 from mpmpp._core import ActuatorNonlinearity, actuator_positions  # noqa: E402
-from mpmpp.stiction import BASELINES, fit_valve  # noqa: E402
+from mpmpp.stiction import BASELINES, fit_valve, hammerstein  # noqa: E402
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop  # noqa: E402
-from valve_reference import choudhury_reference  # noqa: E402
+from valve_reference import choudhury_reference, per_fold_lstsq_losses  # noqa: E402
 from timing import best_of  # noqa: E402
 
 
@@ -42,6 +44,28 @@ def main() -> int:
     for name, test in BASELINES.items():
         t = best_of(lambda test=test: test(rec["op"], rec["pv"], rec["sp"]), args.repeat)[0]
         print(f"  {name}: {t * 1e3:.1f} ms (Hammerstein fit / {name} time: {t_fit / t:.1f})")
+    n = 7 * 8640
+    week = simulate_pi_loop(Process(b=(1 - p,), a=(1.0, -p), delay=4), 0.25, 3.0, n,
+                            disturbance=coloured_noise(rng, n, 0.3, 0.8))
+    t_week = best_of(lambda: fit_valve(week["op"], week["pv"], first_lag=5), 1)[0]
+    print(f"Hammerstein fit of a week at 10 s ({n} samples, with the dead-time window): {t_week:.2f} s")
+    window = hammerstein.dead_time_window(5)
+    y = (week["pv"] - week["pv"].mean()) / week["pv"].std()
+    f = hammerstein.dominant_frequency(y)
+    phi, target = hammerstein._lagged(y, week["op"], f, hammerstein.N_U, 0, window, 12, hammerstein.LONG_N_Y)
+    structures = [hammerstein._structure_columns(n_y, k, w, periodic, window)
+                  for n_y in (hammerstein.N_Y, hammerstein.LONG_N_Y) for k in range(hammerstein.N_U + 1)
+                  for w in ((), window) for periodic in (False, True)]
+
+    def from_grams():   # as the fit does: one design's Gram matrices, every structure from them
+        grams = hammerstein.FoldGrams(phi, target)
+        return [grams.held_out_sse(c) for c in structures]
+
+    t_grams = best_of(from_grams, 1)[0]
+    t_lstsq = best_of(lambda: [per_fold_lstsq_losses(phi[:, c], target, hammerstein.N_FOLDS).sum()
+                               for c in structures], 1)[0]
+    print(f"  the linear valve's {len(structures)} structures: fold Gram matrices {t_grams * 1e3:.0f} ms, "
+          f"lstsq per fold and structure {t_lstsq * 1e3:.0f} ms, ratio {t_lstsq / t_grams:.0f}x")
     return 0
 
 

@@ -1,5 +1,6 @@
 """Plain Python valve models written out from the published equations, as the independent
-reference for mpmpp's C++ valves (tests and bench)."""
+reference for mpmpp's C++ valves, and the valve fit's held-out errors by one least-squares fit
+per fold (tests and bench)."""
 import numpy as np
 
 
@@ -36,3 +37,15 @@ def he_reference(x, fs, fd):
         else:
             y[k], ur = y[k - 1], cum
     return y
+
+
+def per_fold_lstsq_losses(x, target, folds):
+    """Squared one-step errors of each row by the least squares (numpy.linalg.lstsq) on the
+    other ``folds`` contiguous blocks of rows."""
+    edges = np.linspace(0, len(target), folds + 1).astype(int)
+    losses = np.empty(len(target))
+    for a, b in zip(edges[:-1], edges[1:]):
+        keep = np.r_[0:a, b:len(target)]
+        theta = np.linalg.lstsq(x[keep], target[keep], rcond=None)[0]
+        losses[a:b] = (target[a:b] - x[a:b] @ theta) ** 2
+    return losses

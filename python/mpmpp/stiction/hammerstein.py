@@ -122,11 +122,12 @@ def dominant_frequency(x: np.ndarray) -> float:
 
 class FoldGrams:
     """The normal equations of an ARX on N_FOLDS contiguous blocks of its rows: per fold the
-    Gram matrix of [phi, target]. A fold's least squares is the record's less the fold's own (one
-    pass over the rows for all folds and every subset of phi's columns, where one factorisation
-    of 4/5 of the rows per fold and structure cost a week of a 10 s loop's valve fit 12 s CPU),
-    solved with the columns scaled to unit norm (the Gram matrix of unscaled PV lags and a
-    constant squares a needless condition number)."""
+    Gram matrix of [phi, target]. A fold's least squares is the record's less the fold's own: one
+    pass over the rows serves all folds and every subset of phi's columns (a factorisation of
+    4/5 of the rows per fold and structure took the valve fit of a week of a 10 s loop 12 s CPU
+    with both PV-lag structures; bench/bench_stiction.py). Solved with the columns scaled to unit
+    norm: the Gram matrix of unscaled PV lags and a constant squares a needless condition
+    number."""
 
     def __init__(self, phi: np.ndarray, target: np.ndarray):
         self.edges = np.linspace(0, len(target), N_FOLDS + 1).astype(int)
@@ -158,7 +159,8 @@ class FoldGrams:
 
 
 def held_out_losses(phi: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """Squared one-step errors of each row, predicted by the ARX fitted on the other folds."""
+    """Squared one-step errors of each row, predicted by the ARX fitted on the other folds (from
+    the folds' Gram matrices)."""
     folds = FoldGrams(phi, target)
     out = np.empty(len(target))
     cols = np.arange(phi.shape[1])

@@ -270,20 +270,21 @@ def fit_valve(op, pv, stretches=None, first_lag: int = 0) -> HammersteinResult:
                          N_U, a, window, lags, LONG_N_Y) for a, b in stretches]
         return FoldGrams(np.vstack([p for p, _ in parts]), np.concatenate([t for _, t in parts]))
 
-    def evaluate(kind, actuator, params, grams=None, valve_lags=N_U, periodic=False):
-        grams = grams or fold_grams(actuator)
-        return Candidate(kind, params, min(grams.held_out_sse(_structure_columns(n_y, valve_lags, w, periodic, window))
-                                           for w in windows for n_y in dict.fromkeys((N_Y, LONG_N_Y))))
+    def best_sse(grams: FoldGrams, valve_lags=N_U, periodic=False) -> float:
+        """The smallest held-out error over the window and PV-lag structures."""
+        return min(grams.held_out_sse(_structure_columns(n_y, valve_lags, w, periodic, window))
+                   for w in windows for n_y in dict.fromkeys((N_Y, LONG_N_Y)))
 
     plain = fold_grams(ActuatorNonlinearity(), periodic=True)   # the linear valve: every structure from one
-    linears = [evaluate("linear", None, {"valve_lags": k} | ({"disturbance_period": 1.0 / frequency} if p else {}),
-                        plain, k, p)
+    linears = [Candidate("linear", {"valve_lags": k} | ({"disturbance_period": 1.0 / frequency} if p else {}),
+                         best_sse(plain, k, p))
                for k in range(N_U + 1) for p in (False, True)]
     linear = min(linears, key=lambda c: c.cv_sse)
     with_sine = min((c for c in linears if "disturbance_period" in c.params), key=lambda c: c.cv_sse)
     without = min((c for c in linears if "disturbance_period" not in c.params), key=lambda c: c.cv_sse)
     periodic = with_sine.cv_sse < without.cv_sse and is_oscillating(u[widest])
-    ranking = [linear] + [evaluate(*c) for c in _candidate_grid(u_in)]
+    ranking = [linear] + [Candidate(kind, params, best_sse(fold_grams(actuator)))
+                          for kind, actuator, params in _candidate_grid(u_in)]
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")
     # An OP that moves more per sample than the grid's largest valve leaves no hysteresis

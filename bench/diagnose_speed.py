@@ -10,6 +10,8 @@
   with NumPy suffix sums (peer);
 - the same scan of a candidate projected beside disturbance columns inside the pass
   (`ProjectedOnsetScan`) against NumPy projecting it and scanning with suffix sums (peer);
+- the gain fitted with a level step at every onset (`ProjectedOnsetScan.fit_with_level_step`)
+  against the same two-regressor sums written with NumPy suffix sums (peer, all data);
 - the step + ramp trend fit over all onsets (FFT cross-correlations) against one least-squares
   fit per onset with numpy.linalg.lstsq (peer);
 - the refitted-noise onset gains of an actuator candidate (`_core.RefittedNoise`) against the
@@ -112,6 +114,26 @@ def numpy_cross_validated_scan(r, r_without, psi, weight, folds, min_segment, st
     return full, heldout
 
 
+def numpy_level_step_onset(r, x, level, z, solve, w, ks):
+    """The peer of fit_with_level_step on all data: the onset maximising the two-regressor
+    statistic, every suffix sum a reversed NumPy cumsum (the step's projection before the
+    onset from the totals)."""
+    def rcum(a):
+        return np.cumsum(a[::-1], axis=0)[::-1]
+
+    psi = x - z @ (solve @ x)
+    wz = w[:, None] * z
+    sigma = rcum(solve.T * level[:, None])[ks]
+    rz = rcum(wz * r[:, None])[ks]
+    rq = rcum(w * r * level)[ks] - np.sum(rz * sigma, axis=1) - np.sum(sigma * (rz[0] - rz), axis=1)
+    pq = rcum(w * psi * level)[ks] - np.sum(rcum(wz * psi[:, None])[ks] * sigma, axis=1)
+    qq = (rcum(w * level**2)[ks] - 2 * np.sum(rcum(wz * level[:, None])[ks] * sigma, axis=1)
+          + np.einsum("ki,ij,kj->k", sigma, wz.T @ z, sigma))
+    rp, pp = rcum(w * r * psi)[ks], rcum(w * psi**2)[ks]
+    det = pp * qq - pq**2
+    theta, c = (qq * rp - pq * rq) / det, (pp * rq - pq * rp) / det
+    return ks[np.argmax(theta * rp + c * rq)]
+
 
 def kernel_ratios(n: int) -> None:
     rng = np.random.default_rng(0)
@@ -143,6 +165,15 @@ def kernel_ratios(n: int) -> None:
     assert numpy_projected()[0][0] == scan.fit(psi).full.onset
     print(f"projected onset scan (candidate beside 3 disturbance columns), {n} samples: C++ {1e3 * t_proj:.2f} ms, "
           f"NumPy projection + suffix sums {1e3 * t_np_proj:.2f} ms -> C++ is {t_np_proj / t_proj:.1f}x faster")
+
+    level = 1.0 + 0.05 * rng.standard_normal(n)
+    ks = np.r_[0, np.arange(720, n - 720 + 1, 12)]
+    t_step = best_of(lambda: scan.fit_with_level_step(psi, level), 20, time.process_time)[0]
+    t_np_step = best_of(lambda: numpy_level_step_onset(rz, psi, level, z, solve, w, ks), 5, time.process_time)[0]
+    assert numpy_level_step_onset(rz, psi, level, z, solve, w, ks) == scan.fit_with_level_step(psi, level)[0].full.onset
+    print(f"gain with a level step at every onset (beside 3 disturbance columns, both folds and the step alone), "
+          f"{n} samples: C++ {1e3 * t_step:.2f} ms, NumPy suffix sums (all data only) {1e3 * t_np_step:.2f} ms "
+          f"-> C++ is {t_np_step / t_step:.1f}x faster")
 
     e = rng.standard_normal(n) + 1e-4 * np.maximum(np.arange(n) - n // 2, 0)
     ok = np.ones(n, bool)

@@ -14,7 +14,8 @@ void bind_change_scan(py::module_& m) {
       .def_readonly("onset", &OnsetFit::onset)
       .def_readonly("statistic", &OnsetFit::statistic)
       .def_readonly("theta", &OnsetFit::theta)
-      .def_readonly("theta_se", &OnsetFit::theta_se);
+      .def_readonly("theta_se", &OnsetFit::theta_se)
+      .def_readonly("step", &OnsetFit::step);
   py::class_<CrossValidatedOnset>(m, "CrossValidatedOnset",
                                   "onset scan on all samples and two-fold cross-validated")
       .def_readonly("full", &CrossValidatedOnset::full)
@@ -51,6 +52,9 @@ void bind_change_scan(py::module_& m) {
            py::arg("weight") = py::none(), py::call_guard<py::gil_scoped_release>())
       .def("fit_holding_scale", &ProjectedOnsetScan::fit_holding_scale, py::arg("x"),
            py::arg("nominal") = py::none(), py::arg("weight") = py::none(), py::arg("scale") = 1.0,
+           py::call_guard<py::gil_scoped_release>())
+      .def("fit_with_level_step", &ProjectedOnsetScan::fit_with_level_step, py::arg("x"),
+           py::arg("level"), py::arg("nominal") = py::none(),
            py::call_guard<py::gil_scoped_release>());
   m.def("fit_at_onset", &fit_at_onset, py::arg("r"), py::arg("r_without"), py::arg("psi"),
         py::arg("weight"), py::arg("onset"));

@@ -35,6 +35,24 @@ OnsetFit make_fit(Eigen::Index k, double drop, double rp, double pp,
   return f;
 }
 
+// The two-regressor fit of fit_with_level_step: [theta, c] = G^-1 [rp, rq] with
+// G = [[pp, pq], [pq, qq]]; a singular G (no samples of the step, or a step the channel's
+// response already spans) leaves the one-regressor fit. With `held` theta is held there and
+// only c = (rq - theta pq) / qq is fitted.
+OnsetFit make_step_fit(Eigen::Index k, double drop, double rp, double pp, double rq, double pq,
+                       double qq, std::optional<double> held = std::nullopt) {
+  const double det = pp * qq - pq * pq;
+  if (!(qq > 0.0) || !(det > 1e-12 * pp * qq)) return make_fit(k, drop, rp, pp, held);
+  OnsetFit f;
+  f.onset = k;
+  f.theta = held ? *held : (qq * rp - pq * rq) / det;
+  f.step = held ? (rq - f.theta * pq) / qq : (pp * rq - pq * rp) / det;
+  f.statistic = drop + 2.0 * f.theta * rp - f.theta * f.theta * pp + 2.0 * f.step * rq -
+                2.0 * f.theta * f.step * pq - f.step * f.step * qq;
+  f.theta_se = std::sqrt(qq / det);
+  return f;
+}
+
 // Gram matrix of the lag vector [e(t), e(t-1), ..., e(t-order)] summed over t.
 Eigen::MatrixXd lag_gram(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index t) {
   Eigen::VectorXd x(order + 1);
@@ -96,6 +114,20 @@ class GridSums {
         rp_(rows(), folds ? 3 : 1),
         pp_(rows(), folds ? 3 : 1) {}
 
+  // Sums of a second regressor q (a level step at the onset): r q, psi q and q q, set by
+  // set_step for every row and weighting.
+  void with_step() {
+    rq_.resize(drop_.rows(), drop_.cols());
+    pq_.resize(drop_.rows(), drop_.cols());
+    qq_.resize(drop_.rows(), drop_.cols());
+  }
+  bool has_step() const { return rq_.size() > 0; }
+  void set_step(Eigen::Index row, int j, double rq, double pq, double qq) {
+    rq_(row, j) = rq;
+    pq_(row, j) = pq;
+    qq_(row, j) = qq;
+  }
+
   Eigen::Index rows() const { return static_cast<Eigen::Index>(onsets_->size()); }
 
   // Walks t from the last sample down to `stop`, adding weight(t) * terms(t) (terms(t) gives
@@ -151,9 +183,8 @@ class GridSums {
 
   // With fold columns: the full weighting is the sum of the two folds.
   void sum_folds() {
-    drop_.col(0) = drop_.col(1) + drop_.col(2);
-    rp_.col(0) = rp_.col(1) + rp_.col(2);
-    pp_.col(0) = pp_.col(1) + pp_.col(2);
+    for (Eigen::MatrixXd* m : {&drop_, &rp_, &pp_, &rq_, &pq_, &qq_})
+      if (m->size() > 0) m->col(0) = m->col(1) + m->col(2);
   }
 
   // Best onset for weighting j; `row` receives its grid index. With `latest_tie`, of onsets
@@ -169,7 +200,9 @@ class GridSums {
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
       // a fold's sums stand still through the other fold's blocks: same sums, same statistic
       if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) ||
-          pp_(i, j) != pp_(i - 1, j))
+          pp_(i, j) != pp_(i - 1, j) ||
+          (has_step() && (rq_(i, j) != rq_(i - 1, j) || pq_(i, j) != pq_(i - 1, j) ||
+                          qq_(i, j) != qq_(i - 1, j))))
         s = statistic(i, j, held) - onset_penalty;
       if (s > best || (latest_tie && s == best)) {
         best = s;
@@ -177,21 +210,32 @@ class GridSums {
       }
     }
     if (row) *row = best_row;
-    return make_fit((*onsets_)[best_row], drop_(best_row, j), rp_(best_row, j), pp_(best_row, j),
-                    held);
+    return fit_at(best_row, j, held);
+  }
+
+  OnsetFit fit_at(Eigen::Index i, int j, std::optional<double> held = std::nullopt) const {
+    if (has_step())
+      return make_step_fit((*onsets_)[i], drop_(i, j), rp_(i, j), pp_(i, j), rq_(i, j),
+                           pq_(i, j), qq_(i, j), held);
+    return make_fit((*onsets_)[i], drop_(i, j), rp_(i, j), pp_(i, j), held);
   }
 
   // make_fit's statistic without the rest of the fit
   double statistic(Eigen::Index i, int j, std::optional<double> held = std::nullopt) const {
+    if (has_step()) return fit_at(i, j, held).statistic;
     const double pp = pp_(i, j), rp = rp_(i, j);
     if (pp <= 0.0) return drop_(i, j);
     return held ? drop_with(j, i, *held) : drop_(i, j) + rp * rp / pp;
   }
 
-  // Drop of the squared error after the grid onset `row` with channel scale theta, weighting j:
-  // sum w (r^2 - (r_without - theta psi)^2) = drop + 2 theta rp - theta^2 pp.
-  double drop_with(int j, Eigen::Index row, double theta) const {
-    return drop_(row, j) + 2.0 * theta * rp_(row, j) - theta * theta * pp_(row, j);
+  // Drop of the squared error after the grid onset `row` with channel scale theta (and level
+  // step c), weighting j: sum w (r^2 - (r_without - theta psi - c q)^2)
+  //   = drop + 2 theta rp - theta^2 pp + 2 c rq - 2 theta c pq - c^2 qq.
+  double drop_with(int j, Eigen::Index row, double theta, double c = 0.0) const {
+    double d = drop_(row, j) + 2.0 * theta * rp_(row, j) - theta * theta * pp_(row, j);
+    if (has_step())
+      d += 2.0 * c * rq_(row, j) - 2.0 * theta * c * pq_(row, j) - c * c * qq_(row, j);
+    return d;
   }
 
   // The full scan, each fold's scan and each fold's fit scored on the other fold; with `held`
@@ -203,14 +247,14 @@ class GridSums {
     for (int k = 0; k < 2; ++k) {
       Eigen::Index row = 0;
       out.fold[k] = scan(1 + k, &row, true, onset_penalty, held);
-      out.heldout[k] = drop_with(2 - k, row, out.fold[k].theta);
+      out.heldout[k] = drop_with(2 - k, row, out.fold[k].theta, out.fold[k].step);
     }
     return out;
   }
 
  private:
   std::shared_ptr<const std::vector<Eigen::Index>> onsets_;
-  Eigen::MatrixXd drop_, rp_, pp_;
+  Eigen::MatrixXd drop_, rp_, pp_, rq_, pq_, qq_;
 };
 
 }  // namespace detail
@@ -376,6 +420,71 @@ std::pair<CrossValidatedOnset, CrossValidatedOnset> ProjectedOnsetScan::fit_hold
   if (!std::isfinite(scale)) throw InputError("the held channel scale must be finite");
   const GridSums s = sums(x, nominal, weight);
   return {s.cross_validated(onset_penalty_), s.cross_validated(onset_penalty_, scale)};
+}
+
+std::pair<CrossValidatedOnset, CrossValidatedOnset> ProjectedOnsetScan::fit_with_level_step(
+    const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& level,
+    const std::optional<Eigen::VectorXd>& nominal) const {
+  const Eigen::Index n = r_.size(), m = columns_.cols();
+  if (x.size() != n || level.size() != n || (nominal && nominal->size() != n))
+    throw InputError("x, level and nominal must have the length of r");
+  const Eigen::VectorXd b = solve_ * x;
+  const std::vector<Eigen::Index>& onsets = *onsets_;
+  GridSums sums(onsets_, true);
+  sums.with_step();
+  // Per fold, suffix sums over t >= k of w times: r^2 - rw^2, rw psi, psi^2 (the channel),
+  // rw L, psi L, L^2 (the step before projection) and rw z, psi z, L z (its projection);
+  // sigma = S (L 1{t >= k}) is the step's nuisance coefficient, over every fold.
+  struct Fold {
+    double drop = 0.0, rp = 0.0, pp = 0.0, rl = 0.0, pl = 0.0, ll = 0.0;
+    Eigen::VectorXd rwz, pz, lz;
+  } fold[2];
+  for (Fold& f : fold) f.rwz = f.pz = f.lz = Eigen::VectorXd::Zero(m);
+  // sigma at every onset, one row of S at a time (S is row-major: its columns are strided)
+  const Eigen::Index rows = static_cast<Eigen::Index>(onsets.size());
+  Eigen::MatrixXd sigma_at(rows, m);
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const double* s = solve_.row(j).data();
+    double running = 0.0;
+    Eigen::Index row = rows - 1;
+    for (Eigen::Index t = n - 1; t >= begin_ && row >= 0; --t) {
+      running += s[t] * level[t];
+      if (t == onsets[row]) sigma_at(row--, j) = running;
+    }
+  }
+  Eigen::Index row = rows - 1;
+  for (Eigen::Index t = n - 1; t >= begin_ && row >= 0; --t) {
+    const auto z = columns_.row(t).transpose();
+    const double psi = x[t] - z.dot(b), rw = r_[t] + (nominal ? (*nominal)[t] : 0.0);
+    const double w = weight_[t], l = level[t];
+    Fold& f = fold[odd_[t] != 0.0 ? 1 : 0];
+    f.drop += w * (r_[t] * r_[t] - rw * rw);
+    f.rp += w * rw * psi;
+    f.pp += w * psi * psi;
+    f.rl += w * rw * l;
+    f.pl += w * psi * l;
+    f.ll += w * l * l;
+    f.rwz += (w * rw) * z;
+    f.pz += (w * psi) * z;
+    f.lz += (w * l) * z;
+    if (t != onsets[row]) continue;
+    const Eigen::VectorXd sigma = sigma_at.row(row).transpose();
+    for (int g = 0; g < 2; ++g) {
+      const Fold& h = fold[g];
+      const auto rz_all = rz_[g].row(0).transpose(), rz_after = rz_[g].row(row).transpose();
+      const Eigen::Map<const Eigen::MatrixXd> zz_all(zz_[g].row(0).data(), m, m);
+      // q = L 1{t >= k} - z' sigma: after k it pairs with rw and psi; before k (q = -z' sigma)
+      // with r, whose sums there are the totals less the suffix
+      const double rq = h.rl - h.rwz.dot(sigma) - sigma.dot(rz_all - rz_after);
+      const double pq = h.pl - h.pz.dot(sigma);
+      const double qq = h.ll - 2.0 * h.lz.dot(sigma) + sigma.dot(zz_all * sigma);
+      sums.set(row, 1 + g, h.drop, h.rp, h.pp);
+      sums.set_step(row, 1 + g, rq, pq, qq);
+    }
+    --row;
+  }
+  sums.sum_folds();
+  return {sums.cross_validated(onset_penalty_), sums.cross_validated(onset_penalty_, 1.0)};
 }
 
 GridSums ProjectedOnsetScan::sums(const Eigen::Ref<const Eigen::VectorXd>& x,

@@ -19,9 +19,12 @@ def model(extra_input=False):
                        {"y": {"u": mpmpp.TransferFunction(*G)}}, {"y": mpmpp.TransferFunction(*H)})
 
 
-def simulate(n=8000, seed=0, onset=None, gain=1.0, noise_den_after=None, w_gain=0.0, drift_rate=0.0):
+def simulate(n=8000, seed=0, onset=None, gain=1.0, noise_den_after=None, w_gain=0.0, drift_rate=0.0,
+             gain_reference=0.0):
     """y = G_true u + H e (+ w through 0.5/(1-0.8q^-1) q^-4), u from an integral controller
-    on y plus a small dither-free setpoint schedule. From `onset` on: gain x `gain`, noise
+    on y plus a small dither-free setpoint schedule. From `onset` on: gain x `gain` about the
+    input value `gain_reference` (G_true (u - ref) + G ref: a plant whose gain changes about
+    another operating point than the loop's moves the output's level at the onset), noise
     denominator `noise_den_after`, drift of `drift_rate` per sample."""
     rng = np.random.default_rng(seed)
     e = 0.05 * rng.standard_normal(n)
@@ -41,7 +44,8 @@ def simulate(n=8000, seed=0, onset=None, gain=1.0, noise_den_after=None, w_gain=
     for t in range(n):
         k = gain if t >= onset else 1.0
         if t >= 1:
-            x[t] = a * x[t - 1] + (num[0] * k * u[t - d] if t - d >= 0 else 0.0)
+            x[t] = a * x[t - 1] + (num[0] * (k * (u[t - d] - gain_reference) + gain_reference)
+                                   if t - d >= 0 else 0.0)
         y[t] = x[t] + v[t]
         u[t] = (u[t - 1] if t else 0.0) + 0.04 * (sp[t] - y[t])
     # the gain factor multiplies the input term only from onset on: x carries the state

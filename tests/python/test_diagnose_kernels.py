@@ -104,6 +104,20 @@ def numpy_cross_validated(r, r_without, psi, weight, odd, begin, min_segment, st
     return (begin + onset, stat, theta), per_fold
 
 
+def nuisance_case(rng, n, width):
+    """(Z, weight, odd, S): the level and (width - 1) / 2 step + ramp disturbance columns,
+    jittered, about 5 % of the samples left out, folds of 100 samples, and the weighted
+    least-squares solve of Z."""
+    t = np.arange(n)
+    z = np.column_stack([np.ones(n)] + [np.where(t >= k, d, 0.0) for k in (300, 610)[: (width - 1) // 2]
+                                         for d in (1.0, (t - k) / 100.0)])
+    z += 0.1 * rng.standard_normal(z.shape)
+    weight = (rng.random(n) > 0.05).astype(float)
+    odd = ((t // 100) % 2 == 1) * weight
+    solve = np.linalg.pinv((z * weight[:, None]).T @ z) @ (z * weight[:, None]).T
+    return z, weight, odd, solve
+
+
 @pytest.mark.parametrize("held", [None, 1.0, 0.7])
 @pytest.mark.parametrize("case", ["full", "late_start", "nominal", "own_weight", "begin", "penalty", "snap"])
 @pytest.mark.parametrize("width", [1, 5])
@@ -115,12 +129,7 @@ def test_projected_scan_matches_numpy(case, width, held):
     rng = np.random.default_rng(width)
     n, begin = 900, (130 if case == "begin" else 0)
     t = np.arange(n)
-    z = np.column_stack([np.ones(n)] + [np.where(t >= k, d, 0.0) for k in (300, 610)[: (width - 1) // 2]
-                                         for d in (1.0, (t - k) / 100.0)])
-    z += 0.1 * rng.standard_normal(z.shape)
-    weight = (rng.random(n) > 0.05).astype(float)
-    odd = ((t // 100) % 2 == 1) * weight
-    solve = np.linalg.pinv((z * weight[:, None]).T @ z) @ (z * weight[:, None]).T
+    z, weight, odd, solve = nuisance_case(rng, n, width)
     x = rng.standard_normal(n)
     change = 500
     if case == "late_start":   # a drift from 430; its projection carries the change from 200
@@ -160,6 +169,84 @@ def test_projected_scan_matches_numpy(case, width, held):
         assert cv.heldout[k] == pytest.approx(heldout, rel=1e-8, abs=1e-8)
 
 
+def level_step_fits(r, r_without, psi, q_of, weight, begin, min_segment, step, held=None):
+    """(onset, statistic, theta, c) for every grid onset k from ``begin``: weighted least squares
+    of r_without on [psi, q_k] after k and of r on q_k before it (rows from ``begin``), the
+    statistic the drop of the squared error against r; ``held``: theta held at that value."""
+    n = len(r)
+    t = np.arange(n)
+    for k in [begin, *range(begin + min_segment, n - min_segment + 1, step)]:
+        q = q_of(k)
+        rows = t >= begin
+        after = t >= k
+        target = np.where(after, r_without, r)[rows]
+        design = np.column_stack([np.where(after, psi, 0.0), q])[rows]
+        sw = np.sqrt(weight[rows])
+        if held is None:
+            coef = np.linalg.lstsq(design * sw[:, None], target * sw, rcond=None)[0]
+        else:
+            target = target - held * design[:, 0]
+            coef = np.array([held, np.linalg.lstsq(design[:, 1:] * sw[:, None], target * sw, rcond=None)[0][0]])
+            target = target + held * design[:, 0]
+        stat = np.sum(weight[rows] * r[rows] ** 2) - np.sum(weight[rows] * (target - design @ coef) ** 2)
+        yield k, stat, coef[0], coef[1]
+
+
+@pytest.mark.parametrize("held", [None, 1.0])
+@pytest.mark.parametrize("case", ["full", "nominal", "begin", "penalty"])
+@pytest.mark.parametrize("width", [1, 5])
+def test_level_step_scan_matches_least_squares(case, width, held):
+    """ProjectedOnsetScan.fit_with_level_step: the channel fitted with a level step at its onset,
+    the step projected beside the nuisance columns (before the onset too), against NumPy least
+    squares of the same model at every grid onset; each fold's fit scored on the other fold.
+    ``held``: the second fit, the step alone with the channel scale held at 1."""
+    rng = np.random.default_rng(10 + width)
+    n, begin = 900, (130 if case == "begin" else 0)
+    t = np.arange(n)
+    z, weight, odd, solve = nuisance_case(rng, n, width)
+    level = 0.8 + 0.05 * rng.standard_normal(n)      # a whitened constant, not quite constant
+
+    def project(v):
+        return v - z @ (solve @ v)
+
+    x = rng.standard_normal(n)
+    psi = project(x)
+
+    def q_of(k):
+        return project(np.where(t >= k, level, 0.0))
+
+    r = project(z @ rng.standard_normal(width) + np.where(t >= 500, 0.6 * psi, 0.0) + 1.5 * q_of(500)
+                + rng.standard_normal(n))
+    nominal = project(0.3 * rng.standard_normal(n)) if case == "nominal" else None
+    r_without = r if nominal is None else r + nominal
+    penalty = 0.0
+    if case == "penalty":
+        stats = [f[1] for f in level_step_fits(r, r_without, psi, q_of, weight, begin, 60, 7)]
+        penalty = 0.5 * (max(stats) - stats[0])
+        assert penalty > 1.0
+    cv = _core.ProjectedOnsetScan(r, weight, odd, z, solve, begin, 60, 7, penalty).fit_with_level_step(
+        x, level, nominal)[0 if held is None else 1]
+
+    def best(w):
+        fits = list(level_step_fits(r, r_without, psi, q_of, w, begin, 60, 7, held))
+        return max(fits, key=lambda f: (f[1] - (penalty if f[0] > begin else 0.0), f[0]))
+
+    onset, stat, theta, c = best(weight)
+    assert (cv.full.onset, cv.full.statistic, cv.full.theta, cv.full.step) == (
+        onset, pytest.approx(stat, rel=1e-9), pytest.approx(theta, rel=1e-9), pytest.approx(c, rel=1e-9))
+    if case == "full" and held is None:
+        assert abs(onset - 500) <= 7 and abs(c - 1.5) < 0.3 and abs(theta - 0.6) < 0.2
+    folds = [weight * (odd == 0), weight * (odd != 0)]
+    for k in (0, 1):
+        on, stat, theta, c = best(folds[k])
+        assert (cv.folds[k].onset, cv.folds[k].statistic, cv.folds[k].theta, cv.folds[k].step) == (
+            on, pytest.approx(stat, rel=1e-9), pytest.approx(theta, rel=1e-9), pytest.approx(c, rel=1e-9))
+        q, after = q_of(on), t >= on
+        fitted = np.where(after, r_without - theta * psi, r) - c * q
+        test = folds[1 - k] * (t >= begin)
+        assert cv.heldout[k] == pytest.approx(np.sum(test * (r ** 2 - fitted ** 2)), rel=1e-8, abs=1e-8)
+
+
 def test_projected_scan_rejects_mismatched_lengths_and_a_non_finite_scale():
     n = 300
     z, solve = np.ones((n, 1)), np.full((1, n), 1.0 / n)
@@ -170,6 +257,8 @@ def test_projected_scan_rejects_mismatched_lengths_and_a_non_finite_scale():
         scan.fit(np.zeros(n + 1))
     with pytest.raises(ValueError, match="held channel scale must be finite"):
         scan.fit_holding_scale(np.zeros(n), scale=float("nan"))
+    with pytest.raises(ValueError, match="length of r"):
+        scan.fit_with_level_step(np.zeros(n), np.ones(n - 1))
 
 
 @pytest.mark.parametrize("seed", [0, 1])

@@ -23,6 +23,7 @@ from mpmpp.diagnose.process import COUPLING_POLES, TIME_CONSTANT_FACTORS
 from mpmpp.diagnosis_study import true_change, update_quality
 from mpmpp.evaluate import nominal_model
 
+import closed_loop_case as loop
 import diagnose_eval as suite
 from example_cases import MISSING_COUPLING, load_case
 
@@ -59,6 +60,24 @@ def test_gain_ratio(seed, factor, tolerance):
     sc, expect = _case("gain", seed, factor=factor)
     top = _top_process(sc, seed, "gain", expect["output"], expect["input"])
     assert top.estimate["gain_ratio"] == pytest.approx(factor, rel=tolerance)
+
+
+@pytest.mark.parametrize("seed", (0, 1))
+@pytest.mark.parametrize("gain,reference,tolerance", [(0.5, -1.0, 0.06), (0.5, 1.0, 0.06), (2.0, -1.0, 0.08)])
+def test_gain_ratio_about_another_operating_point(seed, gain, reference, tolerance):
+    """A plant whose gain changes about an input value other than the record's mean also steps
+    the output's level at the onset (closed_loop_case ``gain_reference``, one input unit either
+    side of the loop's operating point). The gain is fitted with that step (process.Shape
+    level_step) and its errors taken with it fitted out. Without (seeds 0-2): ratios 0.37-0.45
+    for the x0.5 and 1.76-1.81 for the x2 at reference -1, an output drift reported beside the
+    gain, and one x0.5 read as a sticking valve."""
+    data = loop.simulate(n=8000, seed=seed, onset=4000, gain=gain, gain_reference=reference)
+    res = diagnose(loop.model(), data)
+    process = [f for f in res.findings if f.effect in PROCESS_EFFECTS]
+    assert [f.effect for f in process] == ["gain"]
+    assert process[0].estimate["gain_ratio"] == pytest.approx(gain, rel=tolerance)
+    assert abs(process[0].onset_s / loop.TS - 4000) <= 60
+    assert not any(f.effect == "output_drift" for f in res.findings)
 
 
 @pytest.mark.parametrize("seed", SEEDS)

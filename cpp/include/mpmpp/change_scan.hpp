@@ -26,6 +26,7 @@ struct OnsetFit {
   double statistic = 0.0;  // drop of the residual sum of squares at that onset
   double theta = 0.0;      // least-squares channel scale after the onset
   double theta_se = 0.0;   // its standard error (unit noise variance)
+  double step = 0.0;       // the output's level step at the onset (fit_with_level_step; else 0)
 };
 
 // Best onset among k = 0 and k = min_segment, min_segment + step, ..., N - min_segment.
@@ -91,6 +92,20 @@ class ProjectedOnsetScan {
   std::pair<CrossValidatedOnset, CrossValidatedOnset> fit_holding_scale(
       const Eigen::Ref<const Eigen::VectorXd>& x, const std::optional<Eigen::VectorXd>& nominal,
       const std::optional<Eigen::VectorXd>& weight, double scale) const;
+  // The fit with a second regressor: a level step of the output at the onset, `level` the
+  // whitened response of a constant (unprojected), q_k = P (level 1{t >= k}) with P the
+  // projection on the nuisance's complement. After onset k the model is
+  //   r_without = theta psi + c q_k,   before it r = c q_k,
+  // both parts counted (q_k is not zero before k once projected). A gain change about an
+  // operating point other than the record's mean moves the output's level by
+  // (theta - 1) K (mean - reference) at its onset: with the reference unknown, c is free.
+  // OnsetFit::step holds c. The second fit, from the same sums, is the step alone (theta held
+  // at 1, the model's channel kept): what the channel's change must beat, since in closed loop
+  // G u follows a compensated disturbance and a level step plus a small theta fits its steps
+  // and ramps.
+  std::pair<CrossValidatedOnset, CrossValidatedOnset> fit_with_level_step(
+      const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& level,
+      const std::optional<Eigen::VectorXd>& nominal = std::nullopt) const;
 
  private:
   detail::GridSums sums(const Eigen::Ref<const Eigen::VectorXd>& x,

@@ -215,8 +215,8 @@ class GridSums {
 
   OnsetFit fit_at(Eigen::Index i, int j, std::optional<double> held = std::nullopt) const {
     if (has_step())
-      return make_step_fit((*onsets_)[i], drop_(i, j), rp_(i, j), pp_(i, j), rq_(i, j),
-                           pq_(i, j), qq_(i, j), held);
+      return make_step_fit((*onsets_)[i], drop_(i, j), rp_(i, j), pp_(i, j), rq_(i, j), pq_(i, j),
+                           qq_(i, j), held);
     return make_fit((*onsets_)[i], drop_(i, j), rp_(i, j), pp_(i, j), held);
   }
 

@@ -169,7 +169,8 @@ class ShapeResponses:
         self._drift_base: dict = {}
         self._delay_families: dict = {}
         self._segment_starts = {a for a, _ in out.sig.segments}
-        self.level = out.whiten(np.ones(len(out.r)))   # a constant output error, whitened
+        # a constant output error, whitened: the nuisance's level column (disturbance_drives' first)
+        self.level = nuisance.columns[:, 0]
 
     def level_step(self, onset: int) -> np.ndarray:
         """The output's level step at ``onset``, whitened and projected (the second regressor of

@@ -18,6 +18,7 @@ from .errors import held_out_error
 from .input_driven import input_driven_gain
 from .result import Finding, InsufficientData, ModelChange
 from .scoring import confidence
+from .spikes import without_spikes
 from .trend import trend_fit
 from .whitening import AR_ORDER, MIN_AR_ROWS_PER_COEFFICIENT, SETTLE, OutputResidual, masked_ar, stable
 
@@ -207,39 +208,6 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
         id="", effect=best.effect, output=out.name, input=None, onset_s=onset_s,
         confidence=confidence(conf_stat, params), estimate=estimate, error_before=err.before,
         error_after=err.after, explanation=text, score=best.score, change=change))
-
-
-SPIKE_SIGMAS = 5.0          # an innovation this many robust sigmas out is a spike in y
-MAX_SPIKE_SHARE = 0.1       # more than this: heavy tails, not spikes; nothing is removed
-
-
-def without_spikes(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]],
-                   hinv: TransferFunction) -> np.ndarray:
-    """The one-step error ``e`` = H^-1 v with additive outliers of y taken out. A spike s in y at t enters the
-    one-step error as s h(k) at t + k, h the impulse response of H^-1, and an AR correction
-    predicts that tail: with spikes, a right noise model would pass for a wrong one. Spikes
-    are the samples beyond SPIKE_SIGMAS robust sigmas (1.4826 MAD of the piece they lie in);
-    each is taken as s = e(t) and its tail subtracted (an additive-outlier intervention), in
-    time order so that a spike is measured with the earlier ones' tails gone."""
-    limit = np.full(len(e), np.inf)
-    centre = np.zeros(len(e))
-    for a, b in pieces:
-        x = e[a:b][ok[a:b]]
-        if len(x):
-            centre[a:b] = np.median(x)
-            limit[a:b] = SPIKE_SIGMAS * 1.4826 * np.median(np.abs(x - centre[a]))
-    candidates = np.flatnonzero(ok & (np.abs(e - centre) > limit))
-    if not len(candidates) or len(candidates) > MAX_SPIKE_SHARE * ok.sum():
-        return e
-    tail = hinv.filter(np.r_[1.0, np.zeros(len(e) - 1)])
-    tail = tail[: max(int(np.flatnonzero(np.abs(tail) > 1e-6 * np.abs(tail).max()).max()) + 1, 1)]
-    cleaned = e.copy()
-    for t in candidates:
-        # a candidate made only by an earlier spike's tail is gone by now
-        if abs(cleaned[t] - centre[t]) > limit[t]:
-            k = min(len(tail), len(e) - t)
-            cleaned[t:t + k] -= cleaned[t] * tail[:k]
-    return cleaned
 
 
 def _kurtosis(out: OutputResidual, first_onset: int) -> float:

@@ -23,6 +23,7 @@ from .process_error import held_out_rms, process_parts
 from .reference_refit import refitted_before
 from .refitted_noise import RefittedNoise
 from .result import DiagnoseResult, Finding, InsufficientData
+from .spikes import SPIKE_SIGMAS, output_spikes
 from .valve import valve_findings
 from .whitening import (AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual,
                         without_split)
@@ -115,7 +116,17 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
         notes.append(f"{name}: the model has no noise model; its disturbance model was estimated from the "
                      f"data (AR({NOISE_ORDER}) of the output error"
                      + (", training rows)" if reference is not None else ")"))
-    return DiagnosisSignals(dataclasses.replace(sig, noise=noise), estimated, notes, rows)
+    sig = dataclasses.replace(sig, noise=noise, y=sig.y.copy())
+    for i, name in enumerate(sig.outputs):
+        at, size = output_spikes(sig, i)
+        if not len(at):
+            continue
+        sig.y[at, i] -= size
+        if name in estimated:   # the estimate the spikes bent, made again without them
+            sig.noise[i] = estimated_noise_model(sig, i, rows)
+        notes.append(f"{name}: {len(at)} spike(s) (single samples beyond {SPIKE_SIGMAS:g} robust sigmas of the "
+                     f"one-step error, largest {np.abs(size).max():.3g}) taken out of the output before any fit")
+    return DiagnosisSignals(sig, estimated, notes, rows)
 
 
 def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float = SEGMENT_S,

@@ -87,7 +87,9 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
     """Deviation signals of ``data`` for ``model``. An output without a noise model (H = 1 in
     the file) is the normal case for hand-written models: its disturbance model is estimated
     from the data (on the rows before ``train_end_s`` when given), so the whitening and the
-    reported errors use a realistic H, and its absence is never taken for a noise change."""
+    reported errors use a realistic H, and its absence is never taken for a noise change. Spikes
+    (isolated additive outliers of an output, spikes.py) are taken out of y before anything is
+    fitted; a note says how many."""
     if train_end_s is not None and train_end_s < 0:
         raise ValueError(f"--train-end must be >= 0 seconds, got {train_end_s}")
     time_s = seconds_of(data)

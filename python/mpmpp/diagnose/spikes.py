@@ -83,7 +83,7 @@ def _tail(hinv: TransferFunction, n: int) -> np.ndarray:
 def _limits(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray]:
     """Per row: SPIKE_SIGMAS robust sigmas about the piece's median (infinite where nothing is
     known), the scale taken per SCALE_ROWS rows of the piece (the last stretch joined to the
-    one before)."""
+    one before), the piece's own where a stretch has none."""
     limit = np.full(len(e), np.inf)
     centre = np.zeros(len(e))
     for a, b in pieces:
@@ -91,11 +91,13 @@ def _limits(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]]) -> tup
         if not len(x):
             continue
         centre[a:b] = np.median(x)
+        whole = np.median(np.abs(x - centre[a]))
         edges = list(range(a, b, SCALE_ROWS))[: max((b - a) // SCALE_ROWS, 1)] + [b]
         for lo, hi in zip(edges[:-1], edges[1:]):
             xs = e[lo:hi][ok[lo:hi]]
-            if len(xs):
-                limit[lo:hi] = SPIKE_SIGMAS * 1.4826 * np.median(np.abs(xs - centre[a]))
+            # a stretch with no spread of its own (a quantised or held signal) takes the piece's
+            mad = np.median(np.abs(xs - centre[a])) if len(xs) else 0.0
+            limit[lo:hi] = SPIKE_SIGMAS * 1.4826 * (mad if mad > 0.0 else whole)
     return limit, centre
 
 

@@ -4,8 +4,9 @@ A spike s in y at t enters the one-step error e = H^-1 v as s h(k) at t + k, h t
 response of H^-1 (h(0) = 1, H monic). Left in, it biases every least-squares fit that sees
 it, and in closed loop worst of all: the controller answers the spike, so its tail in e meets
 the input's reaction to it, and a channel fitted to that pair reads the feedback as a process
-change (held-out family mpc_3x3_move_limits, seed 644: seven spikes of 6 sigma on y2 made a
-dead time of 11 samples instead of 1 "throughout the record" at 0.77; without them nothing).
+change (held-out family mpc_3x3_move_limits, seed 644: outliers of 6 sigma on y2, five of them
+found, made a dead time of 11 samples instead of 1 "throughout the record" at 0.77; simulated
+without them, nothing).
 The plant's true output did answer the controller's move, so taking s out of y at t (an
 additive-outlier intervention) leaves exactly the record the plant made.
 """

@@ -35,6 +35,19 @@ def spike_sizes(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]],
     answer to a move (a dead time or time constant off, seen a few rows after each setpoint
     step) raises its neighbours too, and is no spike. Candidates are taken in time order, each
     measured with the earlier spikes' tails gone."""
+    rows, sizes, _ = _taken_out(e, ok, pieces, hinv)
+    return rows, sizes
+
+
+def without_spikes(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]],
+                   hinv: TransferFunction) -> np.ndarray:
+    """``e`` with the tails of its spikes (``spike_sizes``) taken out."""
+    return _taken_out(e, ok, pieces, hinv)[2]
+
+
+def _taken_out(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]],
+               hinv: TransferFunction) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The spikes' rows and sizes (``spike_sizes``) and ``e`` with their tails taken out."""
     limit, centre = _limits(e, ok, pieces)
     # a spike is confirmed by the ISOLATION rows on either side: none at a piece's ends
     confirmable = np.zeros(len(e), bool)
@@ -42,7 +55,7 @@ def spike_sizes(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]],
         confirmable[a + ISOLATION:max(b - ISOLATION, a)] = True
     candidates = np.flatnonzero(ok & confirmable & (np.abs(e - centre) > limit))
     if not len(candidates) or len(candidates) > MAX_SPIKE_SHARE * ok.sum():
-        return np.zeros(0, int), np.zeros(0)
+        return np.zeros(0, int), np.zeros(0), e
     tail = _tail(hinv, len(e))
     cleaned = e.copy()
     rows, sizes = [], []
@@ -59,19 +72,7 @@ def spike_sizes(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]],
         cleaned[t:t + k] = trial
         rows.append(t)
         sizes.append(s)
-    return np.asarray(rows, int), np.asarray(sizes, float)
-
-
-def without_spikes(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]],
-                   hinv: TransferFunction) -> np.ndarray:
-    """``e`` with the tails of its spikes (``spike_sizes``) taken out."""
-    rows, sizes = spike_sizes(e, ok, pieces, hinv)
-    tail = _tail(hinv, len(e))
-    cleaned = e.copy()
-    for t, s in zip(rows, sizes):
-        k = min(len(tail), len(e) - t)
-        cleaned[t:t + k] -= s * tail[:k]
-    return cleaned
+    return np.asarray(rows, int), np.asarray(sizes, float), cleaned
 
 
 def _tail(hinv: TransferFunction, n: int) -> np.ndarray:

@@ -28,7 +28,7 @@ import numpy as np
 
 from . import _core
 from .integrating import row_integrates, without_line
-from .signals import Signals, per_segment, valve_positions
+from .signals import Signals, filtered_columns, per_segment, valve_positions
 
 # Play widths in multiples of the input's spread (its standard deviation over the record): a
 # valve's dead zone is a fraction of the OP's travel in the record. Widths, level, share and
@@ -115,7 +115,7 @@ def _linear_change_basis(sig: Signals, i: int, j: int) -> np.ndarray:
 
     row, hinv = sig.rows[i], sig.noise[i].inverse()
     basis = channel_basis(sig, i, j, first_lag(row[j]))
-    white = per_segment(sig, lambda b: np.column_stack([hinv.filter(c) for c in b.T]), basis)
+    white = filtered_columns(sig, [hinv], basis)
     return per_segment(sig, lambda b: np.column_stack([without_line(c) for c in b.T]), white) \
         if row_integrates(row) else white
 

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ..signals import per_segment
+from ..signals import filtered_columns
 from .laguerre import laguerre_filters, laguerre_pole, output_basis
 from .whitening import NOISE_ORDER, OutputResidual
 
@@ -36,12 +36,15 @@ def input_driven_gain(out: OutputResidual, folds: list[np.ndarray], order: int =
     sig = out.sig
     e = np.nan_to_num(out.e)
     hinv = out.noise.inverse()
-    whitened_u = per_segment(sig, lambda xs: np.column_stack(
-        [hinv.filter(xs[:, k]) for k in range(xs.shape[1])]), np.nan_to_num(sig.u))
+    whitened_u = filtered_columns(sig, [hinv], np.nan_to_num(sig.u))
     x = np.nan_to_num(output_basis(sig, out.i, whitened_u, laguerre_filters(laguerre_pole(sig, out.i))))
-    lags = np.column_stack([np.r_[np.zeros(k), e[:-k]] for k in range(1, order + 1)])
-    noise_side = np.column_stack([np.ones(len(e)), lags])
-    both = np.column_stack([noise_side, x])
+    # [1, e lagged 1..order, x], column-major (x is); the disturbance side is its first columns
+    both = np.zeros((len(e), 1 + order + x.shape[1]), order="F")
+    both[:, 0] = 1.0
+    for k in range(1, order + 1):
+        both[k:, k] = e[:-k]
+    both[:, 1 + order:] = x
+    noise_side = both[:, :1 + order]
     gain = 0.0
     for k in (0, 1):
         fit, test = folds[k], folds[1 - k]

@@ -11,7 +11,7 @@ import numpy as np
 
 from .._core import TransferFunction, without_integrators
 from ..integrating import row_integrates, without_line
-from ..signals import Signals, per_segment
+from ..signals import Signals, filtered_columns, per_segment
 
 LAGUERRE_FUNCTIONS = 8
 DEFAULT_POLE = math.exp(-1.0 / 10.0)     # a 10-sample time constant when the output has no channel
@@ -48,9 +48,7 @@ def delayed_before(u: np.ndarray, lag: int) -> np.ndarray:
 
 def basis_responses(sig: Signals, columns: np.ndarray, filters: list[TransferFunction]) -> np.ndarray:
     """Every column through every basis filter, per data segment (filters start at rest)."""
-    raw = np.nan_to_num(columns)
-    return per_segment(sig, lambda xs: np.column_stack(
-        [g.filter(xs[:, k]) for k in range(xs.shape[1]) for g in filters]), raw)
+    return filtered_columns(sig, filters, np.nan_to_num(columns))
 
 
 def output_basis(sig: Signals, i: int, columns: np.ndarray, filters: list[TransferFunction]) -> np.ndarray:

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._core import TransferFunction
-from ..signals import Signals, bridged_reach, per_segment
+from ..signals import Signals, bridged_reach, filtered_columns, per_segment
 from .errors import one_step_errors
 from .laguerre import laguerre_filters, laguerre_pole, output_basis
 from .result import ModelChange
@@ -56,8 +56,7 @@ class ProcessBasis:
     def whitened(self, noise: TransferFunction) -> np.ndarray:
         key = (tuple(noise.num), tuple(noise.den), noise.delay)
         if key not in self._whitened:
-            self._whitened[key] = per_segment(self.sig, lambda xs: np.column_stack(
-                [noise.inverse().filter(xs[:, k]) for k in range(xs.shape[1])]), self.regressors)
+            self._whitened[key] = filtered_columns(self.sig, [noise.inverse()], self.regressors)
         return self._whitened[key]
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft
 
 from .._core import TransferFunction
 
@@ -42,9 +43,11 @@ class TrendScan:
         self.w = ok.astype(float)
         if len(self.onsets) == 0:
             return
-        self._size = 1 << (2 * n - 1).bit_length()     # zero-padded: the circular correlation is the linear one
+        # zero-padded to at least 2n - 1 (the circular correlation is then the linear one), to a
+        # length of small prime factors: on a week at 5 s, 243,000 is 1.6x faster than 2^18
+        self._size = scipy.fft.next_fast_len(2 * n - 1, real=True)
         s, r = self.s, self.r
-        kernels = [np.conj(np.fft.rfft(b, self._size)) for b in (s, r, s * s, r * r, s * r)]
+        kernels = [np.conj(scipy.fft.rfft(b, self._size)) for b in (s, r, s * s, r * r, s * r)]
         self._sr = kernels[:2]
         ws, wr, wss, wrr, wsr = self._lagged(self.w, kernels)
         gram = np.empty((len(self.onsets), 3, 3))
@@ -58,8 +61,8 @@ class TrendScan:
 
     def _lagged(self, a: np.ndarray, kernels: list[np.ndarray]) -> list[np.ndarray]:
         """sum_{t >= k} a[t] kernel[t - k] at the onsets k, per kernel."""
-        fa = np.fft.rfft(a, self._size)
-        return [np.fft.irfft(fa * f, self._size)[: len(a)][self.onsets] for f in kernels]
+        fa = scipy.fft.rfft(a, self._size)
+        return [scipy.fft.irfft(fa * f, self._size)[: len(a)][self.onsets] for f in kernels]
 
     def fit(self, e: np.ndarray, first_onset: int) -> TrendFit:
         n, ok, w = len(e), self.ok, self.w

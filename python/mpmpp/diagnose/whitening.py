@@ -27,7 +27,7 @@ import numpy as np
 from .. import _core
 from .._core import TransferFunction
 from ..integrating import row_integrates, without_line
-from ..signals import Signals, bridged_reach, per_segment
+from ..signals import Signals, bridged_reach, filtered_columns, per_segment
 from .laguerre import delayed_before, laguerre_filters, laguerre_pole, output_basis
 from .result import InsufficientData
 from .trend import TrendScan, trend_fit
@@ -233,7 +233,7 @@ def input_basis(sig: Signals, i: int, prefilter: TransferFunction | None = None)
     x = np.nan_to_num(np.column_stack(columns))
     if prefilter is None:
         return x
-    return np.nan_to_num(per_segment(sig, lambda xs: np.column_stack([prefilter.filter(c) for c in xs.T]), x))
+    return np.nan_to_num(filtered_columns(sig, [prefilter], x))
 
 
 def disturbance_steps(e: np.ndarray, ok: np.ndarray, hinv: TransferFunction, first_onset: int, grid: int,

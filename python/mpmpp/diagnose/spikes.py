@@ -15,8 +15,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._core import TransferFunction
-from ..signals import Signals, bridged_reach, per_segment
-from .whitening import AR_ORDER, SETTLE, output_error
+from ..signals import Signals
+from .errors import one_step_errors
+from .whitening import AR_ORDER, used_rows
 
 SPIKE_SIGMAS = 5.0     # an innovation this many robust sigmas out is a spike candidate
 MAX_SPIKE_SHARE = 0.1  # more than this: heavy tails, not spikes; nothing is taken out
@@ -105,12 +106,7 @@ def _limits(e: np.ndarray, ok: np.ndarray, pieces: list[tuple[int, int]]) -> tup
 
 def output_spikes(sig: Signals, i: int) -> tuple[np.ndarray, np.ndarray]:
     """Rows and sizes of the spikes of output i in its one-step error under the model's channels
-    and ``sig.noise[i]`` (each data segment after SETTLE rows, interpolated samples' reach left
-    out)."""
+    and ``sig.noise[i]``, on the rows the fits use (``used_rows``)."""
     hinv = sig.noise[i].inverse()
-    e = np.nan_to_num(per_segment(sig, hinv.filter, output_error(sig, i, sig.rows[i], sig.u)))
-    ok = np.zeros(len(e), bool)
-    for a, b in sig.segments:
-        ok[a + SETTLE:b] = True
-    ok &= ~bridged_reach(sig, i, hinv, AR_ORDER)
-    return spike_sizes(e, ok, list(sig.segments), hinv)
+    e = np.nan_to_num(one_step_errors(sig, i, []))
+    return spike_sizes(e, used_rows(sig, i, hinv, AR_ORDER), list(sig.segments), hinv)

@@ -131,6 +131,16 @@ def output_error(sig: Signals, i: int, row: list, u: np.ndarray) -> np.ndarray:
     return per_segment(sig, without_line, v) if row_integrates(row) else v
 
 
+def used_rows(sig: Signals, i: int, hinv: TransferFunction, reach: int) -> np.ndarray:
+    """Rows of output i's error that fits use: each data segment after SETTLE rows (the filters
+    start at rest there), less the errors that read an interpolated sample through ``hinv`` and
+    ``reach`` lags (``bridged_reach``)."""
+    used = np.zeros(len(sig.time_s), bool)
+    for a, b in sig.segments:
+        used[a + SETTLE:b] = True
+    return used & ~bridged_reach(sig, i, hinv, reach)
+
+
 def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, block: int,
                     noise_estimated: bool = False) -> OutputResidual:
     """Residuals of output i, its disturbance split and whitening, and the held-out blocks
@@ -139,10 +149,7 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     row, noise = sig.rows[i], sig.noise[i]
     v = output_error(sig, i, row, sig.u)
     e = per_segment(sig, lambda vv: noise.inverse().filter(vv), v)
-    weight = np.zeros(n)
-    for a, b in sig.segments:
-        weight[a + SETTLE:b] = 1.0
-    weight[bridged_reach(sig, i, noise.inverse(), AR_ORDER)] = 0.0
+    weight = used_rows(sig, i, noise.inverse(), AR_ORDER).astype(float)
     e0 = np.nan_to_num(e)
     # The split looks for a change of the disturbance's level or colour. A slow drift
     # changes the AR fit too, and a split inside it lets each side's correction absorb a
@@ -342,10 +349,7 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray, beside_inputs:
     compensation of it, away before any candidate can explain it, and the compensation's
     leftovers then pose as a channel change."""
     v = np.nan_to_num(output_error(sig, i, sig.rows[i], sig.u))
-    usable = np.zeros(len(v), bool)
-    for a, b in sig.segments:
-        usable[a + SETTLE:b] = True
-    usable &= rows & ~bridged_reach(sig, i, TransferFunction(), NOISE_ORDER)
+    usable = rows & used_rows(sig, i, TransferFunction(), NOISE_ORDER)
     free = v - trend_fit(v, usable, TransferFunction(), 0, TREND_GRID, 2 * SETTLE).trend
     free -= free[usable].mean()
     basis = input_basis(sig, i) if beside_inputs else None

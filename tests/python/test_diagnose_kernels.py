@@ -12,12 +12,13 @@ from mpmpp import TransferFunction, _core
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.plots import rolling_rms
 from mpmpp.diagnose import process
-from mpmpp.diagnose.process import DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
+from mpmpp.diagnose.process import COUPLING_DELAYS, DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
 from mpmpp.diagnose.refine import neighbours, refine
 from mpmpp.diagnose.trend import trend_fit
 from mpmpp.diagnose.whitening import disturbance_nuisance, output_residual
 
 import closed_loop_case as loop
+from example_cases import MISSING_COUPLING, load_case
 from trend_reference import brute_trend
 
 
@@ -336,6 +337,37 @@ def test_coarse_drift_search_finds_the_exhaustive_searchs_drift(monkeypatch):
     assert (found.shape.label, found.shape.drift_form) == (best.shape.label, best.shape.drift_form)
     assert found.onset == best.onset and found.heldout == best.heldout
     assert best.shape.drift_form == "ramp" and abs(best.shape.label - 21000) <= 360
+
+
+def test_coarse_coupling_search_finds_the_exhaustive_searchs_channel(monkeypatch):
+    # the example's missing coupling: every third delay per pole (1, 4, 7, ...), then around
+    # the leaders, one of which (fold 0's) lies between the coarse grid's delays
+    model, data, hidden = load_case(MISSING_COUPLING)
+    sig = diagnosis_signals(model, data).sig
+    i = sig.outputs.index(hidden["output"])
+    out = output_residual(sig, i, 720, 0, 720)
+    nuisance = disturbance_nuisance(out, [])
+    responses = ShapeResponses(out, nuisance)
+    logn = math.log(len(sig.time_s))
+    shapes = [s for s in process_shapes(sig, i) if s.column == hidden["input"]]
+    assert {s.effect for s in shapes} == {"missing_coupling"}
+    search = process._Search(out, shapes, 0, 720, 12, logn, {}, 0.0)
+    scan = search.scan(nuisance.project(out.r), responses)
+    stride = process.COUPLING_DELAY_STRIDE
+    coarse = search._coupling_fits(scan, responses, shapes)
+    monkeypatch.setattr(process, "COUPLING_DELAY_STRIDE", 1)
+    every = search._coupling_fits(scan, responses, shapes)
+    assert len(every) == len(shapes) and len(coarse) < len(every) / 2
+
+    def leaders(fits):   # the shapes _best_per_channel picks: on all data and on each fold
+        picks = [max(fits, key=lambda f: f.statistic)]
+        picks += [max(fits, key=lambda f, k=k: f.folds[k].statistic) for k in (0, 1)]
+        return [(f.shape.label, f.shape.shape.den[1], f.onset) for f in picks]
+
+    assert leaders(coarse) == leaders(every)
+    assert any((label - COUPLING_DELAYS[0]) % stride for label, _, _ in leaders(every))
+    (found,), (best,) = process._best_per_channel(coarse, logn), process._best_per_channel(every, logn)
+    assert found.heldout == best.heldout and found.theta == best.theta
 
 
 def test_rolling_rms_matches_a_plain_window():

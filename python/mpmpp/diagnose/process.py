@@ -52,6 +52,8 @@ DELAY_RANGE = (-10, 15)      # new delay = model delay + this range (samples)
 COUPLING_POLES = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98)
 # Delay >= 1: in closed loop u(t) may already react to y(t), a lag-0 channel would fit feedback.
 COUPLING_DELAYS = range(1, 41)
+COUPLING_DELAY_STRIDE = 3    # the delays searched coarse to fine (_Search._coupling_fits)
+NEW_CHANNEL_EFFECTS = ("missing_coupling", "unmodeled_input")
 DRIFT_GRID_S = 1800.0
 DRIFT_COLUMN = "(drift)"
 # Drift onsets per form fitted one by one; a longer record's (a day holds 46 per form) are
@@ -497,6 +499,34 @@ def _as_fit(shape: Shape, cv) -> Fit:
                step=cv.full.step)
 
 
+def _line_fits(scan: _core.ProjectedOnsetScan, responses: ShapeResponses, lines: list[list[Shape]],
+               stride: int) -> list[Fit]:
+    """Fits of one channel's shapes laid out on lines of a grid (drift onsets per form, a new
+    channel's delays per pole), coarse to fine: every stride-th shape of each line, then every
+    shape within stride of the leaders: each line's best on all data (where a line's statistic
+    peaks; the lines' peaks trade off, a slower pole with a shorter delay) and the best on each
+    fold's in-fold statistic (the choices ``_best_per_channel`` scores). stride 1: every shape."""
+    fitted: dict = {}
+
+    def fit(shape: Shape) -> None:
+        if id(shape) not in fitted:
+            fitted[id(shape)] = _fit_shape(scan, shape, responses)
+
+    for line in lines:
+        for shape in line[::stride]:
+            fit(shape)
+    if stride > 1:
+        coarse = list(fitted.values())
+        leaders = [max((fitted[id(s)] for s in line[::stride]), key=lambda f: f.statistic) for line in lines]
+        leaders += [max(coarse, key=lambda f, k=k: f.folds[k].statistic) for k in (0, 1)]
+        for leader in leaders:
+            line = next(line for line in lines if any(s is leader.shape for s in line))
+            i = next(j for j, s in enumerate(line) if s is leader.shape)
+            for shape in line[max(i - stride + 1, 0):i + stride]:
+                fit(shape)
+    return [fitted[id(s)] for line in lines for s in line if id(s) in fitted]
+
+
 def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
     """Per (effect, column): honest two-fold cross-validation of the whole search. On each fold
     the shape (grid point) and onset with the largest in-fold statistic are picked and scored
@@ -585,8 +615,16 @@ class _Search:
     def best(self, r: np.ndarray, responses: ShapeResponses) -> Fit | None:
         """The preferred fit of a round on residual r (None when every candidate is refused)."""
         scan = self.scan(r, responses)
-        fits = [f for s in self.shapes if s.column not in self.taken and s.kind != "drift"
-                for f in _fits_of_shape(scan, s, responses)]
+        fits, new_channels = [], {}
+        for s in self.shapes:
+            if s.column in self.taken or s.kind == "drift":
+                continue
+            if s.effect in NEW_CHANNEL_EFFECTS:
+                new_channels.setdefault(s.column, []).append(s)
+            else:
+                fits += _fits_of_shape(scan, s, responses)
+        for shapes in new_channels.values():
+            fits += self._coupling_fits(scan, responses, shapes)
         if self.later_only:
             fits = [f for f in fits if f.onset > self.first_onset]
         if DRIFT_COLUMN not in self.taken:
@@ -602,37 +640,29 @@ class _Search:
         return _preferred(fits) if fits else None
 
     def _drift_fits(self, scan: _core.ProjectedOnsetScan, responses: ShapeResponses) -> list[Fit]:
-        """The drift shapes' fits. Up to DRIFT_ONSETS_EXHAUSTIVE onsets per form every onset is
-        fitted; beyond, every c-th (at most that many per form), then every onset within c of
-        the coarse fits that lead on all data and on each fold (the three choices
-        ``_best_per_channel`` makes). A ramp's or step's statistic moves smoothly with its
-        onset at this 30 min grid; each drift's scan costs O(N), and a week at 5 s holds 334
-        onsets per form, so an exhaustive search cost O(N^2) (the 7-day 3x3 bench: 5,344 drift
-        fits, a third of diagnose's time)."""
-        drifts = [s for s in self.shapes if s.kind == "drift"]
+        """The drift shapes' fits: per form a line of onsets, every onset fitted up to
+        DRIFT_ONSETS_EXHAUSTIVE per form, beyond that coarse to fine (``_line_fits``). A ramp's or
+        step's statistic moves smoothly with its onset at this 30 min grid; each drift's scan costs
+        O(N), and a week at 5 s holds 334 onsets per form, so an exhaustive search cost O(N^2)
+        (the 7-day 3x3 bench: 5,344 drift fits, a third of diagnose's time)."""
         forms: dict = {}
-        for s in drifts:
-            forms.setdefault(s.drift_form, []).append(s)
-        c = max((math.ceil(len(f) / DRIFT_ONSETS_EXHAUSTIVE) for f in forms.values()), default=1)
-        fitted: dict = {}
+        for s in self.shapes:
+            if s.kind == "drift":
+                forms.setdefault(s.drift_form, []).append(s)
+        stride = max((math.ceil(len(f) / DRIFT_ONSETS_EXHAUSTIVE) for f in forms.values()), default=1)
+        return _line_fits(scan, responses, list(forms.values()), stride)
 
-        def fit(shape: Shape) -> None:
-            if id(shape) not in fitted:
-                fitted[id(shape)] = _fit_shape(scan, shape, responses)
-
-        for shapes in forms.values():
-            for shape in shapes[::c]:
-                fit(shape)
-        if c > 1:
-            coarse = list(fitted.values())
-            leaders = [max(coarse, key=lambda f: f.statistic)]
-            leaders += [max(coarse, key=lambda f, k=k: f.folds[k].statistic) for k in (0, 1)]
-            for leader in leaders:
-                shapes = forms[leader.shape.drift_form]
-                i = next(j for j, s in enumerate(shapes) if s is leader.shape)
-                for shape in shapes[max(i - c + 1, 0):i + c]:
-                    fit(shape)
-        return [fitted[id(s)] for s in drifts if id(s) in fitted]
+    def _coupling_fits(self, scan: _core.ProjectedOnsetScan, responses: ShapeResponses,
+                       shapes: list[Shape]) -> list[Fit]:
+        """The fits of one new channel's unit first-order-plus-delay shapes: per pole a line of
+        delays, fitted coarse to fine (``_line_fits``, every COUPLING_DELAY_STRIDE-th delay). A
+        new channel's statistic moves smoothly with its delay (its input is a closed loop's,
+        low-pass); 240 shapes per new channel and round were a third of diagnose's cost on a
+        week of 3x3 data (1,920 fits of ~3,400)."""
+        poles: dict = {}
+        for s in shapes:
+            poles.setdefault(s.shape.den[1], []).append(s)
+        return _line_fits(scan, responses, list(poles.values()), COUPLING_DELAY_STRIDE)
 
     def scan(self, r: np.ndarray, responses: ShapeResponses) -> _core.ProjectedOnsetScan:
         """The onset scans of this output's candidates on residual r, beside the responses'

@@ -62,6 +62,7 @@ void bind_data_io(py::module_& m) {
            py::arg("good_quality") = std::vector<std::string>{});
   const auto release = py::call_guard<py::gil_scoped_release>();
   m.def("read_csv", &read_csv, py::arg("path"), release);
+  m.def("read_csv_rows", &read_csv_rows, py::arg("path"), release);
   m.def("parse_csv", &parse_csv, py::arg("text"), py::arg("source") = "<string>", release);
   m.def("validate_data", &validate_data, py::arg("data"), py::arg("model"), py::arg("source"),
         release);

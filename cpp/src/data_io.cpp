@@ -606,6 +606,10 @@ DataTable read_csv(const std::string& path) {
   return parse_csv(detail::read_text_file(path), path);
 }
 
+DataTable read_csv_rows(const std::string& path) {
+  return parse_csv_rows(detail::read_text_file(path), path);
+}
+
 void validate_data(const DataTable& data, const Model& model, const std::string& source) {
   one_line_errors([&] { check_against_model(data, model, source); });
 }

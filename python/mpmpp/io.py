@@ -97,13 +97,13 @@ def load_loop_data(path: PathLike, columns: Sequence[str], *, max_gap_s: Optiona
     the grid of its own sample time (``sample_time_of`` the times as written; ``resample_s`` when given) with
     ``load_data``'s historian repairs, ``columns`` required numeric. A timestamp's jitter, a gap
     and a bad-quality row are then what they are for ``diagnose`` on the same file."""
-    rows = load_data(path)
-    present = set(rows.columns) | set(rows.attrs["text_columns"])
+    # the rows as written: an export's repeated rows (a chunk boundary) are dropped by the
+    # repairs below, as for diagnose, not refused by a check of strictly increasing time
+    rows = _core.read_csv_rows(os.fspath(path))
     for name in columns:
-        if name not in present or name == "time":
-            raise ValueError(f"{os.fspath(path)}: no column {name!r} (columns: "
-                             f"{', '.join(c for c in rows.columns if c != 'time')})")
-    sample_time_s = float(resample_s) if resample_s else sample_time_of(rows["time"].to_numpy())
+        if name not in [*rows.columns, *rows.text_columns] or name == "time":
+            raise ValueError(f"{os.fspath(path)}: no column {name!r} (columns: {', '.join(rows.columns)})")
+    sample_time_s = float(resample_s) if resample_s else sample_time_of(np.unique(np.asarray(rows.time_s)))
     if not sample_time_s > 0:
         raise ValueError(f"{os.fspath(path)}: needs at least 2 rows with increasing times")
     columns = list(dict.fromkeys(columns))  # checked numeric by the grid "model": no channels, only names

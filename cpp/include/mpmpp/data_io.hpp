@@ -96,6 +96,7 @@ DataTable parse_csv(const std::string& text, const std::string& source);
 DataTable read_csv(const std::string& path);
 // The rows as written (time in file order, not yet checked), for the repairs of load_data.
 DataTable parse_csv_rows(const std::string& text, const std::string& source);
+DataTable read_csv_rows(const std::string& path);
 
 // The model's inputs and outputs are numeric columns, and within each segment the
 // time step equals sample_time_s to a relative tolerance of 1e-6.

@@ -48,6 +48,31 @@ def model_rows(model) -> tuple[list, list]:
     return rows, noise
 
 
+# Above 1 by more than rounding a pole is unstable; at 1 the channel integrates (supported).
+UNIT_CIRCLE_TOLERANCE = 1e-9
+
+
+def require_simulable_channels(model, rows: int) -> None:
+    """ValueError naming the first process channel an output-error analysis cannot run on
+    these data: a pole outside the unit circle (simulated from the inputs, the output diverges)
+    or a dead time of the record's length or more (it never reaches the data; a dead time
+    written in seconds where the file counts samples looks like this)."""
+    for o in model.outputs:
+        for i in model.inputs:
+            g = model.process(o, i)
+            if g is None:
+                continue
+            poles = np.abs(g.poles())
+            if len(poles) and poles.max() > 1.0 + UNIT_CIRCLE_TOLERANCE:
+                raise ValueError(f"model: process.{o}.{i}: unstable, a pole has |p| = {poles.max():.4g} > 1 (compare "
+                                 "and diagnose simulate the model's output from its inputs; a model for them is "
+                                 "stable or integrating)")
+            if g.delay >= rows:
+                raise ValueError(f"model: process.{o}.{i}.delay: {g.delay} samples ({g.delay * model.sample_time_s:g} s) "
+                                 f"is as long as the record or longer ({rows} rows); the model file counts the delay "
+                                 "in samples")
+
+
 def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     """Deviation signals of ``data`` (DataFrame with ``time`` in seconds) for ``model``.
 
@@ -64,6 +89,7 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     raw_y = data[outputs].to_numpy(dtype=float)
     raw_z = data[extras].to_numpy(dtype=float) if extras else np.zeros((len(data), 0))
     require_moving_outputs(outputs, raw_y)
+    require_simulable_channels(model, len(data))
     ref = np.ones(len(data), bool) if reference is None else np.asarray(reference, bool)
     nu, ny = len(inputs), len(outputs)
     # rows a data frame leaves out (a historian gap: a step of two samples or more) end a

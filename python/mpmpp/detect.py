@@ -25,7 +25,7 @@ from . import _core
 from ._core import DetectorConfig
 from .disturbance import WHITENING_FLOOR, describe, disturbance_orders
 from .preset_timing import TIMING_FIELDS, fit_to_record, resolve_timing, span_text
-from .held_values import frozen_columns, frozen_note, require_moving_outputs
+from .held_values import frozen_columns, frozen_note, require_moving_outputs, require_recorded_columns
 from .signals import through_actuators
 from .timeaxis import seconds_of
 
@@ -225,6 +225,7 @@ class Detector:
         """monitored: the same data is monitored after training, so it must hold one window
         after the training period."""
         time_s, u, y = _arrays(model, data)
+        require_recorded_columns(model.inputs, u, model.outputs, y)   # training needs every column
         record_s = record_span(time_s, model.sample_time_s) if monitored and len(time_s) else None
         config, timing = _configure(config, model, record_s, train_end_s)
         if train_end_s is None:

@@ -21,6 +21,18 @@ def frozen(x: np.ndarray) -> bool:
     return len(known) > 0 and bool(np.all(known == known[0]))
 
 
+def require_recorded_columns(inputs, u: np.ndarray, outputs, y: np.ndarray) -> None:
+    """ValueError naming the first model column without a single value (a tag the export
+    left empty): it used to surface as 'no stretch of rows without missing values' or as a
+    training period without usable windows. (A monitored chunk may lack a tag for a while:
+    ``monitor`` skips those windows and does not call this.)"""
+    for kind, names, columns in (("input", inputs, u), ("output", outputs, y)):
+        for name, column in zip(names, np.asarray(columns, dtype=float).T):
+            if len(column) and not np.isfinite(column).any():
+                raise ValueError(f"data: column '{name}' (model {kind}) has no values: all {len(column)} rows "
+                                 "are missing")
+
+
 def require_moving_outputs(names, y: np.ndarray) -> None:
     """ValueError naming the first model output (column of y) that is ``frozen``: nothing about
     the model can be checked against an output that never moves."""

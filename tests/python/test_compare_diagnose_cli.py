@@ -83,6 +83,24 @@ def test_a_model_the_data_cannot_check_is_named_in_one_line(tmp_path, capsys):
             assert "\n" not in err and message in err
 
 
+def test_an_empty_model_column_is_named_in_one_line(tmp_path, capsys):
+    """A model input the export left empty used to read as 'no stretch of rows without missing
+    values' (compare, diagnose) or as a training period without usable windows (detect)."""
+    model = model_path(GAIN_CHANGE)
+    name = json.loads(model.read_text())["inputs"][0]
+    lines = data_path(GAIN_CHANGE).read_text().splitlines()
+    k = lines[0].split(",").index(name)
+    rows = [line.split(",") for line in lines[1:]]
+    for r in rows:
+        r[k] = ""
+    path = tmp_path / "empty_input.csv"
+    path.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    for command in ("compare", "diagnose", "detect"):
+        assert main([command, str(model), str(path)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and f"column '{name}' (model input) has no values: all {len(rows)} rows" in err
+
+
 def test_update_json_carries_the_diagnosis_notes_and_out_gets_update_json(tmp_path, capsys):
     """A model file without a noise model: the diagnosis estimates one and says so; update's
     JSON (stdout and --out DIR/update.json, the same document) carries that note."""

@@ -177,7 +177,11 @@ def atomic_output(path: PathLike, mode: str = "w"):
     when the block succeeds: an interrupted or failed write leaves the previous file intact.
     For files written in Python; the engine's save_model/save_data do the same in C++."""
     path = os.fspath(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.tmp.", dir=os.path.dirname(path) or ".")
+    folder = os.path.dirname(path) or "."
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.tmp.", dir=folder)
+    except OSError as exc:   # named by the file asked for, not by the temporary one
+        raise type(exc)(f"{path}: cannot write in {folder}: {exc.strerror}") from None
     try:
         with os.fdopen(fd, mode) as f:
             yield f

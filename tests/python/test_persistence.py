@@ -8,6 +8,7 @@
 - atomic_output (files written in Python) leaves the old file on an exception.
 """
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -19,6 +20,7 @@ import pandas as pd
 import pytest
 
 import mpmpp
+from mpmpp.io import atomic_output
 from child_process import child_env
 
 AWKWARD = [1 / 3, -2 / 7, 1e-300, 5e-324, 1.7976931348623157e308, 0.1 + 0.2, -0.0]
@@ -159,10 +161,18 @@ def test_atomic_output_keeps_the_old_file_on_error(tmp_path):
     path = tmp_path / "scenario.json"
     path.write_text("old")
     with pytest.raises(RuntimeError):
-        with mpmpp.io.atomic_output(path) as f:
+        with atomic_output(path) as f:
             f.write("half of the new")
             raise RuntimeError("interrupted")
     assert path.read_text() == "old" and os.listdir(tmp_path) == ["scenario.json"]
-    with mpmpp.io.atomic_output(path) as f:
+    with atomic_output(path) as f:
         f.write("new")
     assert path.read_text() == "new" and os.listdir(tmp_path) == ["scenario.json"]
+
+
+def test_atomic_output_into_a_missing_folder_names_the_file_asked_for(tmp_path):
+    # the temporary file's name (".r.html.tmp.XXXX") was the one the user read
+    path = tmp_path / "absent" / "r.html"
+    with pytest.raises(FileNotFoundError, match=rf"^{re.escape(str(path))}: cannot write in .*absent: No such file"):
+        with atomic_output(path) as f:
+            f.write("x")

@@ -2,6 +2,7 @@
 the cross-validated onset scan, the step + ramp trend fit over all onsets, and the drift and
 delayed-channel responses built from one response per family; the grid refinement against an
 analytic minimum."""
+import dataclasses
 import math
 
 import numpy as np
@@ -316,6 +317,21 @@ def test_delayed_responses_match_direct_whitening(with_channel):
     for s in shapes:
         direct = nuisance.project(out.whiten(out.channel_response(s.shape, np.nan_to_num(s.drive))))
         np.testing.assert_allclose(responses.whitened(s).psi, direct, rtol=0, atol=1e-9)
+
+
+def test_responses_of_short_lived_shapes_are_their_own():
+    # the refinement's shapes (a time-constant factor between grid points) live only while they
+    # are fitted; CPython hands a freed shape's address to the next, so a cache keyed by the
+    # shape's id returned an earlier factor's response
+    data = loop.simulate(n=6000, seed=4)
+    sig = diagnosis_signals(loop.model(), data).sig
+    out = output_residual(sig, 0, 720, 0, 720)
+    responses = ShapeResponses(out, disturbance_nuisance(out, []))
+    (base,) = [s for s in process_shapes(sig, 0) if s.effect == "time_constant" and s.label == 2.0]
+    for factor in np.linspace(1.6, 2.9, 12):
+        shape = dataclasses.replace(base, shape=process.first_order_with_time_constant(base.nominal, factor))
+        direct = out.whiten(out.channel_response(shape.shape, np.nan_to_num(shape.drive)))
+        np.testing.assert_array_equal(responses.response(shape), direct)
 
 
 def test_coarse_drift_search_finds_the_exhaustive_searchs_drift(monkeypatch):

@@ -196,7 +196,7 @@ class ShapeResponses:
             return self._drift(int(shape.label), shape.drift_form)
         if shape.effect in DELAY_GRID_EFFECTS:
             return self._delayed(shape)
-        key = id(shape)
+        key = _channel_key(shape, shape.shape)
         if key not in self._shapes:
             drive = np.nan_to_num(shape.drive)
             self._shapes[key] = self.out.whiten(self.out.channel_response(shape.shape, drive))
@@ -218,9 +218,10 @@ class ShapeResponses:
         samples, so the response is the undelayed one, delayed; a piece that starts inside a
         segment (after a noise split) inherits the channel's history (``_inside_segment``)."""
         out, g = self.out, shape.shape
-        key = (id(shape.drive), tuple(g.num), tuple(g.den))
+        undelayed = TransferFunction(g.num, g.den, 0)
+        key = _channel_key(shape, undelayed)
         if key not in self._delay_families:
-            x = out.channel_response(TransferFunction(g.num, g.den, 0), np.nan_to_num(shape.drive))
+            x = out.channel_response(undelayed, np.nan_to_num(shape.drive))
             self._delay_families[key] = DelayFamily(x, out.whiten(x))
         family, d = self._delay_families[key], g.delay
         psi = np.zeros(len(out.r))
@@ -287,6 +288,15 @@ class ShapeResponses:
         if key not in self._weight:
             self._weight[key] = self.out.weight * np.isfinite(shape.drive)
         return self._weight[key]
+
+
+def _channel_key(shape: Shape, g: TransferFunction) -> tuple:
+    """Cache key of channel g driven by the shape's column: by value, not by the shape's id. A
+    refined time constant's shapes live only while they are fitted, and a later one created at
+    a freed one's address took its cached response (tuning pi_siso_rough, 3 of 50 runs: the
+    refined factor moved with the process's allocation history). The drive is a column of the
+    data, alive while the responses are."""
+    return id(shape.drive), tuple(np.asarray(g.num, float)), tuple(np.asarray(g.den, float)), g.delay
 
 
 def first_order_with_time_constant(g: TransferFunction, factor: float) -> TransferFunction | None:

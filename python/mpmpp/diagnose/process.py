@@ -510,31 +510,31 @@ def _as_fit(shape: Shape, cv) -> Fit:
 
 
 def _line_fits(scan: _core.ProjectedOnsetScan, responses: ShapeResponses, lines: list[list[Shape]],
-               stride: int) -> list[Fit]:
+               stride: int, admissible=lambda fit: True) -> list[Fit]:
     """Fits of one channel's shapes laid out on lines of a grid (drift onsets per form, a new
     channel's delays per pole), coarse to fine: every stride-th shape of each line, then every
     shape within stride of the leaders: each line's best on all data (where a line's statistic
     peaks; the lines' peaks trade off, a slower pole with a shorter delay) and the best on each
-    fold's in-fold statistic (the choices ``_best_per_channel`` scores). stride 1: every shape."""
-    fitted: dict = {}
+    fold's in-fold statistic (the choices ``_best_per_channel`` scores), leaders among the
+    ``admissible`` fits (the search keeps no other). stride 1: every shape."""
+    fitted: dict = {}   # (line, position) -> fit
 
-    def fit(shape: Shape) -> None:
-        if id(shape) not in fitted:
-            fitted[id(shape)] = _fit_shape(scan, shape, responses)
+    def fit(k: int, i: int) -> None:
+        if (k, i) not in fitted:
+            fitted[k, i] = _fit_shape(scan, lines[k][i], responses)
 
-    for line in lines:
-        for shape in line[::stride]:
-            fit(shape)
-    if stride > 1:
-        coarse = list(fitted.values())
-        leaders = [max((fitted[id(s)] for s in line[::stride]), key=lambda f: f.statistic) for line in lines]
-        leaders += [max(coarse, key=lambda f, k=k: f.folds[k].statistic) for k in (0, 1)]
-        for leader in leaders:
-            line = next(line for line in lines if any(s is leader.shape for s in line))
-            i = next(j for j, s in enumerate(line) if s is leader.shape)
-            for shape in line[max(i - stride + 1, 0):i + stride]:
-                fit(shape)
-    return [fitted[id(s)] for line in lines for s in line if id(s) in fitted]
+    for k, line in enumerate(lines):
+        for i in range(0, len(line), stride):
+            fit(k, i)
+    coarse = {at: f for at, f in fitted.items() if admissible(f)}
+    if stride > 1 and coarse:
+        leaders = [max(on_line, key=lambda at: coarse[at].statistic) for k in range(len(lines))
+                   if (on_line := [at for at in coarse if at[0] == k])]
+        leaders += [max(coarse, key=lambda at, j=j: coarse[at].folds[j].statistic) for j in (0, 1)]
+        for k, i in leaders:
+            for p in range(max(i - stride + 1, 0), min(i + stride, len(lines[k]))):
+                fit(k, p)
+    return [fitted[at] for at in sorted(fitted)]
 
 
 def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
@@ -636,7 +636,7 @@ class _Search:
         for shapes in new_channels.values():
             fits += self._coupling_fits(scan, responses, shapes)
         if self.later_only:
-            fits = [f for f in fits if f.onset > self.first_onset]
+            fits = [f for f in fits if self._admissible(f)]
         if DRIFT_COLUMN not in self.taken:
             fits += self._drift_fits(scan, responses)
         fits = [f for f in fits if not flips_sign_without_evidence(f, self.actions.get(f.shape.column, 0))]
@@ -672,7 +672,11 @@ class _Search:
         poles: dict = {}
         for s in shapes:
             poles.setdefault(s.shape.den[1], []).append(s)
-        return _line_fits(scan, responses, list(poles.values()), COUPLING_DELAY_STRIDE)
+        return _line_fits(scan, responses, list(poles.values()), COUPLING_DELAY_STRIDE, self._admissible)
+
+    def _admissible(self, fit: Fit) -> bool:
+        """Whether the search keeps ``fit``: with ``later_only``, only a change dated inside the record."""
+        return not self.later_only or fit.onset > self.first_onset
 
     def scan(self, r: np.ndarray, responses: ShapeResponses) -> _core.ProjectedOnsetScan:
         """The onset scans of this output's candidates on residual r, beside the responses'

@@ -13,7 +13,8 @@ from mpmpp import TransferFunction, _core
 from mpmpp.diagnose.pipeline import diagnosis_signals
 from mpmpp.diagnose.plots import rolling_rms
 from mpmpp.diagnose import process
-from mpmpp.diagnose.process import COUPLING_DELAYS, DELAY_GRID_EFFECTS, ShapeResponses, process_shapes
+from mpmpp.diagnose.responses import ShapeResponses
+from mpmpp.diagnose.shapes import COUPLING_DELAYS, DELAY_GRID_EFFECTS, first_order_with_time_constant, process_shapes
 from mpmpp.diagnose.refine import neighbours, refine
 from mpmpp.diagnose.trend import trend_fit
 from mpmpp.diagnose.whitening import disturbance_nuisance, output_residual
@@ -329,7 +330,7 @@ def test_responses_of_short_lived_shapes_are_their_own():
     responses = ShapeResponses(out, disturbance_nuisance(out, []))
     (base,) = [s for s in process_shapes(sig, 0) if s.effect == "time_constant" and s.label == 2.0]
     for factor in np.linspace(1.6, 2.9, 12):
-        shape = dataclasses.replace(base, shape=process.first_order_with_time_constant(base.nominal, factor))
+        shape = dataclasses.replace(base, shape=first_order_with_time_constant(base.nominal, factor))
         direct = out.whiten(out.channel_response(shape.shape, np.nan_to_num(shape.drive)))
         np.testing.assert_array_equal(responses.response(shape), direct)
 

@@ -154,7 +154,7 @@ def foptd_model(loop, scale=1.0, delay=None, name="hand-written"):
 @pytest.mark.parametrize("delay, num", [(2, [0.3, 0.1]), (0, [0.0, 0.3]), (1, [0.0, 0.0, 0.3]), (1, [0.3])])
 def test_delay_search_never_reaches_lag_zero(delay, num):
     from mpmpp.diagnose.pipeline import diagnosis_signals
-    from mpmpp.diagnose.process import first_lag, process_shapes
+    from mpmpp.diagnose.shapes import first_lag, process_shapes
 
     data = pi_loop.simulate(pi_loop.FLOW, 1)
     model = mpmpp.Model("m", 10.0, ["OP"], ["PV"], {"PV": {"OP": mpmpp.TransferFunction(num, [1.0, -0.7], delay)}})
@@ -177,7 +177,8 @@ def test_single_loop_controller_action_from_the_data(loop, action):
 
 
 def _fit(effect, theta, se, gain=1.0):
-    from mpmpp.diagnose.process import Fit, Shape
+    from mpmpp.diagnose.process import Fit
+    from mpmpp.diagnose.shapes import Shape
 
     g = mpmpp.TransferFunction([0.5 * gain], [1.0, -0.5], 1)
     return Fit(Shape(effect, "OP", "input", g, g, 1.0, 1), 0, 0.0, 0.0, theta, se, [], 1.0)

@@ -11,6 +11,7 @@ import pytest
 from mpmpp import families as fam
 from mpmpp._core import TransferFunction
 from mpmpp.diagnose import diagnose
+from mpmpp.diagnose.shapes import Shape
 from mpmpp.diagnosis_study import nominal_model, simulate
 from mpmpp.step_response import step_response_deviation
 
@@ -25,7 +26,7 @@ class _Out:
 
 
 def _fit(effect, shape, nominal, theta, heldout, onset=100):
-    s = process.Shape(effect, "u1", "input", shape, nominal, 1.0, 1)
+    s = Shape(effect, "u1", "input", shape, nominal, 1.0, 1)
     return process.Fit(s, onset, 0.0, heldout, theta, 0.01, [], 1.0)
 
 
@@ -78,7 +79,7 @@ def test_a_gain_change_below_the_share_floor_is_reported(name, seed):
 
 def test_a_dynamics_change_keeps_the_gain_unless_the_data_say_otherwise():
     g = TransferFunction([0.2], [1.0, -0.8], 3)
-    fit = process.Fit(process.Shape("delay", "u1", "input", g, g, 5.0, 2), 0, 0.0, 50.0, 1.011, 0.0098,
+    fit = process.Fit(Shape("delay", "u1", "input", g, g, 5.0, 2), 0, 0.0, 50.0, 1.011, 0.0098,
                       [process.FoldFit(1.0, 20.0, 1.021), process.FoldFit(1.0, 30.0, 1.0)], 10.0)
     kept = process._with_gain_kept(fit)
     assert kept.theta == 1.0 and [f.theta for f in kept.folds] == [1.0, 1.0]
@@ -87,7 +88,7 @@ def test_a_dynamics_change_keeps_the_gain_unless_the_data_say_otherwise():
     far = process.Fit(fit.shape, 0, 0.0, 50.0, 1.05, 0.0098, fit.folds, 10.0)
     assert process._with_gain_kept(far) is far
     # a gain change is theta itself
-    gain = process.Fit(process.Shape("gain", "u1", "input", g, g, 1.0, 1), 0, 0.0, 50.0, 1.011, 0.0098, fit.folds, 10.0)
+    gain = process.Fit(Shape("gain", "u1", "input", g, g, 1.0, 1), 0, 0.0, 50.0, 1.011, 0.0098, fit.folds, 10.0)
     assert process._with_gain_kept(gain) is gain
 
 

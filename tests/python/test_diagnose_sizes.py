@@ -1,5 +1,5 @@
 """The SIZE of each diagnosed effect against the truth, with effects placed between the points
-of the search grids (diagnose/process.py): gain ratio (continuous theta), time constant (grid
+of the search grids (diagnose/shapes.py): gain ratio (continuous theta), time constant (grid
 TIME_CONSTANT_FACTORS, refined between its points), dead time (integer grid, an uneven shift), coupling gain (continuous
 theta on a grid of poles, the true pole between two of them), and the example case's coupling.
 
@@ -19,7 +19,7 @@ import pytest
 import mpmpp
 from mpmpp import families
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
-from mpmpp.diagnose.process import COUPLING_POLES, TIME_CONSTANT_FACTORS
+from mpmpp.diagnose.shapes import COUPLING_POLES, TIME_CONSTANT_FACTORS
 from mpmpp.diagnosis_study import true_change, update_quality
 from mpmpp.evaluate import nominal_model
 
@@ -67,7 +67,7 @@ def test_gain_ratio(seed, factor, tolerance):
 def test_gain_ratio_about_another_operating_point(seed, gain, reference, tolerance):
     """A plant whose gain changes about an input value other than the record's mean also steps
     the output's level at the onset (closed_loop_case ``gain_reference``, one input unit either
-    side of the loop's operating point). The gain is fitted with that step (process.Shape
+    side of the loop's operating point). The gain is fitted with that step (shapes.Shape
     level_step) and its errors taken with it fitted out. Without (seeds 0-2): ratios 0.37-0.45
     for the x0.5 and 1.76-1.81 for the x2 at reference -1, an output drift reported beside the
     gain, and one x0.5 read as a sticking valve."""

@@ -5,9 +5,9 @@ Method (docs/diagnose.md has the long form), per output:
 1. ``whitening``: residual statistics over time; a two-segment AR split of the one-step error
    gives each side its own noise correction, so the residual is whitened whatever the
    disturbance did.
-2. ``process``: candidate channel changes (gain, time constant, delay, missing coupling,
-   unmodeled input, output drift), each fitted from an onset on and scored on held-out 1 h
-   blocks; ``valve``: a single loop's (``loops``) sticking valve by the closed-loop Hammerstein
+2. ``process``: candidate channel changes (``shapes``: gain, time constant, delay, missing
+   coupling, unmodeled input, output drift; their whitened ``responses``), each fitted from an
+   onset on and scored on held-out 1 h blocks; ``valve``: a single loop's (``loops``) sticking valve by the closed-loop Hammerstein
    fit; ``actuator``: backlash / stick-slip on an input that drives several outputs.
 3. ``noise``: noise change and drift on outputs without a process finding.
 4. ``pipeline``: findings are accepted greedily and ranked by score; ``errors`` gives the

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..signals import Signals, valve_positions
 from .errors import held_out_error
-from .process import first_lag
+from .shapes import first_lag
 from .laguerre import channel_basis
 from .refitted_noise import OnsetGains, RefittedNoise
 from .result import Finding, ModelChange

@@ -1,10 +1,7 @@
-"""Process candidates: one channel replaced, from an onset on, by theta * S(q).
+"""The search for process changes: one channel replaced, from an onset on, by theta * S(q).
 
-Shapes S: the model's channel (``gain``), the channel with a new time constant
-(``time_constant``) or delay (``delay``), a unit-gain first-order-plus-delay channel from an
-input the model says has none (``missing_coupling``) or from an extra data column
-(``unmodeled_input``), or an additive ramp/step (``output_drift``). ``scan_onset`` gives the
-best onset and theta per shape (exact two-segment least squares); shapes are searched on grids.
+The shapes S and their grids are ``shapes``, their whitened responses ``responses``. The onset
+scan gives the best onset and theta per shape (exact two-segment least squares).
 A gain is also fitted with a step of the output's level at its onset (``Shape.level_step``): a
 plant's gain changes about its own operating point, not about the record's mean input the
 deviations are taken from, and the difference moves the output's level by
@@ -25,7 +22,6 @@ controller's reaction to the noise correlated with the whitened error.
 """
 from __future__ import annotations
 
-import copy
 import dataclasses
 import functools
 import math
@@ -35,32 +31,24 @@ import numpy as np
 
 from .. import _core
 from .._core import TransferFunction
-from ..integrating import integrates
-from ..signals import Signals, per_segment
+from ..signals import per_segment
 from ..step_response import step_response_deviation, step_response_error
 from .errors import held_out_error, held_out_error_beside
 from .noise import drift_finding
 from .process_error import process_errors
 from .refine import refine
 from .result import Finding, InsufficientData, ModelChange
+from .responses import ShapeResponses, WhitenedShape
 from .scoring import ProfilePoint, ci_from_profile, confidence, theta_ci_from_profile
+from .shapes import (DRIFT_COLUMN, NEW_CHANNEL_EFFECTS, TIME_CONSTANT_BOUNDS, TIME_CONSTANT_FACTORS, Shape,
+                     drift_drive, first_lag, first_order_with_time_constant, process_shapes)
 from .whitening import Nuisance, OutputResidual, disturbance_nuisance, disturbance_onsets
 
-TIME_CONSTANT_FACTORS = (0.33, 0.5, 0.67, 0.8, 1.25, 1.5, 2.0, 3.0)
-TIME_CONSTANT_BOUNDS = (0.2, 5.0)   # refinement bounds past the grid's ends
-DELAY_RANGE = (-10, 15)      # new delay = model delay + this range (samples)
-COUPLING_POLES = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98)
-# Delay >= 1: in closed loop u(t) may already react to y(t), a lag-0 channel would fit feedback.
-COUPLING_DELAYS = range(1, 41)
 COUPLING_DELAY_STRIDE = 3    # the delays searched coarse to fine (_Search._coupling_fits)
-NEW_CHANNEL_EFFECTS = ("missing_coupling", "unmodeled_input")
-DRIFT_GRID_S = 1800.0
-DRIFT_COLUMN = "(drift)"
 # Drift onsets per form fitted one by one; a longer record's (a day holds 46 per form) are
 # searched coarse to fine (_Search._drift_fits), so the drifts cost O(N), not O(N^2).
 DRIFT_ONSETS_EXHAUSTIVE = 48
 MAX_FINDINGS_PER_OUTPUT = 3
-DELAY_GRID_EFFECTS = ("delay", "missing_coupling", "unmodeled_input")
 # A gain finding whose new gain is below this fraction of the model's says the input has all but
 # stopped acting on the output. On the tuning families (seeds 0-9) 10 of the 11 such findings
 # were valve saturations the actuator candidates could not tell from a dead channel, so the
@@ -88,32 +76,6 @@ MATERIAL_STEP_CHANGE_THROUGHOUT = 0.2
 
 
 @dataclass
-class Shape:
-    """A candidate: channel (output <- column) replaced by theta * shape after an onset."""
-
-    effect: str
-    column: str
-    kind: str                     # "input", "extra" or "drift"
-    shape: TransferFunction       # theta = 1 means the shape itself
-    nominal: TransferFunction | None
-    label: float                  # the grid value (gain 1, time-constant factor, delay, pole, drift onset)
-    params: int                   # fitted parameters incl. the grid choice (onset counted later)
-    drive: np.ndarray = field(repr=False, default=None)   # the column the channel filters
-    drift_form: str = ""          # "ramp" or "step" for an output drift (its drive is built on demand)
-    scale_held: bool = False      # theta held at 1: a new dynamics that keeps the model's gain
-    level_step: bool = False      # fitted with the output's level step at its onset (a gain change
-                                  # about another operating point than the record's mean)
-
-    def holding_scale(self) -> "Shape":
-        """The same new dynamics with the model's gain kept (theta held at 1): one parameter fewer."""
-        return dataclasses.replace(self, scale_held=True, params=self.params - 1)
-
-    def scaled(self, theta: float) -> TransferFunction:
-        """The channel theta * shape."""
-        return TransferFunction(np.asarray(self.shape.num) * theta, self.shape.den, self.shape.delay)
-
-
-@dataclass
 class FoldFit:
     """Onset scan on one fold's blocks, scored on the other fold's."""
 
@@ -135,235 +97,6 @@ class Fit:
     profile: list[ProfilePoint] = field(default_factory=list)   # same effect and column
     step: float = 0.0             # the output's level step at the onset (Shape.level_step)
     step_alone_heldout: float = 0.0   # held-out drop of that step alone, the channel kept (level_step)
-
-
-@dataclass
-class DelayFamily:
-    """One channel shape without delay, driven by one column: the shapes that differ from it
-    only in their delay are delayed copies of its responses."""
-
-    response: np.ndarray = field(repr=False)   # channel response per data segment
-    whitened: np.ndarray = field(repr=False)   # and whitened per piece
-    # piece -> the response from its segment's start whitened with that piece's filter (for a
-    # piece that starts inside a segment; ShapeResponses._inside_segment)
-    from_segment_start: dict = field(repr=False, default_factory=dict)
-
-
-@dataclass
-class WhitenedShape:
-    psi: np.ndarray                     # whitened response of the candidate shape
-    nominal: np.ndarray | None          # whitened response of the nominal channel it replaces
-
-
-class ShapeResponses:
-    """Whitened responses and weights per shape; they do not change between the greedy rounds,
-    only the residual does. Gain and time-constant responses are kept; shapes on a grid of
-    delays or drift onsets (hundreds in a long record) are rebuilt on demand from one response
-    per family. The scans take a response unprojected and project it in their pass."""
-
-    def __init__(self, out: OutputResidual, nuisance: Nuisance):
-        self.out = out
-        self.nuisance = nuisance
-        self.project = nuisance.project
-        self._shapes: dict = {}
-        self._nominal: dict = {}
-        self._weight: dict = {}
-        self._drift_base: dict = {}
-        self._delay_families: dict = {}
-        self._segment_starts = {a for a, _ in out.sig.segments}
-        # a constant output error, whitened: the nuisance's level column (disturbance_drives' first)
-        self.level = nuisance.columns[:, 0]
-
-    def level_step(self, onset: int) -> np.ndarray:
-        """The output's level step at ``onset``, whitened and projected (the second regressor of
-        ``ProjectedOnsetScan.fit_with_level_step``)."""
-        return self.project(np.where(np.arange(len(self.level)) >= onset, self.level, 0.0))
-
-    def beside(self, nuisance: Nuisance) -> ShapeResponses:
-        """The same responses fitted beside other disturbances: what is not projected is shared
-        (``_Search.disturbances`` fits the first round beside up to three sets)."""
-        other = copy.copy(self)
-        other.nuisance, other.project, other._nominal = nuisance, nuisance.project, {}
-        return other
-
-    def whitened(self, shape: Shape) -> WhitenedShape:
-        """The shape's whitened response and its nominal channel's, both projected."""
-        return WhitenedShape(self.project(self.response(shape)), self.nominal_response(shape))
-
-    def response(self, shape: Shape) -> np.ndarray:
-        """The shape's whitened response, not projected."""
-        if shape.kind == "drift":
-            return self._drift(int(shape.label), shape.drift_form)
-        if shape.effect in DELAY_GRID_EFFECTS:
-            return self._delayed(shape)
-        key = _channel_key(shape, shape.shape)
-        if key not in self._shapes:
-            drive = np.nan_to_num(shape.drive)
-            self._shapes[key] = self.out.whiten(self.out.channel_response(shape.shape, drive))
-        return self._shapes[key]
-
-    def nominal_response(self, shape: Shape) -> np.ndarray | None:
-        """The whitened, projected response of the nominal channel the shape replaces."""
-        if shape.nominal is None:
-            return None
-        key = (id(shape.nominal), id(shape.drive))
-        if key not in self._nominal:
-            self._nominal[key] = self.project(
-                self.out.whiten(self.out.channel_response(shape.nominal, np.nan_to_num(shape.drive))))
-        return self._nominal[key]
-
-    def _delayed(self, shape: Shape) -> np.ndarray:
-        """Whitened response of a delayed channel. In a piece that starts a data segment, the
-        channel and the whitening filter start at rest and see zeros for the first ``delay``
-        samples, so the response is the undelayed one, delayed; a piece that starts inside a
-        segment (after a noise split) inherits the channel's history (``_inside_segment``)."""
-        out, g = self.out, shape.shape
-        undelayed = TransferFunction(g.num, g.den, 0)
-        key = _channel_key(shape, undelayed)
-        if key not in self._delay_families:
-            x = out.channel_response(undelayed, np.nan_to_num(shape.drive))
-            self._delay_families[key] = DelayFamily(x, out.whiten(x))
-        family, d = self._delay_families[key], g.delay
-        psi = np.zeros(len(out.r))
-        for p, (a, b) in enumerate(out.pieces):
-            if a in self._segment_starts:
-                if d < b - a:
-                    psi[a + d:b] = family.whitened[a:b - d]
-            else:
-                psi[a:b] = self._inside_segment(family, p, d)
-        return psi
-
-    def _inside_segment(self, family: DelayFamily, p: int, d: int) -> np.ndarray:
-        """The delayed channel's whitened response on piece p, which starts inside a data
-        segment: the piece's filter starts at rest at the piece while the channel has run since
-        the segment's start. Once the filter has forgotten its start (``forgetting_rows``) this
-        is the response whitened from the segment's start (once per family and piece), delayed;
-        only the rows before are filtered here. Filtering every delay's piece directly cost a
-        third of diagnose on a week of 3x3 data after a noise split (1,920 coupling shapes)."""
-        out = self.out
-        a, b = out.pieces[p]
-        s0 = self._segment_start(a)
-        if p not in family.from_segment_start:
-            family.from_segment_start[p] = out.whiten_piece(p, family.response[s0:b])
-        restarted = family.from_segment_start[p]
-        start = max(a, s0 + d)
-        piece = np.zeros(b - a)
-        if start > a:   # the channel's input reaches it after the piece starts: no history
-            piece[start - a:] = restarted[:b - start]
-            return piece
-        head = a + out.forgetting_rows(p)
-        piece[:head - a] = out.whiten_piece(p, family.response[a - d:head - d])
-        piece[head - a:] = restarted[head - d - s0:b - d - s0]
-        return piece
-
-    def _segment_start(self, t: int) -> int:
-        return max(a for a in self._segment_starts if a <= t)
-
-    def _drift(self, onset: int, form: str) -> np.ndarray:
-        """Whitened response of a ramp (per hour) or step starting at ``onset``. In the piece
-        holding the onset the whitening filter starts at rest and sees zeros until the onset,
-        so the response there is the piece's response to a drift starting at its first sample,
-        delayed; later pieces restart their filters and are filtered directly."""
-        out = self.out
-        psi = np.zeros(len(out.r))
-        hour = 3600.0 / out.sig.sample_time_s
-        for p, (a, b) in enumerate(out.pieces):
-            if b <= onset:
-                continue
-            if a <= onset:
-                key = (p, form)
-                if key not in self._drift_base:
-                    self._drift_base[key] = out.whiten_piece(p, _drift_drive(b - a, 0, form, hour))
-                psi[onset:b] = self._drift_base[key][: b - onset]
-            else:
-                psi[a:b] = out.whiten_piece(p, _drift_drive(b - a, onset - a, form, hour))
-        return psi
-
-    def weight(self, shape: Shape) -> np.ndarray:
-        """The output's weight where the shape's drive is known (model inputs and drifts are
-        known wherever the output's weight is nonzero)."""
-        if shape.kind != "extra":
-            return self.out.weight
-        key = id(shape.drive)
-        if key not in self._weight:
-            self._weight[key] = self.out.weight * np.isfinite(shape.drive)
-        return self._weight[key]
-
-
-def _channel_key(shape: Shape, g: TransferFunction) -> tuple:
-    """Cache key of channel g driven by the shape's column: by value, not by the shape's id. A
-    refined time constant's shapes live only while they are fitted, and a later one created at
-    a freed one's address took its cached response (tuning pi_siso_rough, 3 of 50 runs: the
-    refined factor moved with the process's allocation history). The drive is a column of the
-    data, alive while the responses are."""
-    return id(shape.drive), tuple(np.asarray(g.num, float)), tuple(np.asarray(g.den, float)), g.delay
-
-
-def first_order_with_time_constant(g: TransferFunction, factor: float) -> TransferFunction | None:
-    """g with every real pole p moved to p^(1/factor) (time constant times factor), DC gain kept;
-    None without such poles or with a pole at 1 (an integrator has no time constant to scale)."""
-    poles = g.poles()
-    if (len(poles) == 0 or np.any(np.abs(poles.imag) > 1e-9) or np.any(poles.real <= 0)
-            or np.any(poles.real >= 1.0 - 1e-12)):
-        return None
-    new_den = np.real(np.poly(poles.real ** (1.0 / factor)))
-    scale = g.dc_gain() * new_den.sum() / g.num.sum()
-    return TransferFunction(np.asarray(g.num) * scale, new_den, g.delay)
-
-
-def first_lag(g: TransferFunction) -> int:
-    """The first lag at which u reaches y through g: the delay plus leading zero numerator terms."""
-    nonzero = np.flatnonzero(np.asarray(g.num) != 0.0)
-    return g.delay + (int(nonzero[0]) if len(nonzero) else 0)
-
-
-def _drift_drive(length: int, onset: int, form: str, hour: float) -> np.ndarray:
-    """A drift starting at ``onset`` (may be negative: started before the first sample):
-    ramp max(t - onset, 0) in hours, or step (t > onset)."""
-    t = np.maximum(np.arange(length) - onset, 0.0)
-    return t / hour if form == "ramp" else (t > 0).astype(float)
-
-
-def _unit_foptd(pole: float, delay: int) -> TransferFunction:
-    return TransferFunction([1.0 - pole], [1.0, -pole], delay)
-
-
-def process_shapes(sig: Signals, i: int) -> list[Shape]:
-    shapes = []
-    for j, name in enumerate(sig.inputs):
-        g, u = sig.rows[i][j], sig.u[:, j]
-        if g is None:
-            shapes += [Shape("missing_coupling", name, "input", _unit_foptd(p, d), None, d, 3, u)
-                       for p in COUPLING_POLES for d in COUPLING_DELAYS]
-            continue
-        gain = Shape("gain", name, "input", g, g, 1.0, 1, u)
-        shapes.append(gain)
-        if not integrates(g):   # an integrator's gain changed about another point ramps its output
-            shapes.append(dataclasses.replace(gain, level_step=True, params=2))
-        for f in TIME_CONSTANT_FACTORS:
-            s = first_order_with_time_constant(g, f)
-            if s is not None:
-                shapes.append(Shape("time_constant", name, "input", s, g, f, 2, u))
-        lag, num = first_lag(g), np.trim_zeros(np.asarray(g.num, float), "f")
-        for dd in range(*DELAY_RANGE):
-            # no lag 0: in closed loop u(t) may already react to y(t), as for the couplings
-            if dd != 0 and len(num) and lag + dd >= 1:
-                shapes.append(Shape("delay", name, "input", TransferFunction(num, g.den, lag + dd),
-                                    g, lag + dd, 2, u))
-    # Output drift competes in the same pool: an additive ramp or step on the output from
-    # onset tau on (grid of DRIFT_GRID_S). In closed loop the controller cancels a drift with
-    # its inputs, so a drift otherwise poses as a channel change fitted to that compensation.
-    n = len(sig.time_s)
-    grid = max(int(round(DRIFT_GRID_S / sig.sample_time_s)), 1)
-    for tau in range(0, max(n - 2 * grid, 1), grid):
-        for form in ("ramp", "step"):
-            shapes.append(Shape("output_drift", DRIFT_COLUMN, "drift", TransferFunction(), None, tau, 2,
-                                drift_form=form))
-    for k, name in enumerate(sig.extras):
-        z = sig.z[:, k]
-        shapes += [Shape("unmodeled_input", name, "extra", _unit_foptd(p, d), None, d, 3, z)
-                   for p in COUPLING_POLES for d in COUPLING_DELAYS]
-    return shapes
 
 
 def _without_channel(r: np.ndarray, w: WhitenedShape) -> np.ndarray:
@@ -768,7 +501,7 @@ def _one_step_change(out: OutputResidual, fit: Fit) -> np.ndarray:
     s = fit.shape
     n = len(out.e)
     if s.kind == "drift":
-        change = fit.theta * _drift_drive(n, int(s.label), s.drift_form, 3600.0 / out.sig.sample_time_s)
+        change = fit.theta * drift_drive(n, int(s.label), s.drift_form, 3600.0 / out.sig.sample_time_s)
     else:
         drive = np.nan_to_num(s.drive)
         change = fit.theta * out.channel_response(s.shape, drive) + fit.step

@@ -23,7 +23,7 @@ from ..stiction.valve import actuator_from_fit
 from .errors import held_out_error
 from .loops import Loop
 from .result import Finding, ModelChange
-from .process import first_lag
+from .shapes import first_lag
 from .whitening import MIN_AR_ROWS_PER_COEFFICIENT, OutputResidual, stable
 
 PARAMS = 3            # kind, S, J

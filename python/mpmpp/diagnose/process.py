@@ -270,16 +270,21 @@ def _line_fits(scan: _core.ProjectedOnsetScan, responses: ShapeResponses, lines:
     return [fitted[at] for at in sorted(fitted)]
 
 
+def _grouped(items: list, key) -> list[list]:
+    """``items`` grouped by ``key``, groups in order of first appearance, each in input order."""
+    groups: dict = {}
+    for item in items:
+        groups.setdefault(key(item), []).append(item)
+    return list(groups.values())
+
+
 def _best_per_channel(fits: list[Fit], logn: float) -> list[Fit]:
     """Per (effect, column): honest two-fold cross-validation of the whole search. On each fold
     the shape (grid point) and onset with the largest in-fold statistic are picked and scored
     on the other fold; the score is the summed held-out gain minus log(N)/2 per parameter.
     The reported fit is the best shape on all data."""
-    groups: dict = {}
-    for f in fits:
-        groups.setdefault((f.shape.effect, f.shape.column, f.shape.scale_held, f.shape.level_step), []).append(f)
     out = []
-    for group in groups.values():
+    for group in _grouped(fits, lambda f: (f.shape.effect, f.shape.column, f.shape.scale_held, f.shape.level_step)):
         top = max(group, key=lambda f: f.statistic)
         heldout = sum(max(group, key=lambda f: f.folds[k].statistic).folds[k].heldout for k in (0, 1))
         top.heldout = heldout
@@ -358,15 +363,9 @@ class _Search:
     def best(self, r: np.ndarray, responses: ShapeResponses) -> Fit | None:
         """The preferred fit of a round on residual r (None when every candidate is refused)."""
         scan = self.scan(r, responses)
-        fits, new_channels = [], {}
-        for s in self.shapes:
-            if s.column in self.taken or s.kind == "drift":
-                continue
-            if s.effect in NEW_CHANNEL_EFFECTS:
-                new_channels.setdefault(s.column, []).append(s)
-            else:
-                fits += _fits_of_shape(scan, s, responses)
-        for shapes in new_channels.values():
+        searched = [s for s in self.shapes if s.column not in self.taken and s.kind != "drift"]
+        fits = [f for s in searched if s.effect not in NEW_CHANNEL_EFFECTS for f in _fits_of_shape(scan, s, responses)]
+        for shapes in _grouped([s for s in searched if s.effect in NEW_CHANNEL_EFFECTS], lambda s: s.column):
             fits += self._coupling_fits(scan, responses, shapes)
         if self.later_only:
             fits = [f for f in fits if self._admissible(f)]
@@ -388,12 +387,9 @@ class _Search:
         step's statistic moves smoothly with its onset at this 30 min grid; each drift's scan costs
         O(N), and a week at 5 s holds 334 onsets per form, so an exhaustive search cost O(N^2)
         (the 7-day 3x3 bench: 5,344 drift fits, a third of diagnose's time)."""
-        forms: dict = {}
-        for s in self.shapes:
-            if s.kind == "drift":
-                forms.setdefault(s.drift_form, []).append(s)
-        stride = max((math.ceil(len(f) / DRIFT_ONSETS_EXHAUSTIVE) for f in forms.values()), default=1)
-        return _line_fits(scan, responses, list(forms.values()), stride)
+        forms = _grouped([s for s in self.shapes if s.kind == "drift"], lambda s: s.drift_form)
+        stride = max((math.ceil(len(f) / DRIFT_ONSETS_EXHAUSTIVE) for f in forms), default=1)
+        return _line_fits(scan, responses, forms, stride)
 
     def _coupling_fits(self, scan: _core.ProjectedOnsetScan, responses: ShapeResponses,
                        shapes: list[Shape]) -> list[Fit]:
@@ -402,10 +398,8 @@ class _Search:
         new channel's statistic moves smoothly with its delay (its input is a closed loop's,
         low-pass); 240 shapes per new channel and round were a third of diagnose's cost on a
         week of 3x3 data (1,920 fits of ~3,400)."""
-        poles: dict = {}
-        for s in shapes:
-            poles.setdefault(s.shape.den[1], []).append(s)
-        return _line_fits(scan, responses, list(poles.values()), COUPLING_DELAY_STRIDE, self._admissible)
+        poles = _grouped(shapes, lambda s: s.shape.den[1])
+        return _line_fits(scan, responses, poles, COUPLING_DELAY_STRIDE, self._admissible)
 
     def _admissible(self, fit: Fit) -> bool:
         """Whether the search keeps ``fit``: with ``later_only``, only a change dated inside the record."""

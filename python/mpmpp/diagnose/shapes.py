@@ -80,8 +80,11 @@ def drift_drive(length: int, onset: int, form: str, hour: float) -> np.ndarray:
     return t / hour if form == "ramp" else (t > 0).astype(float)
 
 
-def _unit_foptd(pole: float, delay: int) -> TransferFunction:
-    return TransferFunction([1.0 - pole], [1.0, -pole], delay)
+def _new_channel_shapes(effect: str, column: str, kind: str, drive: np.ndarray) -> list[Shape]:
+    """A channel the model lacks, from ``column``: unit-gain first order plus delay on the grid
+    of poles and delays (pole by pole, delays in order: the lines the search runs along)."""
+    return [Shape(effect, column, kind, TransferFunction([1.0 - p], [1.0, -p], d), None, d, 3, drive)
+            for p in COUPLING_POLES for d in COUPLING_DELAYS]
 
 
 def process_shapes(sig: Signals, i: int) -> list[Shape]:
@@ -89,8 +92,7 @@ def process_shapes(sig: Signals, i: int) -> list[Shape]:
     for j, name in enumerate(sig.inputs):
         g, u = sig.rows[i][j], sig.u[:, j]
         if g is None:
-            shapes += [Shape("missing_coupling", name, "input", _unit_foptd(p, d), None, d, 3, u)
-                       for p in COUPLING_POLES for d in COUPLING_DELAYS]
+            shapes += _new_channel_shapes("missing_coupling", name, "input", u)
             continue
         gain = Shape("gain", name, "input", g, g, 1.0, 1, u)
         shapes.append(gain)
@@ -116,7 +118,5 @@ def process_shapes(sig: Signals, i: int) -> list[Shape]:
             shapes.append(Shape("output_drift", DRIFT_COLUMN, "drift", TransferFunction(), None, tau, 2,
                                 drift_form=form))
     for k, name in enumerate(sig.extras):
-        z = sig.z[:, k]
-        shapes += [Shape("unmodeled_input", name, "extra", _unit_foptd(p, d), None, d, 3, z)
-                   for p in COUPLING_POLES for d in COUPLING_DELAYS]
+        shapes += _new_channel_shapes("unmodeled_input", name, "extra", sig.z[:, k])
     return shapes

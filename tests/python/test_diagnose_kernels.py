@@ -356,6 +356,30 @@ def test_coarse_drift_search_finds_the_exhaustive_searchs_drift(monkeypatch):
     assert best.shape.drift_form == "ramp" and abs(best.shape.label - 21000) <= 360
 
 
+def test_line_search_refines_level_by_level_to_the_peaks(monkeypatch):
+    # two lines of 300 shapes with one smooth peak each (at 137 and 251; fold 1 peaks at 20):
+    # stride 14 fits every 14th, then every 5th, 2nd and 1st shape around the leaders
+    peaks = {0: 137, 1: 251}
+    fitted = []
+
+    def fake_fit(scan, shape, responses):
+        k, i = shape
+        fitted.append((k, i))
+        stat = 100.0 - abs(i - peaks[k]) / (2.0 if k == 0 else 1.0)
+        folds = [process.FoldFit(stat, 0.0, 1.0), process.FoldFit(90.0 - abs(i - 20) if k == 0 else 0.0, 0.0, 1.0)]
+        return process.Fit(shape, 0, stat, 0.0, 1.0, 0.1, folds, 0.0)
+
+    monkeypatch.setattr(process, "_fit_shape", fake_fit)
+    lines = [[(k, i) for i in range(300)] for k in (0, 1)]
+    fits = process._line_fits(None, None, lines, 14)
+    assert len(fitted) == len(set(fitted)) == len(fits) and len(fits) < 300 / 4
+    for k, peak in peaks.items():
+        assert max((f for f in fits if f.shape[0] == k), key=lambda f: f.statistic).shape == (k, peak)
+    assert max(fits, key=lambda f: f.folds[1].statistic).shape == (0, 20)
+    fitted.clear()
+    assert len(process._line_fits(None, None, lines, 1)) == 600
+
+
 def test_coarse_coupling_search_finds_the_exhaustive_searchs_channel(monkeypatch):
     # the example's missing coupling: every third delay per pole (1, 4, 7, ...), then around
     # the leaders, one of which (fold 0's) lies between the coarse grid's delays

@@ -245,11 +245,12 @@ def _as_fit(shape: Shape, cv) -> Fit:
 def _line_fits(scan: _core.ProjectedOnsetScan, responses: ShapeResponses, lines: list[list[Shape]],
                stride: int, admissible=lambda fit: True) -> list[Fit]:
     """Fits of one channel's shapes laid out on lines of a grid (drift onsets per form, a new
-    channel's delays per pole), coarse to fine: every stride-th shape of each line, then every
-    shape within stride of the leaders: each line's best on all data (where a line's statistic
-    peaks; the lines' peaks trade off, a slower pole with a shorter delay) and the best on each
-    fold's in-fold statistic (the choices ``_best_per_channel`` scores), leaders among the
-    ``admissible`` fits (the search keeps no other). stride 1: every shape."""
+    channel's delays per pole), coarse to fine: every stride-th shape of each line, then at a
+    third of the stride every shape within the stride of the leaders, and so on down to every
+    shape beside them. Leaders: each line's best on all data (where a line's statistic peaks;
+    the lines' peaks trade off, a slower pole with a shorter delay) and the best on each fold's
+    in-fold statistic (the choices ``_best_per_channel`` scores), among the ``admissible`` fits
+    (the search keeps no other). stride 1: every shape."""
     fitted: dict = {}   # (line, position) -> fit
 
     def fit(k: int, i: int) -> None:
@@ -259,14 +260,16 @@ def _line_fits(scan: _core.ProjectedOnsetScan, responses: ShapeResponses, lines:
     for k, line in enumerate(lines):
         for i in range(0, len(line), stride):
             fit(k, i)
-    coarse = {at: f for at, f in fitted.items() if admissible(f)}
-    if stride > 1 and coarse:
-        leaders = [max(on_line, key=lambda at: coarse[at].statistic) for k in range(len(lines))
-                   if (on_line := [at for at in coarse if at[0] == k])]
-        leaders += [max(coarse, key=lambda at, j=j: coarse[at].folds[j].statistic) for j in (0, 1)]
+    while stride > 1 and (kept := {at: f for at, f in fitted.items() if admissible(f)}):
+        finer = math.ceil(stride / 3)
+        leaders = [max(on_line, key=lambda at: kept[at].statistic) for k in range(len(lines))
+                   if (on_line := [at for at in kept if at[0] == k])]
+        leaders += [max(kept, key=lambda at, j=j: kept[at].folds[j].statistic) for j in (0, 1)]
         for k, i in leaders:
-            for p in range(max(i - stride + 1, 0), min(i + stride, len(lines[k]))):
-                fit(k, p)
+            for p in range(i - (stride - 1) // finer * finer, i + stride, finer):
+                if 0 <= p < len(lines[k]):
+                    fit(k, p)
+        stride = finer
     return [fitted[at] for at in sorted(fitted)]
 
 

@@ -80,7 +80,7 @@ class ShapeResponses:
         """The whitened, projected response of the nominal channel the shape replaces."""
         if shape.nominal is None:
             return None
-        key = (id(shape.nominal), id(shape.drive))
+        key = _channel_key(shape, shape.nominal)   # by value, as the candidates' responses
         if key not in self._nominal:
             self._nominal[key] = self.project(
                 self.out.whiten(self.out.channel_response(shape.nominal, np.nan_to_num(shape.drive))))

@@ -255,7 +255,7 @@ ResidualRegression::ResidualRegression(const Model& nominal, int output, std::ve
   double output_pole = 0.0;
   int shortest_delay = std::numeric_limits<int>::max();
   for (int j = 0; j < nominal.num_inputs(); ++j) {
-    if (!nominal.has_channel(output, j)) continue;
+    if (!nominal.acts(output, j)) continue;
     output_pole = std::max(output_pole, laguerre_pole(*nominal.process[output][j]));
     shortest_delay = std::min(shortest_delay, nominal.process[output][j]->delay());
   }
@@ -263,7 +263,7 @@ ResidualRegression::ResidualRegression(const Model& nominal, int output, std::ve
     if (j < 0 || j >= nominal.num_inputs())
       throw InputError("residual regression: output '" + nominal.outputs[output] +
                        "' has no input " + std::to_string(j));
-    if (!nominal.has_channel(output, j)) {
+    if (!nominal.acts(output, j)) {
       if (config.absent_channels < 1 || output_pole == 0.0)
         throw InputError("residual regression: output '" + nominal.outputs[output] +
                          "' has no channel from input '" + nominal.inputs[j] + "'");

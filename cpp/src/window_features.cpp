@@ -13,8 +13,8 @@ std::vector<MonitoredChannel> monitored_channels(const Model& model, const Detec
   std::vector<MonitoredChannel> channels;
   for (int i = 0; i < model.num_outputs(); ++i)
     for (int j = 0; j < model.num_inputs(); ++j)
-      if (model.has_channel(i, j) || monitors_absent)
-        channels.push_back({MonitoredChannel::Kind::Process, i, j, model.has_channel(i, j)});
+      if (model.acts(i, j) || monitors_absent)
+        channels.push_back({MonitoredChannel::Kind::Process, i, j, model.acts(i, j)});
   for (int i = 0; i < model.num_outputs(); ++i)
     channels.push_back({MonitoredChannel::Kind::Noise, i, -1});
   return channels;

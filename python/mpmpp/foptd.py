@@ -52,6 +52,8 @@ def _exact(num: np.ndarray, den: np.ndarray, delay: int, ts: float) -> Foptd | N
     tau = -ts / math.log(a)
     if len(b) == 1:
         return Foptd(gain, tau, (delay - 1) * ts, True)
+    if gain == 0.0:   # a zero-gain (washout) channel is no delayed first order
+        return None
     # Fractional dead time f*Ts: b0 = K (1 - a^(1-f)), b1 = K (a^(1-f) - a) (modified z-transform).
     af = 1.0 - b[0] / gain
     if not a < af < 1.0:

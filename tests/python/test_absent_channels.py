@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+import mpmpp
 from mpmpp import StreamingDetector, _core
 from mpmpp import families as fam
 from mpmpp.detect import Detector, detect, make_config
@@ -137,3 +138,24 @@ def test_detector_file_and_stream_with_absent_channels(tmp_path, coupling_run):
     u, y = data[list(model.inputs)].to_numpy(), data[list(model.outputs)].to_numpy()
     windows = StreamingDetector(again).push_block(time_s, u, y)
     np.testing.assert_array_equal(np.array([w.scores for w in windows]), batch.scores)
+
+
+def test_a_channel_written_as_zero_is_an_absent_one(coupling_run):
+    """A model file may write a channel it means to leave out as gain 0: the detector takes it
+    as absent (a zero impulse response sizes no FIR features and its gain direction spans
+    nothing; "nominal transfer function is zero: give fir_length" before)."""
+    _, _, model, data = coupling_run
+    i, inputs = _absent_output(model)
+    (j,) = [j for j in inputs if (model.outputs[i], model.inputs[j]) not in model.channels()]
+    process = model.process_dict()
+    process[model.outputs[i]][model.inputs[j]] = mpmpp.TransferFunction([0.0], [1.0, -0.5], 3)
+    zero = mpmpp.Model(model.name, model.sample_time_s, model.inputs, model.outputs, process, model.noise_dict())
+    config = make_config("mimo", model)
+    assert _core.WindowFeatures(zero, config).channels == _core.WindowFeatures(model, config).channels
+    n = config.window_samples(model.sample_time_s)
+    y, u = data[model.outputs[i]].to_numpy()[:n], data[list(model.inputs)].to_numpy()[:n]
+    for got, expected in zip(_core.residual_regression(zero, i, inputs, config, y, u),
+                             _core.residual_regression(model, i, inputs, config, y, u)):
+        np.testing.assert_equal(got, expected)
+    paper = make_config("paper_mimo", model)
+    assert _core.WindowFeatures(zero, paper).channels == _core.WindowFeatures(model, paper).channels

@@ -1,6 +1,8 @@
 """diagnose on valid data that used to break it: models without a noise model, held-out folds
 left (nearly) empty after a late onset, user-style PI loops. The answer is a finding-free
 result or a note about the data, never an exception."""
+import warnings
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -15,6 +17,7 @@ from mpmpp.diagnose import whitening
 from mpmpp.diagnose.whitening import (AMPLIFYING, INPUT_BASIS_FUNCTIONS, NOISE_ORDER, TREND_GRID, disturbance_ar,
                                       masked_ar)
 from mpmpp.evaluate import nominal_model
+from mpmpp.foptd import foptd_parameters
 from mpmpp.simulate import simulate
 from mpmpp import families
 from mpmpp.update import update
@@ -305,3 +308,25 @@ def test_the_noise_correction_is_one_per_disturbance_regime_over_the_data_segmen
     split, _ = _corrections(free, pieces, inputs, cuts=[601])
     assert np.array_equal(split[0], split[1]) and np.array_equal(split[2], split[3])
     assert not np.allclose(split[0], split[2])
+
+
+@pytest.mark.parametrize("num", [[0.0], [0.1, -0.1]], ids=["zero", "washout"])
+def test_a_channel_of_zero_gain_is_diagnosed(num):
+    # a hand-written channel of gain 0 ("no effect") and a washout (zero DC gain, a transient):
+    # the time-constant candidates keep the DC gain by scaling, which a zero gain cannot give
+    # ("num has a non-finite coefficient" before); a zero channel is searched as one the model
+    # lacks, and its update writes the channel
+    data = loop.simulate(n=8000, seed=4, onset=4000, gain=2.0)
+    noise = loop.model().noise("y")
+    model = mpmpp.Model("zero channel", loop.TS, ["u"], ["y"], {"y": {"u": mpmpp.TransferFunction(num, [1.0, -0.9], 6)}},
+                        {"y": noise})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")   # no 0/0 on the way (check's reading divided by the gain)
+        assert foptd_parameters(model.process("y", "u"), loop.TS) is None
+        res = diagnose(model, data)
+    assert all(np.isfinite(f.confidence) for f in res.findings)
+    if num == [0.0]:
+        (top,) = [f for f in res.findings if f.effect in PROCESS_EFFECTS][:1]
+        assert (top.effect, top.input) == ("missing_coupling", "u")
+        channel = update(model, data, top.id).model.process("y", "u")
+        assert channel.dc_gain() > 0.5

@@ -41,6 +41,9 @@ struct Model {
   int num_inputs() const { return static_cast<int>(inputs.size()); }
   int num_outputs() const { return static_cast<int>(outputs.size()); }
   bool has_channel(int i, int j) const { return process[i][j].has_value(); }
+  // A channel written as zero (gain 0) says what an absent one says; the detector takes it
+  // as absent (its impulse response sizes no FIR, its directions span nothing).
+  bool acts(int i, int j) const { return has_channel(i, j) && !process[i][j]->is_zero(); }
   bool has_actuators() const {
     for (const auto& a : actuators)
       if (a) return true;

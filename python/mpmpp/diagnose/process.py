@@ -587,8 +587,10 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
                     "delay_samples": int(s.label),
                     "time_constant_s": (-sig.sample_time_s / math.log(pole)) if pole > 0 else 0.0}
         what = "input" if s.kind == "input" else "data column"
+        written_zero = s.kind == "input" and out.row[out.sig.inputs.index(s.column)] is not None
+        lacks = "its channel in the model is zero" if written_zero else "the model has no such channel"
         text = (f"{out.name} responds to {what} {s.column} (gain about {theta:.3g}, "
-                f"delay {int(s.label)} samples) but the model has no such channel, {when}")
+                f"delay {int(s.label)} samples) but {lacks}, {when}")
     change = ModelChange(output=out.name, input=s.column, channel=s.scaled(theta_fit), new_input=s.kind == "extra")
     err = held_out_error(out, fit.onset, change)
     params = s.params + (1 if fit.onset > 0 else 0)

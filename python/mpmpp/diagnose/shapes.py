@@ -57,10 +57,11 @@ class Shape:
 
 def first_order_with_time_constant(g: TransferFunction, factor: float) -> TransferFunction | None:
     """g with every real pole p moved to p^(1/factor) (time constant times factor), DC gain kept;
-    None without such poles or with a pole at 1 (an integrator has no time constant to scale)."""
+    None without such poles, with a pole at 1 (an integrator has no time constant to scale) or
+    with a DC gain of 0 (a washout channel: no gain to keep by scaling)."""
     poles = g.poles()
     if (len(poles) == 0 or np.any(np.abs(poles.imag) > 1e-9) or np.any(poles.real <= 0)
-            or np.any(poles.real >= 1.0 - 1e-12)):
+            or np.any(poles.real >= 1.0 - 1e-12) or np.asarray(g.num).sum() == 0.0):
         return None
     new_den = np.real(np.poly(poles.real ** (1.0 / factor)))
     scale = g.dc_gain() * new_den.sum() / g.num.sum()
@@ -91,7 +92,9 @@ def process_shapes(sig: Signals, i: int) -> list[Shape]:
     shapes = []
     for j, name in enumerate(sig.inputs):
         g, u = sig.rows[i][j], sig.u[:, j]
-        if g is None:
+        # a channel written as zero (gain 0) says what an absent one says: searched as one the
+        # model lacks (theta * 0 would be no candidate at all)
+        if g is None or not np.any(np.asarray(g.num) != 0.0):
             shapes += _new_channel_shapes("missing_coupling", name, "input", u)
             continue
         gain = Shape("gain", name, "input", g, g, 1.0, 1, u)

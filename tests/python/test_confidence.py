@@ -16,19 +16,19 @@ def finding(score, before, after, pb, pa, effect="gain", actuator=None):
 
 
 def test_features():
-    kinds = conf.FEATURES[5:]
+    kinds = conf.FEATURES[6:]
 
     def kind(name):
         return [1.0 if f == f"effect_{name}" else 0.0 for f in kinds]
 
     x = conf.features(finding(99.0, 1.0, 0.9, 0.5, 0.1, actuator=9.0))
-    assert x == pytest.approx([math.log(100.0), 0.1, 0.8, math.log(0.5), math.log(10.0 / 100.0), *kind("gain")])
+    assert x == pytest.approx([math.log(100.0), 0.1, 0.8, math.log(0.5), math.log(10.0 / 100.0), 0.0, *kind("gain")])
     # unknown process errors: no fall, the smallest share; a disturbance effect: no actuator rival
     y = conf.features(finding(-3.0, 1.0, 0.5, None, None, effect="noise_change", actuator=50.0))
-    assert y == pytest.approx([0.0, 0.5, 0.0, math.log(1e-3), 0.0, *kind("noise_change")])
+    assert y == pytest.approx([0.0, 0.5, 0.0, math.log(1e-3), 0.0, 0.0, *kind("noise_change")])
     # an unmodelled measured input is the same search as a missing coupling
     z = conf.features(finding(9.0, 1.0, 0.9, 0.5, 0.4, effect="unmodeled_input"))
-    assert z[5:] == pytest.approx(kind("missing_coupling"))
+    assert z[6:] == pytest.approx(kind("missing_coupling"))
 
 
 def test_actuator_rival():
@@ -43,6 +43,21 @@ def test_actuator_rival():
     contested = conf.calibrated_confidence(finding(200.0, 1.0, 0.9, 0.5, 0.1, actuator=200.0))
     clear = conf.calibrated_confidence(finding(200.0, 1.0, 0.9, 0.5, 0.1, actuator=-5.0))
     assert contested < clear
+
+
+def test_actuator_close():
+    """1 when the actuator search scores about as well as a gain, time-constant or dead-time
+    finding (the rival above ACTUATOR_CLOSE), 0 below, without a search and for other effects;
+    on the shipped map a tie at a score of 12,000 (a valve pinned beyond its band against a gain
+    cut to a quarter, tuning pi_siso seed 9) is no confident finding."""
+    close = conf.FEATURES.index("actuator_close")
+    for effect in ("gain", "time_constant", "delay"):
+        assert conf.features(finding(12000.0, 1.0, 0.9, 0.5, 0.1, effect, actuator=11900.0))[close] == 1.0
+        assert conf.features(finding(12000.0, 1.0, 0.9, 0.5, 0.1, effect, actuator=9000.0))[close] == 0.0
+        assert conf.features(finding(12000.0, 1.0, 0.9, 0.5, 0.1, effect))[close] == 0.0
+    assert conf.features(finding(12000.0, 1.0, 0.9, 0.5, 0.1, "output_drift", actuator=12000.0))[close] == 0.0
+    tie = conf.calibrated_confidence(finding(12000.0, 0.05, 0.049, 0.005, 0.001, actuator=11900.0))
+    assert tie < 0.9 < conf.calibrated_confidence(finding(12000.0, 0.05, 0.049, 0.005, 0.001, actuator=100.0))
 
 
 def test_fitted_map_reproduces_sklearn_probabilities():

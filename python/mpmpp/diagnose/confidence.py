@@ -6,7 +6,8 @@ one is how much evidence it has relative to the record, whether its update lower
 errors (a finding whose update barely lowers them is not a confident one), and how large the
 input-explained part of the error is against the disturbance, how nearly the actuator search
 explains the same record (for a gain, time-constant or dead-time finding: a gain is what an
-unmodelled valve nonlinearity looks like to a linear fit), and which effect it names (an output
+unmodelled valve nonlinearity looks like to a linear fit; and whether it explains it as well),
+and which effect it names (an output
 drift is rarely anything else). A logistic
 map of these features is fitted on the TUNING scenario families only (studies/calibrate_confidence.py writes
 confidence_map.json); its reliability is reported on the held-out families
@@ -28,8 +29,12 @@ MAP_FILE = Path(__file__).with_name("confidence_map.json")
 # A missing coupling and an unmodelled measured input are the same search (a new input channel).
 _EFFECT_KIND = {"unmodeled_input": "missing_coupling"}
 _KINDS = tuple(e for e in EFFECTS if e not in _EFFECT_KIND)
-FEATURES = ("log_score", "one_step_fall", "process_fall", "process_share", "actuator_rival") + tuple(
+FEATURES = ("log_score", "one_step_fall", "process_fall", "process_share", "actuator_rival", "actuator_close") + tuple(
     f"effect_{k}" for k in _KINDS)
+# actuator_rival above this: the actuator search explains the record about as well as the
+# finding (tuning families PI seeds 0-9, MPC seeds 0-5: such gain, time-constant and dead-time
+# findings were right 12 of 25 times, those between -0.5 and -0.1 30 of 35).
+ACTUATOR_CLOSE = -0.1
 
 
 def _ratio_fall(before, after) -> float:
@@ -53,6 +58,18 @@ def _actuator_rival(finding: dict) -> float:
     return math.log1p(max(float(rival), 0.0)) - math.log1p(max(float(finding.get("score", 0.0)), 0.0))
 
 
+def _actuator_close(finding: dict) -> float:
+    """1 where the actuator search on the finding's input scores about as well as the finding
+    (``_actuator_rival`` above ACTUATOR_CLOSE), else 0. The rival enters the logistic map
+    linearly, so on a long record the finding's own large score outweighed it: a valve pinned
+    beyond its band and a gain cut to a quarter explain such a record equally, and which one
+    is right is a coin toss whatever the score (a tie is not evidence for either)."""
+    rival = finding.get("actuator_score")
+    if finding["effect"] not in SCALED_CHANNEL_EFFECTS or rival is None:
+        return 0.0
+    return 1.0 if _actuator_rival(finding) > ACTUATOR_CLOSE else 0.0
+
+
 def features(finding: dict) -> np.ndarray:
     """The evidence of one finding (``Finding.to_dict()`` plus its ``score`` and
     ``actuator_score``)."""
@@ -64,6 +81,7 @@ def features(finding: dict) -> np.ndarray:
         _ratio_fall(pb, finding.get("process_error_after")),
         max(share, math.log(1e-3)),
         _actuator_rival(finding),
+        _actuator_close(finding),
         *(1.0 if _EFFECT_KIND.get(finding["effect"], finding["effect"]) == k else 0.0 for k in _KINDS),
     ])
 

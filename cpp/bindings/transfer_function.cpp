@@ -43,6 +43,7 @@ void bind_transfer_function(py::module_& m) {
       .def("zeros", &TransferFunction::zeros)
       .def("is_stable", &TransferFunction::is_stable)
       .def("is_minimum_phase", &TransferFunction::is_minimum_phase)
+      .def("is_zero", &TransferFunction::is_zero, "numerator identically zero")
       .def("series", &TransferFunction::series)
       .def("parallel", &TransferFunction::parallel)
       .def("inverse", &TransferFunction::inverse)

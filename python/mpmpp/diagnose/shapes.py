@@ -94,7 +94,7 @@ def process_shapes(sig: Signals, i: int) -> list[Shape]:
         g, u = sig.rows[i][j], sig.u[:, j]
         # a channel written as zero (gain 0) says what an absent one says: searched as one the
         # model lacks (theta * 0 would be no candidate at all)
-        if g is None or not np.any(np.asarray(g.num) != 0.0):
+        if g is None or g.is_zero():
             shapes += _new_channel_shapes("missing_coupling", name, "input", u)
             continue
         gain = Shape("gain", name, "input", g, g, 1.0, 1, u)

@@ -54,9 +54,10 @@ UNIT_CIRCLE_TOLERANCE = 1e-9
 
 def require_simulable_channels(model, rows: int) -> None:
     """ValueError naming the first process channel an output-error analysis cannot run on
-    these data: a pole outside the unit circle (simulated from the inputs, the output diverges)
-    or a dead time of the record's length or more (it never reaches the data; a dead time
-    written in seconds where the file counts samples looks like this)."""
+    these data: a pole outside the unit circle (simulated from the inputs, the output diverges),
+    a gain beyond floating point (coefficients near 1e308: the simulated output overflows) or a
+    dead time of the record's length or more (it never reaches the data; a dead time written in
+    seconds where the file counts samples looks like this)."""
     for o in model.outputs:
         for i in model.inputs:
             g = model.process(o, i)
@@ -71,6 +72,9 @@ def require_simulable_channels(model, rows: int) -> None:
                 raise ValueError(f"model: process.{o}.{i}.delay: {g.delay} samples ({g.delay * model.sample_time_s:g} s) "
                                  f"is as long as the record or longer ({rows} rows); the model file counts the delay "
                                  "in samples")
+            if not np.all(np.isfinite(g.step(2 * len(g.den) + g.delay + len(g.num)))):
+                raise ValueError(f"model: process.{o}.{i}: its step response is not finite in floating point "
+                                 f"(num {[float(x) for x in g.num]}, den {[float(x) for x in g.den]}): check the channel's units")
 
 
 def extract(model, data, reference=None, min_segment: int = 200) -> Signals:

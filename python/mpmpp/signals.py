@@ -40,6 +40,11 @@ class Signals:
     def seconds_to_index(self, seconds: float) -> int:
         return int(np.searchsorted(self.time_s, seconds, side="left"))
 
+    @property
+    def samples_per_hour(self) -> float:
+        """Samples in an hour (the unit of a drift's ramp)."""
+        return 3600.0 / self.sample_time_s
+
 
 def model_rows(model) -> tuple[list, list]:
     """Per output, the list of its channels (TransferFunction or None) and its noise model."""

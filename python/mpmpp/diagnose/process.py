@@ -498,7 +498,7 @@ def _one_step_change(out: OutputResidual, fit: Fit) -> np.ndarray:
     s = fit.shape
     n = len(out.e)
     if s.kind == "drift":
-        change = fit.theta * drift_drive(n, int(s.label), s.drift_form, 3600.0 / out.sig.sample_time_s)
+        change = fit.theta * drift_drive(n, int(s.label), s.drift_form, out.sig.samples_per_hour)
     else:
         drive = np.nan_to_num(s.drive)
         change = fit.theta * out.channel_response(s.shape, drive) + fit.step

@@ -42,7 +42,7 @@ class ShapeResponses:
         self._shapes: dict = {}
         self._nominal: dict = {}
         self._weight: dict = {}
-        self._drift_base: dict = {}
+        self._piece_drifts: dict = {}
         self._delay_families: dict = {}
         self._segment_starts = {a for a, _ in out.sig.segments}
         # a constant output error, whitened: the nuisance's level column (disturbance_drives' first)
@@ -144,14 +144,14 @@ class ShapeResponses:
         week of 3x3 data in bench/diagnose_speed.py, 0.11 s so)."""
         out = self.out
         psi = np.zeros(len(out.r))
-        hour = 3600.0 / out.sig.sample_time_s
         for p, (a, b) in enumerate(out.pieces):
             if b <= onset:
                 continue
             if a <= onset:
                 psi[onset:b] = self._piece_drift(p, form)[: b - onset]
             elif form == "ramp":
-                psi[a:b] = self._piece_drift(p, "ramp") + ((a - onset) / hour) * self._piece_drift(p, "constant")
+                level = (a - onset) / out.sig.samples_per_hour
+                psi[a:b] = self._piece_drift(p, "ramp") + level * self._piece_drift(p, "constant")
             else:
                 psi[a:b] = self._piece_drift(p, "constant")
         return psi
@@ -159,12 +159,11 @@ class ShapeResponses:
     def _piece_drift(self, p: int, form: str) -> np.ndarray:
         """Piece p's whitened response to a ramp or step starting at its first sample, or to a
         constant 1 (once per piece)."""
-        if (p, form) not in self._drift_base:
+        if (p, form) not in self._piece_drifts:
             a, b = self.out.pieces[p]
-            drive = (np.ones(b - a) if form == "constant"
-                     else drift_drive(b - a, 0, form, 3600.0 / self.out.sig.sample_time_s))
-            self._drift_base[p, form] = self.out.whiten_piece(p, drive)
-        return self._drift_base[p, form]
+            drive = np.ones(b - a) if form == "constant" else drift_drive(b - a, 0, form, self.out.sig.samples_per_hour)
+            self._piece_drifts[p, form] = self.out.whiten_piece(p, drive)
+        return self._piece_drifts[p, form]
 
     def weight(self, shape: Shape) -> np.ndarray:
         """The output's weight where the shape's drive is known (model inputs and drifts are

@@ -310,7 +310,7 @@ def disturbance_drives(out: OutputResidual, onsets: list[int]) -> list[np.ndarra
     segment: its channels are filtered from rest at each segment's start, and an input away
     from the operating point the record's mean guesses makes the integrator's output error
     ramp (any offset of a level loop's OP from its balance), which is no model error."""
-    n, hour = len(out.e), 3600.0 / out.sig.sample_time_s
+    n, hour = len(out.e), out.sig.samples_per_hour
     t = np.arange(n, dtype=float)
     drives = [np.ones(n)] + [np.where(t >= k, d, 0.0) for k in onsets for d in (np.ones(n), (t - k) / hour)]
     if row_integrates(out.row):

@@ -24,9 +24,9 @@ from .reference_refit import refitted_before
 from .refitted_noise import RefittedNoise
 from .result import DiagnoseResult, Finding, InsufficientData
 from .spikes import SPIKE_SIGMAS, output_spikes
+from .split_rivals import changes_the_split_absorbed
 from .valve import valve_findings
-from .whitening import (AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual,
-                        without_split)
+from .whitening import AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual
 
 
 SEGMENT_S = 3600.0           # preferred shortest stretch a change is fitted on
@@ -227,8 +227,8 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
             except InsufficientData as exc:
                 notes.append(str(exc))
                 continue
-            redo = _changes_the_split_absorbed(out, verdict, first_onset, min_segment, step, logn, min_effect,
-                                               actions_of(out))
+            redo = changes_the_split_absorbed(out, verdict, first_onset, min_segment, step, logn, min_effect,
+                                              actions_of(out))
             if redo:
                 found += redo
                 continue
@@ -302,35 +302,6 @@ def _with_later_changes(first: DiagnoseResult, model, data, train_end_s: float |
         first, findings=found, notes=notes,
         residuals_after={f.id: residuals_after[id(f)] for f in found if residuals_after[id(f)] is not None},
         process_parts={f.id: process_parts[id(f)] for f in found if process_parts[id(f)] is not None})
-
-
-def _changes_the_split_absorbed(out, verdict, *search) -> list[Finding]:
-    """The process findings that replace a disturbance verdict on output ``out`` (``search``:
-    the arguments of ``process_findings`` after the residual), or none.
-
-    The disturbance split found where the one-step error changed, and each side's AR correction
-    absorbed what a process change made predictable. So when the split is significant, the
-    candidates are scored again with the disturbance unchanged (one correction throughout,
-    ``without_split``) and replace the verdict when the inputs explain the change (the input
-    filter's test) or, for a ``noise_change``, when the best of them scores higher than it: both
-    scores are a held-out log-likelihood gain less a charge per fitted parameter, so the
-    explanation the held-out blocks favour wins. Without external excitation a small dead-time
-    change and a new disturbance colour are close to each other after the onset (the input is a
-    filter of past errors, docs/diagnose.md "Disturbance or process"), and the split's new AR
-    takes the dead time in. Tuning families, seeds 0-19, the 177 runs with a dated
-    ``noise_change`` (160 controls): dead-time changes named 3 -> 6 of 17 change runs, controls
-    with a process finding 0 -> 0; the controls' best candidates reach at most 0.71 of the noise
-    change's score, the changes gained 2.1-6.7 times it. Taking the candidates whatever the scores
-    (as tried on 2026-11-29), 35 of the 160 controls got a process finding."""
-    if not out.split_significant:
-        return []
-    absorbed = verdict.finding is not None and verdict.finding.effect == "noise_change"
-    if not (verdict.input_driven or absorbed):
-        return []
-    redo = process_findings(without_split(out), *search)
-    if redo and not verdict.input_driven and max(f.score for f in redo) <= verdict.finding.score:
-        return []
-    return redo
 
 
 LINEAR_CHANNEL_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input")

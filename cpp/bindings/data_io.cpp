@@ -10,6 +10,7 @@ namespace py = pybind11;
 namespace mpmpp::bindings {
 
 void bind_data_io(py::module_& m) {
+  m.attr("LARGEST_VALUE") = kLargestValue;
   py::enum_<TimeKind>(m, "TimeKind", "How a data file writes its time")
       .value("seconds", TimeKind::Seconds)
       .value("epoch_seconds", TimeKind::EpochSeconds)

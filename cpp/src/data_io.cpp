@@ -433,9 +433,12 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
   };
   std::vector<CellCounts> counts(width);
   std::vector<std::vector<std::string>> text_cells(width);
-  auto not_a_number = [&](std::size_t j, std::size_t row, const std::string& cell) {
+  auto cell_error = [&](std::size_t j, std::size_t row, const std::string& cell, const char* what) {
     return InputError(where + row_name(row) + ", column " + detail::printable(d.columns[j]) + ": " +
-                      quoted(cell) + " is not a number");
+                      quoted(cell) + what);
+  };
+  auto not_a_number = [&](std::size_t j, std::size_t row, const std::string& cell) {
+    return cell_error(j, row, cell, " is not a number");
   };
   std::vector<std::string> fields;
   for (std::size_t k = 0; k < n; ++k) {
@@ -458,6 +461,10 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
       if (empty) {
         ++d.missing[j];
       } else if (const auto v = parse_number(cell)) {
+        if (std::abs(*v) >= kLargestValue)
+          throw cell_error(j, row, cell,
+                           " is too large to compute with (magnitude 1e100 or more: its squares "
+                           "overflow); check the column's units");
         ++count.numbers;
         x = *v;
       } else if (is_status_word(cell)) {

@@ -25,7 +25,8 @@ from . import _core
 from ._core import DetectorConfig
 from .disturbance import WHITENING_FLOOR, describe, disturbance_orders
 from .preset_timing import TIMING_FIELDS, fit_to_record, resolve_timing, span_text
-from .held_values import frozen_columns, frozen_note, require_moving_outputs, require_recorded_columns
+from .held_values import (frozen_columns, frozen_note, require_computable, require_moving_outputs,
+                          require_recorded_columns)
 from .signals import through_actuators
 from .timeaxis import seconds_of
 
@@ -105,10 +106,12 @@ def _arrays(model, data: pd.DataFrame):
     if missing:
         raise ValueError(f"data: column '{missing[0]}' of the model is missing")
     as_float = lambda cols: np.ascontiguousarray(data[cols].to_numpy(dtype=float))  # noqa: E731
-    u = np.ascontiguousarray(through_actuators(model, as_float(list(model.inputs))))
-    y = as_float(list(model.outputs))
+    time_s = np.ascontiguousarray(seconds_of(data))
+    raw_u, y = as_float(list(model.inputs)), as_float(list(model.outputs))
+    require_computable([*model.inputs, *model.outputs], np.column_stack([raw_u, y]), time_s)
+    u = np.ascontiguousarray(through_actuators(model, raw_u))
     require_moving_outputs(model.outputs, y)
-    return np.ascontiguousarray(seconds_of(data)), u, y
+    return time_s, u, y
 
 
 def _channel_dicts(model, core_channels):

@@ -1,12 +1,16 @@
 """A model column that stops moving: frozen for the whole record (a tag the historian stopped
 updating, a stuck transmitter or valve) or held at one value for an hour or more (at a limit, in
 manual). Nothing about a channel through it can be learnt where it does not move, and every
-analysis says so rather than reading the model as right (docs/diagnose.md "Frozen inputs")."""
+analysis says so rather than reading the model as right (docs/diagnose.md "Frozen inputs").
+Beside it, the columns no analysis can use at all: never recorded, or holding a value beyond
+what floating point computes with."""
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from ._core import LARGEST_VALUE
 
 if TYPE_CHECKING:
     from .signals import Signals
@@ -31,6 +35,21 @@ def require_recorded_columns(inputs, u: np.ndarray, outputs, y: np.ndarray) -> N
             if len(column) and not np.isfinite(column).any():
                 raise ValueError(f"data: column '{name}' (model {kind}) has no values: all {len(column)} rows "
                                  "are missing")
+
+
+def require_computable(names, columns: np.ndarray, time_s: np.ndarray | None = None) -> None:
+    """ValueError naming the first column (of ``columns``, N x len(names)) with a value of
+    magnitude LARGEST_VALUE or more, infinities included, and where (at ``time_s``, or the row).
+    The file reader refuses such a cell (data_io.hpp kLargestValue); this is the same rule for
+    arrays and data frames, where an infinity would otherwise pass for a missing value."""
+    for name, column in zip(names, np.asarray(columns, dtype=float).T):
+        beyond = np.flatnonzero(np.abs(column) >= LARGEST_VALUE)
+        if len(beyond):
+            k = beyond[0]
+            where = f"row {k}" if time_s is None else f"t={time_s[k]:g} s"
+            raise ValueError(f"data: column '{name}' holds {column[k]:.4g} at {where}: a value of magnitude "
+                             f"{LARGEST_VALUE:g} or more cannot be computed with (its squares overflow); check "
+                             "the column's units")
 
 
 def require_moving_outputs(names, y: np.ndarray) -> None:

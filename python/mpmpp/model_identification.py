@@ -59,7 +59,7 @@ from .compare import _finite
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import MIN_ROWS, require_rows
-from .held_values import frozen
+from .held_values import frozen, require_computable
 from .signals import bridge_lost_outputs, complete_runs
 from .stretches import Stretches
 from .timeaxis import sample_grid, seconds_of
@@ -254,6 +254,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
         if col not in data.columns:
             raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
     raw = data[inputs + outputs].to_numpy(dtype=float, copy=True)
+    require_computable(inputs + outputs, raw, seconds_of(data))
     ts, gaps = sample_grid(seconds_of(data), data.attrs.get("segment_starts", ()))
     require_rows(len(raw), ts)
     # A few lost output samples are interpolated rather than cutting the record into stretches,

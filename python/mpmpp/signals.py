@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .held_values import require_moving_outputs, require_recorded_columns
+from .held_values import require_computable, require_moving_outputs, require_recorded_columns
 from .timeaxis import seconds_of
 
 
@@ -98,6 +98,7 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     raw_y = data[outputs].to_numpy(dtype=float)
     raw_z = data[extras].to_numpy(dtype=float) if extras else np.zeros((len(data), 0))
     require_recorded_columns(inputs, raw_u, outputs, raw_y)
+    require_computable([*inputs, *outputs, *extras], np.column_stack([raw_u, raw_y, raw_z]), time_s)
     require_moving_outputs(outputs, raw_y)
     require_simulable_channels(model, len(data))
     ref = np.ones(len(data), bool) if reference is None else np.asarray(reference, bool)

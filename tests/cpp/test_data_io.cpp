@@ -61,6 +61,12 @@ TEST(DataIo, HistorianStatusWordsInANumericColumnAreMissingAndCounted) {
             "d.csv: row 4, column u: \"12,5\" is not a number");
   EXPECT_EQ(error_of("time,u,y\n0,1,2\n5,2,2\n10,-inf,2\n"),
             "d.csv: row 4, column u: \"-inf\" is not a number");
+  // A number too large to square and sum is refused where it is written, not met later as an
+  // infinity inside a fit; the largest value allowed reads as written.
+  EXPECT_EQ(error_of("time,u,y\n0,1,2\n5,2,-1e100\n"),
+            "d.csv: row 3, column y: \"-1e100\" is too large to compute with (magnitude 1e100 or "
+            "more: its squares overflow); check the column's units");
+  EXPECT_DOUBLE_EQ(mpmpp::parse_csv("time,u\n0,9.9e99\n", "d.csv").values(0, 0), 9.9e99);
 }
 
 TEST(DataIo, ErrorsNameFileRowAndColumn) {

@@ -76,6 +76,8 @@ CASES = [
     ("bad timestamp", None, "time,u,y\nyesterday,1,2\n", 'row 2, column time: "yesterday" is neither'),
     ("header only", None, "time,u,y\n", "no data rows"),
     ("infinite value", None, "time,u,y\n0,1,inf\n", 'row 2, column y: "inf" is not a number'),
+    ("value too large to compute with", None, "time,u,y\n0,1,2\n5,3e300,2\n",
+     'row 3, column u: "3e300" is too large to compute with'),
 ]
 
 

@@ -26,6 +26,11 @@ namespace mpmpp {
 // Unix epoch seconds: no plant record is 31 years long in seconds from its start.
 constexpr double kEpochThresholdS = 1e9;
 
+// A value of this magnitude or more cannot be computed with: its square summed over a record
+// overflows double precision (1e100 squared is 1e200). No measurement in engineering units
+// comes near it; the fits met the infinities far from the cause ("SVD did not converge").
+constexpr double kLargestValue = 1e100;
+
 // How the file wrote its time; timestamps and epoch seconds are calendar time.
 enum class TimeKind { Seconds, EpochSeconds, Timestamp, LocalTimestamp };
 

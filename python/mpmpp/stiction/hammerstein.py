@@ -35,6 +35,7 @@ from math import exp
 import numpy as np
 
 from .._core import ActuatorNonlinearity, StictionLaw, actuator_positions
+from ..held_values import require_computable
 from ..signals import longest
 from .oscillation import is_oscillating
 from .record_quality import NOTABLE_SHARE, rate_limited_share
@@ -256,6 +257,7 @@ def fit_valve(op, pv, stretches=None, first_lag: int = 0) -> HammersteinResult:
     u_in, y_in = u[inside], y[inside]
     if not (np.isfinite(u_in).all() and np.isfinite(y_in).all()):
         raise ValueError("OP and PV must not contain missing or infinite values")
+    require_computable(("OP", "PV"), np.column_stack([u_in, y_in]))
     if np.ptp(u_in) == 0 or np.ptp(y_in) == 0:
         raise ValueError("OP or PV is constant: the record does not excite the valve")
     y_s = (y - y_in.mean()) / np.std(y_in)

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "mpmpp/error.hpp"
+#include "mpmpp/limits.hpp"
 #include "text_file.hpp"
 
 namespace mpmpp {
@@ -69,6 +70,9 @@ double finite_number(const json& j, const std::string& path) {
   expect_type(j, j.is_number(), "a number", path);
   const double x = j.get<double>();
   if (!std::isfinite(x)) fail(path, "must be finite");
+  if (std::abs(x) >= kLargestValue)
+    fail(path, "too large to compute with, got " + format_number(x) +
+                   " (magnitude 1e100 or more: its squares overflow); check the units");
   return x;
 }
 

@@ -64,6 +64,9 @@ TEST(ModelIo, ErrorsNameFileAndPath) {
   EXPECT_EQ(error_of(with("\"u2\": {\"gain\"", "\"u3\": {\"gain\""))
                 .rfind("m.json: process.y.u3: unknown input \"u3\"", 0),
             0u);
+  EXPECT_EQ(error_of(with("\"gain\": 1.5", "\"gain\": -2e150")),
+            "m.json: process.y.u2.gain: too large to compute with, got -2e+150 (magnitude 1e100 or "
+            "more: its squares overflow); check the units");
   EXPECT_EQ(error_of(""), "m.json: file is empty");
   EXPECT_EQ(error_of("{\"a\": 1, \"a\": 2}"), "m.json: a: duplicate key");
   EXPECT_EQ(error_of("not json").rfind("m.json: not valid JSON: parse error at line 1", 0), 0u);

@@ -37,6 +37,8 @@ CASES = [
     ("missing den", changed(lambda m: channel(m).pop("den")), None, 'process.y.u: missing field "den"'),
     ("missing sample time", changed(lambda m: m.pop("sample_time_s")), None, 'missing field "sample_time_s"'),
     ("num not an array", changed(lambda m: channel(m).update(num="0.1")), None, "process.y.u.num: must be an array"),
+    ("coefficient too large", changed(lambda m: channel(m).update(num=[3e300])), None,
+     "process.y.u.num[0]: too large to compute with, got 3e+300"),
     ("den[0] zero", changed(lambda m: channel(m).update(den=[0.0, 1.0])), None, "process.y.u: den[0] must be non-zero"),
     ("negative delay", changed(lambda m: channel(m).update(delay=-1)), None, "process.y.u.delay: must be >= 0"),
     ("fractional delay", changed(lambda m: channel(m).update(delay=2.5)), None, "process.y.u.delay: must be an integer"),

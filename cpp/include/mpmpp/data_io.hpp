@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "mpmpp/error.hpp"
+#include "mpmpp/limits.hpp"
 #include "mpmpp/model.hpp"
 
 namespace mpmpp {
@@ -25,11 +26,6 @@ namespace mpmpp {
 // A numeric time column starting at or after 2001-09-09T01:46:40Z (1e9 s) holds
 // Unix epoch seconds: no plant record is 31 years long in seconds from its start.
 constexpr double kEpochThresholdS = 1e9;
-
-// A value of this magnitude or more cannot be computed with: its square summed over a record
-// overflows double precision (1e100 squared is 1e200). No measurement in engineering units
-// comes near it; the fits met the infinities far from the cause ("SVD did not converge").
-constexpr double kLargestValue = 1e100;
 
 // How the file wrote its time; timestamps and epoch seconds are calendar time.
 enum class TimeKind { Seconds, EpochSeconds, Timestamp, LocalTimestamp };

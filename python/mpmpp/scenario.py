@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from ._core import LARGEST_VALUE
 
 MODEL_KEYS = {"name", "sample_time_s", "inputs", "outputs", "process", "noise", "actuators"}
 MAX_SAMPLES = 100_000_000  # ~16 years at 5 s
@@ -76,6 +77,8 @@ def _num(value, where: str, *, minimum: float | None = None, positive: bool = Fa
     x = float(value)
     if math.isnan(x) or (math.isinf(x) and not allow_inf):
         _fail(where, "must be finite")
+    if math.isfinite(x) and abs(x) >= LARGEST_VALUE:   # the data file it writes could not be read
+        _fail(where, f"too large to compute with, got {x:g} (magnitude {LARGEST_VALUE:g} or more)")
     if positive and not x > 0:
         _fail(where, "must be > 0")
     if minimum is not None and x < minimum:

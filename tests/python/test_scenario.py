@@ -57,6 +57,7 @@ def mutate(path, value):
     (["duration_s"], -1, "duration_s: must be > 0"),
     (["trhuth"], {}, "trhuth: unknown key"),
     (["truth", "sigma", "dry_weight"], "0.05", "truth.sigma.dry_weight: must be a number"),
+    (["truth", "sigma", "dry_weight"], 1e200, "truth.sigma.dry_weight: too large to compute with, got 1e+200"),
     (["truth", "sigma", "wet_weight"], 0.1, "truth.sigma.wet_weight: unknown key"),
     (["controller", "mv", "stock_flow", "max_move"], 0, "controller.mv.stock_flow.max_move: must be > 0"),
     (["controller", "mv", "stock_flow", "target"], 5000, "controller.mv.stock_flow.target: must lie within"),

@@ -10,8 +10,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._core import LARGEST_VALUE
-
 if TYPE_CHECKING:
     from .signals import Signals
 
@@ -42,6 +40,8 @@ def require_computable(names, columns: np.ndarray, time_s: np.ndarray | None = N
     magnitude LARGEST_VALUE or more, infinities included, and where (at ``time_s``, or the row).
     The file reader refuses such a cell (data_io.hpp kLargestValue); this is the same rule for
     arrays and data frames, where an infinity would otherwise pass for a missing value."""
+    from ._core import LARGEST_VALUE   # here: `mpmpp check -h` loads this module, not the engine
+
     for name, column in zip(names, np.asarray(columns, dtype=float).T):
         beyond = np.flatnonzero(np.abs(column) >= LARGEST_VALUE)
         if len(beyond):

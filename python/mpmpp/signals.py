@@ -60,9 +60,12 @@ UNIT_CIRCLE_TOLERANCE = 1e-9
 def require_simulable_channels(model, rows: int) -> None:
     """ValueError naming the first process channel an output-error analysis cannot run on
     these data: a pole outside the unit circle (simulated from the inputs, the output diverges),
-    a gain beyond floating point (coefficients near 1e308: the simulated output overflows) or a
+    a gain beyond floating point (a step response of magnitude LARGEST_VALUE or more: the fits
+    overflow; a model file's numbers are bounded on reading, a Model built in Python is not) or a
     dead time of the record's length or more (it never reaches the data; a dead time written in
     seconds where the file counts samples looks like this)."""
+    from ._core import LARGEST_VALUE   # here: `mpmpp check -h` loads this module, not the engine
+
     for o in model.outputs:
         for i in model.inputs:
             g = model.process(o, i)
@@ -77,8 +80,10 @@ def require_simulable_channels(model, rows: int) -> None:
                 raise ValueError(f"model: process.{o}.{i}.delay: {g.delay} samples ({g.delay * model.sample_time_s:g} s) "
                                  f"is as long as the record or longer ({rows} rows); the model file counts the delay "
                                  "in samples")
-            if not np.all(np.isfinite(g.step(2 * len(g.den) + g.delay + len(g.num)))):
-                raise ValueError(f"model: process.{o}.{i}: its step response is not finite in floating point "
+            step = g.step(2 * len(g.den) + g.delay + len(g.num))
+            if not (np.all(np.isfinite(step)) and np.abs(step).max() < LARGEST_VALUE):
+                raise ValueError(f"model: process.{o}.{i}: its step response reaches magnitude {LARGEST_VALUE:g} "
+                                 "or more, which floating point cannot compute with "
                                  f"(num {[float(x) for x in g.num]}, den {[float(x) for x in g.den]}): check the channel's units")
 
 

@@ -68,14 +68,15 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
 def test_a_model_the_data_cannot_check_is_named_in_one_line(tmp_path, capsys):
     """An unstable channel (its simulated output diverges: diagnose stopped with 'SVD did not
     converge'), a gain that overflows (diagnose: 'num has a non-finite coefficient' after
-    RuntimeWarnings) and a dead time longer than the record (compare stopped with a NumPy
-    broadcast error) are named by their field, exit 2."""
+    RuntimeWarnings; now refused on reading the file, and for a Model built in Python by the
+    analysis) and a dead time longer than the record (compare stopped with a NumPy broadcast
+    error) are named by their field, exit 2."""
     data = str(data_path(GAIN_CHANGE))
     doc = json.loads(model_path(GAIN_CHANGE).read_text())
     (o, row), = doc["process"].items()
     (i, channel), = row.items()
     for field, value, message in (("den", [1.0, -1.5], f"process.{o}.{i}: unstable, a pole has |p| = 1.5 > 1"),
-                                  ("num", [1e308], f"process.{o}.{i}: its step response is not finite"),
+                                  ("num", [1e308], f"process.{o}.{i}.num[0]: too large to compute with"),
                                   ("delay", 100000, f"process.{o}.{i}.delay: 100000 samples")):
         path = tmp_path / f"{field}.json"
         path.write_text(json.dumps({**doc, "process": {o: {i: {**channel, field: value}}}}))

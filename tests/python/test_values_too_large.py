@@ -62,3 +62,13 @@ def test_the_bound_is_the_readers():
     require_computable(["u"], np.array([[9.9e99], [-9.9e99], [np.nan]]))   # allowed, missing allowed
     with pytest.raises(ValueError, match="column 'u' holds 1e\\+100 at row 1"):
         require_computable(["u"], np.array([[0.0], [1e100]]))
+
+
+def test_a_model_built_in_python_with_a_channel_beyond_the_bound_is_named():
+    # a model file's numbers are bounded on reading; one built in Python meets the same bound
+    # where its channel is simulated (signals.require_simulable_channels)
+    data = loop.simulate(n=3000, seed=1)
+    big = mpmpp.Model("m", loop.TS, ["u"], ["y"], {"y": {"u": mpmpp.TransferFunction([3e99], [1.0, -0.9], 1)}})
+    for analysis in (diagnose, mpmpp.compare):
+        with pytest.raises(ValueError, match=r"process\.y\.u: its step response reaches magnitude 1e\+100 or more"):
+            analysis(big, data)

@@ -54,6 +54,9 @@ MAX_FINDINGS_PER_OUTPUT = 3
 # were valve saturations the actuator candidates could not tell from a dead channel, so the
 # finding says so (and pipeline._switches_the_input_off prefers an actuator finding beside it).
 DEAD_CHANNEL = 0.25
+# A gain this many times off (or its inverse) from the record's start reads as a unit error
+# in the hand-written model (kg/h for t/h is 1000, % for a fraction 100) more than as a change.
+UNIT_FACTOR = 10.0
 # A changed channel of the opposite sign needs overwhelming evidence (|theta| / se): in closed
 # loop the controller's feedback path has the inverse sign and fits readily as a "process".
 SIGN_FLIP_Z = 5.0
@@ -548,6 +551,12 @@ def _time_constant_s(g: TransferFunction, ts: float) -> float:
     return -ts / math.log(p) if 0.0 < p < 1.0 else 0.0
 
 
+def _ratio_text(theta: float) -> str:
+    """A gain ratio as a user reads it: two decimals near 1, three significant digits beyond
+    (a model 1000x off printed as 0.00x said nothing)."""
+    return f"{theta:.2f}" if 0.01 <= abs(theta) < 100.0 else f"{theta:.3g}"
+
+
 def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
     sig = out.sig
     s = fit.shape
@@ -560,7 +569,7 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
     theta_fit = fit.folds[0].theta
     if s.effect == "gain":
         estimate = {"gain_ratio": theta, "ci95": ci}
-        text = f"gain of {name} about {theta:.2f}x the model's {when}"
+        text = f"gain of {name} about {_ratio_text(theta)}x the model's {when}"
         if s.level_step:
             # its size is not reported: a disturbance step the search placed near the onset shares it
             text += (f", with a step of {out.name}'s level at the onset (the gain changed about another "
@@ -569,6 +578,9 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
         if abs(theta) < DEAD_CHANNEL:
             text += (f"; {s.column} has all but stopped acting on {out.name}, as a valve stuck or pinned at a "
                      f"limit of its travel does (compare the valve's position with the controller output)")
+        if fit.onset == 0 and not 1.0 / UNIT_FACTOR < abs(theta) < UNIT_FACTOR:
+            text += ("; a model off by such a factor from the start is often written in other units (kg/h for "
+                     "t/h, % for a fraction): check the channel's units")
     elif s.effect == "time_constant":
         t_old = _time_constant_s(s.nominal, sig.sample_time_s)
         estimate = {"time_constant_ratio": s.label, "time_constant_s": t_old * s.label,

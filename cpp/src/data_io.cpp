@@ -368,6 +368,10 @@ void check_parts(const Eigen::VectorXd& time_s, const std::vector<std::string>& 
       if (std::isinf(values(k, c)))
         throw InputError("column " + columns[c] + ": infinite value at sample " +
                          std::to_string(k));
+      else if (std::abs(values(k, c)) >= kLargestValue)  // the reader would refuse the file
+        throw InputError("column " + columns[c] + ": value " + format_number(values(k, c)) +
+                         " at sample " + std::to_string(k) +
+                         " is too large to compute with (magnitude 1e100 or more)");
 }
 
 }  // namespace

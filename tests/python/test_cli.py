@@ -29,6 +29,16 @@ def test_help_everywhere(command, capsys):
     assert "usage: mpmpp" in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("argv, prog", [(["simulate", "s.json", "--force"], "mpmpp simulate"),
+                                        (["--force"], "mpmpp")])
+def test_an_unknown_option_is_named_by_its_command(argv, prog, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(argv)
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"usage: {prog}") and f"{prog}: error: unrecognized arguments: --force" in err
+
+
 def test_check_json_summary(capsys):
     model, data = model_path(GAIN_CHANGE), data_path(GAIN_CHANGE)
     assert cli.main(["check", str(model), str(data), "--json"]) == 0

@@ -389,7 +389,8 @@ Detector train_detector(const Model& model, const DetectorConfig& config,
     throw InputError("train_end_s: the training period holds " + std::to_string(train.size()) +
                      " usable windows (" + std::to_string(in_period) + " in all, window " +
                      format_seconds(config.window_s) + " s, step " + format_seconds(config.step_s) +
-                     " s); need at least 3");
+                     " s); need at least 3 (a window is skipped for a missing value or a time gap "
+                     "in it, or a degenerate fit)");
   const double ratio = mean_variance_ratio(firsts, config.window_samples(model.sample_time_s));
   std::vector<ChannelScorer> scorers;
   scorers.reserve(channels.size());

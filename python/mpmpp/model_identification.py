@@ -60,7 +60,7 @@ from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import MIN_ROWS, require_rows
 from .held_values import frozen, require_computable
-from .signals import bridge_lost_outputs, complete_runs
+from .signals import bridge_lost_outputs, complete_runs, missing_counts
 from .stretches import Stretches
 from .timeaxis import sample_grid, seconds_of
 
@@ -277,9 +277,8 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     n = sum(b - a for a, b in runs)
     if n < MIN_ROWS:
         # a long record (require_rows passed) with scattered missing values is not "too short"
-        missing = ", ".join(f"{col} {k}" for col, k in zip(inputs + outputs, np.sum(~np.isfinite(raw), axis=0)) if k)
         raise ValueError(f"data: the stretches of at least {shortest} rows without missing values or time gaps "
-                         f"hold {n} of {len(raw)} rows, need {MIN_ROWS} (missing values: {missing or 'none'})")
+                         f"hold {n} of {len(raw)} rows, need {MIN_ROWS} ({missing_counts(inputs + outputs, raw)})")
     rows = np.concatenate([np.arange(a, b) for a, b in runs])
     st = Stretches([b - a for a, b in runs])
     raw = raw[rows]

@@ -113,7 +113,10 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     gaps = np.flatnonzero(np.diff(time_s) > 1.5 * float(model.sample_time_s)) + 1
     raw_y, bridged = bridge_lost_outputs(raw_y, raw_u, gaps)
     valid = np.all(np.isfinite(np.column_stack([raw_u, raw_y])), axis=1)
-    segments, skipped = complete_segments(valid, min_segment, gaps)
+    try:
+        segments, skipped = complete_segments(valid, min_segment, gaps)
+    except ValueError as exc:
+        raise ValueError(f"{exc} ({missing_counts([*inputs, *outputs], np.column_stack([raw_u, raw_y]))})") from None
     raw_u = through_actuators(model, raw_u, segments)
     both = np.column_stack([raw_u, raw_y, raw_z])
     means = np.nanmean(both[ref], axis=0) if ref.any() else np.nanmean(both, axis=0)
@@ -222,6 +225,13 @@ def longest(runs) -> tuple[int, int]:
 def longest_run(valid: np.ndarray, starts=()) -> tuple[int, int]:
     """The longest of ``complete_runs`` ((0, 0) when there is none)."""
     return longest(complete_runs(valid, starts))
+
+
+def missing_counts(names, columns: np.ndarray) -> str:
+    """"missing values: y 1152, u 3" (or "none") for a message on a record without a complete
+    stretch long enough: scattered missing values, not a short record, are then the cause."""
+    counts = np.sum(~np.isfinite(np.asarray(columns, dtype=float)), axis=0)
+    return "missing values: " + (", ".join(f"{name} {k}" for name, k in zip(names, counts) if k) or "none")
 
 
 def complete_segments(valid: np.ndarray, min_segment: int, starts=()) -> tuple[list[tuple[int, int]], int]:

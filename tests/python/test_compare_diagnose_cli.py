@@ -104,6 +104,29 @@ def test_an_empty_model_column_is_named_in_one_line(tmp_path, capsys):
         assert "\n" not in err and f"column '{name}' (model input) has no values: all {len(rows)} rows" in err
 
 
+def test_scattered_missing_values_are_counted_in_the_refusal(tmp_path, capsys):
+    """Every tenth output sample lost leaves no complete stretch: the refusal counts the missing
+    values per column (it read as a record without any stretch, the cause left to guess), and
+    detect says why its windows were skipped."""
+    model = model_path(GAIN_CHANGE)
+    name = json.loads(model.read_text())["outputs"][0]
+    lines = data_path(GAIN_CHANGE).read_text().splitlines()
+    k = lines[0].split(",").index(name)
+    rows = [line.split(",") for line in lines[1:]]
+    for r in rows[::10]:
+        r[k] = ""
+    path = tmp_path / "holes.csv"
+    path.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    for command in ("compare", "diagnose", "stiction", "detect"):
+        args = ([command, str(path), "--op", json.loads(model.read_text())["inputs"][0], "--pv", name]
+                if command == "stiction" else [command, str(model), str(path)])
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err
+        assert (f"(missing values: {name} {len(rows[::10])})" in err if command != "detect"
+                else "a window is skipped for a missing value or a time gap in it" in err), err
+
+
 def test_update_json_carries_the_diagnosis_notes_and_out_gets_update_json(tmp_path, capsys):
     """A model file without a noise model: the diagnosis estimates one and says so; update's
     JSON (stdout and --out DIR/update.json, the same document) carries that note."""

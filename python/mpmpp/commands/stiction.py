@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from ..signals import complete_segments, longest
+from ..signals import complete_segments, longest, missing_counts
 from ..stiction.hammerstein import HYSTERESIS_KINDS
 from ..timeaxis import sample_grid, seconds_of
 
@@ -35,14 +35,17 @@ def _column(df, name: str, path: str) -> np.ndarray:
     return values
 
 
-def _stretches(df, columns: list[np.ndarray], path: str) -> tuple[list, str | None]:
+def _stretches(df, names: list[str], columns: list[np.ndarray], path: str) -> tuple[list, str | None]:
     """The stretches of rows with every column present and no time gap inside (the fit runs the
     valve through consecutive samples, restarting at each), and a note when rows were left out."""
     try:
         _, starts = sample_grid(seconds_of(df), df.attrs.get("segment_starts", ()))
-        runs, skipped = complete_segments(np.all(np.isfinite(np.column_stack(columns)), axis=1), MIN_STRETCH, starts)
     except ValueError as exc:
         raise ValueError(f"{path}: {exc}") from None
+    try:
+        runs, skipped = complete_segments(np.all(np.isfinite(np.column_stack(columns)), axis=1), MIN_STRETCH, starts)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc} ({missing_counts(names, np.column_stack(columns))})") from None
     if not skipped:
         return runs, None
     a, b = longest(runs)
@@ -61,8 +64,9 @@ def run(args) -> int:
 
     df = load_loop_data_for(args, [c for c in (args.op, args.pv, args.sp) if c])
     note_repairs(args.data, df.attrs["repairs"])
-    columns = [_column(df, c, args.data) for c in (args.op, args.pv, args.sp) if c]
-    stretches, skipped = _stretches(df, columns, args.data)
+    names = [c for c in (args.op, args.pv, args.sp) if c]
+    columns = [_column(df, c, args.data) for c in names]
+    stretches, skipped = _stretches(df, names, columns, args.data)
     op, pv, *sp = columns
     sp = sp[0] if sp else None
     rows = sum(b - a for a, b in stretches)

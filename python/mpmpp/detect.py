@@ -228,8 +228,10 @@ class Detector:
         """monitored: the same data is monitored after training, so it must hold one window
         after the training period."""
         time_s, u, y = _arrays(model, data)
+        if not len(time_s):
+            raise ValueError("data: no rows to train on")
         require_recorded_columns(model.inputs, u, model.outputs, y)   # training needs every column
-        record_s = record_span(time_s, model.sample_time_s) if monitored and len(time_s) else None
+        record_s = record_span(time_s, model.sample_time_s) if monitored else None
         config, timing = _configure(config, model, record_s, train_end_s)
         if train_end_s is None:
             train_end_s = config.train_duration_s
@@ -273,8 +275,6 @@ class Detector:
 
 def _check_record(config: DetectorConfig, sample_time_s: float, time_s, train_end_s: float) -> None:
     """A one-line error when the record does not reach the training end plus one window."""
-    if len(time_s) == 0:
-        return  # left to the window extraction's own message
     span = record_span(time_s, sample_time_s)
     window = config.window_samples(sample_time_s) * sample_time_s
     needed = train_end_s + window

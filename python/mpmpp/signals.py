@@ -87,6 +87,16 @@ def require_simulable_channels(model, rows: int) -> None:
                                  f"(num {[float(x) for x in g.num]}, den {[float(x) for x in g.den]}): check the channel's units")
 
 
+def _numeric(column) -> bool:
+    """Whether a data frame's column holds numbers: a text column (tag names, units, states)
+    is left out of the candidate columns, as the file reader leaves it out."""
+    try:
+        column.to_numpy(dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
 def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
     """Deviation signals of ``data`` (DataFrame with ``time`` in seconds) for ``model``.
 
@@ -97,7 +107,8 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
         if col not in data.columns:
             raise ValueError(f"data: missing column '{col}' required by the model")
     setpoints = {f"{o}_sp" for o in outputs}
-    extras = [c for c in data.columns if c not in {"time", *inputs, *outputs} and c not in setpoints]
+    extras = [c for c in data.columns if c not in {"time", *inputs, *outputs} and c not in setpoints
+              and _numeric(data[c])]
     time_s = seconds_of(data)
     raw_u = data[inputs].to_numpy(dtype=float)
     raw_y = data[outputs].to_numpy(dtype=float)

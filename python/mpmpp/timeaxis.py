@@ -17,18 +17,31 @@ __all__ = ["sample_grid", "seconds_of", "origin_of", "absolute_seconds", "format
 
 
 def seconds_of(data) -> np.ndarray:
-    """The ``time`` column of a DataFrame as float seconds. A column of timestamps (datetime64)
-    or text is a one-line ValueError naming it: read as floats, timestamps would count
-    nanoseconds and every duration would be off by 1e9."""
+    """The ``time`` column of a DataFrame as float seconds, finite and increasing. A frame
+    without one, a column of timestamps (datetime64) or text, and rows out of time order or
+    repeated are one-line ValueErrors naming it, as the file reader's are: read as floats,
+    timestamps would count nanoseconds and every duration would be off by 1e9, and rows out of
+    order were analysed as if in order."""
+    if "time" not in getattr(data, "columns", ()):
+        raise ValueError("data: no 'time' column (seconds; a frame indexed by time: data.reset_index())")
     column = data["time"]
     if getattr(column.dtype, "kind", "") == "M":
         raise ValueError("data: column 'time' holds timestamps; analyses count seconds (mpmpp.load_data "
                          "reads a timestamped file into seconds, or set data['time'] = "
                          "(t - t.iloc[0]).dt.total_seconds())")
     try:
-        return column.to_numpy(dtype=float)
+        time_s = column.to_numpy(dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"data: column 'time' must be numbers of seconds, got {column.iloc[0]!r}") from None
+    if not np.all(np.isfinite(time_s)):
+        raise ValueError(f"data: column 'time' row {int(np.flatnonzero(~np.isfinite(time_s))[0])}: "
+                         "not a finite number of seconds")
+    back = np.flatnonzero(np.diff(time_s) <= 0)
+    if len(back):
+        k = int(back[0]) + 1
+        raise ValueError(f"data: column 'time' row {k}: {time_s[k]:g} s is not after row {k - 1}'s {time_s[k - 1]:g} s "
+                         "(rows must be in time order, each time once)")
+    return time_s
 
 
 def sample_grid(time_s: np.ndarray, splits=()) -> tuple[float, np.ndarray]:

@@ -254,8 +254,9 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
         if col not in data.columns:
             raise ValueError(f"data: no column {col!r} (columns: {', '.join(map(str, data.columns))})")
     raw = data[inputs + outputs].to_numpy(dtype=float, copy=True)
-    require_computable(inputs + outputs, raw, seconds_of(data))
-    ts, gaps = sample_grid(seconds_of(data), data.attrs.get("segment_starts", ()))
+    time_s = seconds_of(data)
+    require_computable(inputs + outputs, raw, time_s)
+    ts, gaps = sample_grid(time_s, data.attrs.get("segment_starts", ()))
     require_rows(len(raw), ts)
     # A few lost output samples are interpolated rather than cutting the record into stretches,
     # each fitted from rest (signals.bridge_lost_outputs). They stay in the criterion (the C++

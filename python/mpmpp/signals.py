@@ -87,14 +87,13 @@ def require_simulable_channels(model, rows: int) -> None:
                                  f"(num {[float(x) for x in g.num]}, den {[float(x) for x in g.den]}): check the channel's units")
 
 
-def _numeric(column) -> bool:
-    """Whether a data frame's column holds numbers: a text column (tag names, units, states)
-    is left out of the candidate columns, as the file reader leaves it out."""
+def _numbers(column) -> np.ndarray | None:
+    """A data frame's column as floats, or None for a text column (tag names, units, states),
+    which is left out of the candidate columns as the file reader leaves it out."""
     try:
-        column.to_numpy(dtype=float)
+        return column.to_numpy(dtype=float)
     except (TypeError, ValueError):
-        return False
-    return True
+        return None
 
 
 def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
@@ -107,12 +106,12 @@ def extract(model, data, reference=None, min_segment: int = 200) -> Signals:
         if col not in data.columns:
             raise ValueError(f"data: missing column '{col}' required by the model")
     setpoints = {f"{o}_sp" for o in outputs}
-    extras = [c for c in data.columns if c not in {"time", *inputs, *outputs} and c not in setpoints
-              and _numeric(data[c])]
+    numbers = {c: _numbers(data[c]) for c in data.columns if c not in {"time", *inputs, *outputs, *setpoints}}
+    extras = [c for c, x in numbers.items() if x is not None]
     time_s = seconds_of(data)
     raw_u = data[inputs].to_numpy(dtype=float)
     raw_y = data[outputs].to_numpy(dtype=float)
-    raw_z = data[extras].to_numpy(dtype=float) if extras else np.zeros((len(data), 0))
+    raw_z = np.column_stack([numbers[c] for c in extras]) if extras else np.zeros((len(data), 0))
     require_recorded_columns(inputs, raw_u, outputs, raw_y)
     require_computable([*inputs, *outputs, *extras], np.column_stack([raw_u, raw_y, raw_z]), time_s)
     require_moving_outputs(outputs, raw_y)

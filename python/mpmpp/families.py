@@ -153,6 +153,8 @@ def _noise(rng, colour):
         return {"num": list(np.real(np.poly(z))), "den": list(np.real(np.poly(p)))}
     if colour == "highpass":  # blue: a zero near 1
         return {"num": [1.0, -rng.uniform(0.5, 0.9)], "den": [1.0, rng.uniform(-0.3, 0.3)]}
+    if colour == "wander":  # a wandering operating point: nearly integrated, IMA(1,1)-like
+        return {"num": [1.0, -rng.uniform(0.6, 0.9)], "den": [1.0, -rng.uniform(0.99, 0.998)]}
     raise ValueError(f"unknown noise colour {colour!r}")
 
 
@@ -485,6 +487,19 @@ FAMILIES = [
            "among the effects", "mpc", 3, _EFFECTS_MIMO + ("none", "noise_change", "output_drift"),
            time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0),
            model_forms=("discrete+noise", "discrete"), setpoint_steps=True),
+    # Added 2026-12-02 (forty-first session): a disturbance that wanders (nearly integrated,
+    # IMA(1,1)-like), as most real plants' do; every colour before was stationary with poles
+    # inside 0.9, and on such records detect raised false MPM alarms (docs/families.md
+    # "A wandering disturbance"). The held-out mpc_siso_wander keeps its controller (clipped
+    # moves), sample times (2, 15 s) and models without noise model.
+    Family("pi_siso_wander", TUNING, "single PI loop with setpoint steps, a wandering (nearly "
+           "integrated) disturbance, FOPTD model without noise model", "pi", 1,
+           _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(5.0, 10.0), noise_colours=("wander",),
+           model_forms=("foptd",), setpoint_steps=True),
+    Family("mpc_2x2_wander", TUNING, "project MPC, 2x2, setpoint steps, a wandering or AR(1) "
+           "disturbance per output, discrete model with or without noise model", "mpc", 2,
+           _EFFECTS_MIMO + ("none", "noise_change"), time_constant_samples=(2.0, 20.0), sample_times_s=(5.0, 10.0),
+           noise_colours=("wander", "ar1"), model_forms=("discrete+noise", "discrete"), setpoint_steps=True),
     Family("pid_siso_slow", HELD_OUT, "PID (derivative on measurement), 30-60 s sampling, 2-3 day "
            "records, second-order noise, FOPTD or discrete model without noise model", "pid", 1,
            _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(30.0, 60.0),
@@ -518,6 +533,10 @@ FAMILIES = [
            "a sample in dead time) without noise model", "pi", 1, _EFFECTS_SISO + ("none", "noise_change"),
            sample_times_s=(1.0, 2.0, 5.0, 10.0), noise_colours=("white", "ar1", "arma11", "ar2"),
            model_forms=("foptd",), record_hours=(10.0, 24.0), setpoint_steps=True, hand_written=True),
+    Family("mpc_siso_wander", HELD_OUT, "MPC with clipped moves, SISO, 2 or 15 s sampling, a "
+           "wandering (nearly integrated) disturbance, discrete model without noise model or FOPTD",
+           "mpc_clip", 1, _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(2.0, 15.0),
+           noise_colours=("wander",), model_forms=("discrete", "foptd")),
     Family("pi_siso_short", HELD_OUT, "single PI loop, records of 2-8 h (shorter than the presets' "
            "training plus a window: detect refuses the shortest)", "pi", 1, ("gain", "time_constant", "none"),
            sample_times_s=(1.0, 2.0, 5.0), model_forms=("foptd",), record_hours=(2.0, 8.0), setpoint_steps=True),

@@ -631,3 +631,30 @@ def test_the_controller_action_is_read_within_stretches_not_across_a_gap():
     u, pv = np.concatenate([p[0] for p in pieces]), np.concatenate([p[1] for p in pieces])
     assert _controller_action(u, pv, np.zeros(800), starts=[400]) == 1
     assert _controller_action(u, pv, np.zeros(800)) == -1
+
+
+def test_a_wandering_disturbance_gets_a_moving_average_root_and_the_scipy_fit_at_it():
+    """A nearly integrated disturbance (the families' `wander` colour, IMA(1,1)-like) needs
+    H = (1 - c q^-1) / A, which no short AR holds (docs/identify.md "A wandering disturbance").
+    The root comes from MA_ROOTS; at it, the estimate is SciPy's joint prediction-error fit of
+    the data through 1 / (1 - c q^-1). An AR(1) disturbance keeps H = 1 / A."""
+    import scipy.signal as ss
+
+    from mpmpp import families
+    from mpmpp.diagnosis_study import simulate
+    from mpmpp.model_identification import MA_ROOTS
+
+    for seed in (0, 2):
+        spec, _ = families.family("pi_siso_wander").draw(seed, 6 * 3600.0, "none")
+        df = simulate(spec)
+        r = model_from_data(df, ["u1"], ["y1"])
+        h, g, c = r.model.noise("y1"), r.model.process("y1", "u1"), r.channels[0]
+        assert len(h.num) == 2 and -h.num[1] in MA_ROOTS[1:]
+        smooth = [ss.lfilter([1.0], [1.0, h.num[1]], df[col].to_numpy() - df[col].mean()) for col in ("y1", "u1")]
+        b, f, a = ref.pem_ar_noise(*smooth, r.outputs[0].noise_order, c.numerator_length, c.delay_samples)
+        # the reference removes the filtered data's mean, mpmpp the raw data's: agreement to 1e-3
+        assert sum(g.num) / sum(g.den) == pytest.approx(b.sum() / f.sum(), rel=1e-3)
+        assert np.allclose(g.den, f, rtol=1e-3) and np.allclose(g.num, b, atol=1e-3)
+        assert np.allclose(h.den, a, atol=1e-3)
+    r = model_from_data(pi_loop.simulate(pi_loop.FLOW, seed=11, setpoint_steps=True), ["OP"], ["PV"])
+    assert list(r.model.noise("PV").num) == [1.0]

@@ -489,9 +489,10 @@ FAMILIES = [
            model_forms=("discrete+noise", "discrete"), setpoint_steps=True),
     # Added 2026-12-02 (forty-first session): a disturbance that wanders (nearly integrated,
     # IMA(1,1)-like), as most real plants' do; every colour before was stationary with poles
-    # inside 0.9, and on such records detect raised false MPM alarms (docs/families.md
-    # "A wandering disturbance"). The held-out mpc_siso_wander keeps its controller (clipped
-    # moves), sample times (2, 15 s) and models without noise model.
+    # inside 0.9. On such records diagnose names process changes on controls and identify's
+    # estimates were biased (docs/families.md "A wandering disturbance"). The held-out
+    # mpc_siso_wander keeps its controller (clipped moves), sample times (2, 15 s) and models
+    # without noise model.
     Family("pi_siso_wander", TUNING, "single PI loop with setpoint steps, a wandering (nearly "
            "integrated) disturbance, FOPTD model without noise model", "pi", 1,
            _EFFECTS_SISO + ("none", "noise_change"), sample_times_s=(5.0, 10.0), noise_colours=("wander",),

@@ -319,8 +319,8 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
                 raise ValueError(f"lag 0 cannot be searched for {out!r}: the data show feedback "
                                  "(the controller reacts to the output within the sample)")
             z = significance_z(max_delay - max(min_delay, 0) + 1)
-            search = dict(out=out, inputs=inputs, ts=ts, z=z, min_delay=max(min_delay, 0), max_delay=max_delay,
-                          na_orders=na_orders, numerator_lengths=numerator_lengths, pool=pool, st=st)
+            search = _OutputSearch(out, inputs, ts, z, max(min_delay, 0), max_delay, tuple(na_orders),
+                                   tuple(numerator_lengths), pool, st)
             fitted, count = _classes_fitted(Y[:, i], U, classes, action, search)
             if not fitted:
                 raise NotIdentified("not identified: no candidate model could be fitted (data not informative)")
@@ -348,26 +348,42 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
     return IdentificationResult(model, ts, n, len(data) - n, summaries, fits, interpolated_samples=int(bridged.sum()))
 
 
-def _class_fit(y, U, cls: ProcessClass, action: int, search: dict) -> tuple["_ClassFit", int]:
-    """Class ``cls`` fitted to one output (``_search`` over ``search``: out, inputs, ts, z, the
-    delay range, orders, pool and stretches): (the fit, the candidate models fitted).
-    NotIdentified when no candidate could be fitted."""
-    s = search
-    best, profile, n_fitted = _search(y, U, cls, s["min_delay"], s["max_delay"], s["na_orders"], s["numerator_lengths"],
-                                      s["max_delay"] + max(s["na_orders"]), s["pool"], s["st"])
-    chans = [_summarise(s["out"], s["inputs"][j], best, j, profile, s["ts"], s["z"], cls) for j in range(U.shape[1])]
-    return _ClassFit(cls, best, chans, action), n_fitted
+@dataclass(frozen=True)
+class _OutputSearch:
+    """What every class fit of one output shares: the output and its inputs, the sample time,
+    the gain's significance level, the delay range and orders searched, the thread pool and
+    the stretches."""
+    out: str
+    inputs: list
+    ts: float
+    z: float
+    min_delay: int
+    max_delay: int
+    na_orders: tuple
+    numerator_lengths: tuple
+    pool: object
+    st: Stretches
+
+    def fit(self, y, U, cls: ProcessClass, action: int) -> tuple["_ClassFit", int]:
+        """Class ``cls`` fitted (``_search``): (the fit, the candidate models fitted).
+        NotIdentified when no candidate could be fitted."""
+        best, profile, n_fitted = _search(y, U, cls, self.min_delay, self.max_delay, self.na_orders,
+                                          self.numerator_lengths, self.max_delay + max(self.na_orders), self.pool,
+                                          self.st)
+        chans = [_summarise(self.out, self.inputs[j], best, j, profile, self.ts, self.z, cls)
+                 for j in range(U.shape[1])]
+        return _ClassFit(cls, best, chans, action), n_fitted
 
 
-def _classes_fitted(y, U, classes, action: int, search: dict) -> tuple[list["_ClassFit"], int]:
-    """Every process class of ``classes`` fitted (``_class_fit``): (the fits, the number of
-    candidate models fitted)."""
+def _classes_fitted(y, U, classes, action: int, search: _OutputSearch) -> tuple[list["_ClassFit"], int]:
+    """Every process class of ``classes`` fitted (``_OutputSearch.fit``): (the fits, the number
+    of candidate models fitted)."""
     fitted, count = [], 0
     for cls in classes:
         if cls is INTEGRATING_LAG and not _lag_worth_searching(fitted):
             continue
         try:
-            fit, n_fitted = _class_fit(y, U, cls, action, search)
+            fit, n_fitted = search.fit(y, U, cls, action)
         except NotIdentified:
             continue
         count += n_fitted
@@ -375,7 +391,7 @@ def _classes_fitted(y, U, classes, action: int, search: dict) -> tuple[list["_Cl
     return fitted, count
 
 
-def _moving_average_root(y, U, chosen: "_ClassFit", search: dict) -> tuple[float, "_ClassFit", int]:
+def _moving_average_root(y, U, chosen: "_ClassFit", search: _OutputSearch) -> tuple[float, "_ClassFit", int]:
     """The disturbance model's moving-average root for the chosen class: (root, its fit,
     candidate models fitted). Each root of MA_ROOTS refits the class on the data through
     1 / (1 - root q^-1) (H = (1 - root q^-1) / A); one wins by BIC (charged one parameter) when
@@ -388,13 +404,11 @@ def _moving_average_root(y, U, chosen: "_ClassFit", search: dict) -> tuple[float
     best, root, count = chosen, 0.0, 0
     if chosen.cls.integrating:
         return root, best, count
-    st, cost = search["st"], chosen.best.bic
+    st, cost = search.st, chosen.best.bic
     for r in MA_ROOTS[1:]:
         smooth = _core.TransferFunction(np.ones(1), np.array([1.0, -r]), 0)
         try:
-            fit, n_fitted = _class_fit(st.filter(smooth, y),
-                                       np.column_stack([st.filter(smooth, U[:, j]) for j in range(U.shape[1])]),
-                                       chosen.cls, chosen.action, search)
+            fit, n_fitted = search.fit(st.filter(smooth, y), st.filter_columns(smooth, U), chosen.cls, chosen.action)
         except NotIdentified:
             continue
         count += n_fitted
@@ -659,7 +673,7 @@ def _refine(y, U, c: _Candidate, cls, t0, st: Stretches | None = None, max_itera
         a = np.linalg.lstsq(lagged[rows], v[rows], rcond=None)[0]
         A = _core.TransferFunction(np.r_[1.0, a], np.ones(1), 0)
         yf = st.filter(A, y)
-        uf = np.column_stack([st.filter(A, U[:, j]) for j in range(U.shape[1])])
+        uf = st.filter_columns(A, U)
         try:
             r = oe(yf, uf, best.delays, structure="oe", nb=best.nb, nf=cls.nf, skip=na,
                    stretch_starts=st.starts)

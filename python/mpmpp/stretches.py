@@ -36,6 +36,10 @@ class Stretches:
         """tf (a ``TransferFunction``) applied to x (one column), each stretch from rest."""
         return np.asarray(tf.filter(np.ascontiguousarray(x, dtype=float), stretch_starts=self.starts))
 
+    def filter_columns(self, tf, x: np.ndarray) -> np.ndarray:
+        """``filter`` applied to every column of x."""
+        return np.column_stack([self.filter(tf, x[:, j]) for j in range(x.shape[1])])
+
     def lag(self, x: np.ndarray, k: int) -> np.ndarray:
         """x delayed by k rows in every stretch, zeros before each stretch's first row."""
         return np.concatenate([np.r_[np.zeros(min(k, b - a)), x[a:max(b - k, a)]] for a, b in self.spans()])

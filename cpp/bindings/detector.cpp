@@ -97,6 +97,7 @@ void bind_detector(py::module_& m) {
       .def_readwrite("laguerre_terms", &DetectorConfig::laguerre_terms)
       .def_readwrite("residual_ar_order", &DetectorConfig::residual_ar_order)
       .def_readwrite("residual_ar_orders", &DetectorConfig::residual_ar_orders)
+      .def_readwrite("residual_ma_roots", &DetectorConfig::residual_ma_roots)
       .def_readwrite("residual_steps", &DetectorConfig::residual_steps)
       .def_readwrite("step_significance", &DetectorConfig::step_significance)
       .def_readwrite("outlier_sigmas", &DetectorConfig::outlier_sigmas)

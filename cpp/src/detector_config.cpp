@@ -252,6 +252,8 @@ void DetectorConfig::validate() const {
   if (residual_ar_order < 0) fail("residual_ar_order", "must be >= 0 (0 = arx_order_a)");
   for (int order : residual_ar_orders)
     if (order < 1) fail("residual_ar_orders", "entries must be >= 1");
+  for (double root : residual_ma_roots)
+    if (!(root >= 0 && root < 1)) fail("residual_ma_roots", "entries must be in [0, 1)");
   if (residual_steps < 0) fail("residual_steps", "must be >= 0 (0 = none)");
   if (!(step_significance > 0 && step_significance < 1))
     fail("step_significance", "must be in (0, 1)");
@@ -270,17 +272,26 @@ void DetectorConfig::validate() const {
   inspection_windows();
 }
 
-void DetectorConfig::check_residual_ar_orders(int num_outputs) const {
-  if (!residual_ar_orders.empty() && static_cast<int>(residual_ar_orders.size()) != num_outputs)
-    throw InputError("detector config: residual_ar_orders has " +
-                     std::to_string(residual_ar_orders.size()) + " entries; the model has " +
-                     std::to_string(num_outputs) + " outputs");
+void DetectorConfig::check_whitening_entries(int num_outputs) const {
+  auto check = [&](std::size_t entries, const char* key) {
+    if (entries != 0 && static_cast<int>(entries) != num_outputs)
+      throw InputError(std::string("detector config: ") + key + " has " + std::to_string(entries) +
+                       " entries; the model has " + std::to_string(num_outputs) + " outputs");
+  };
+  check(residual_ar_orders.size(), "residual_ar_orders");
+  check(residual_ma_roots.size(), "residual_ma_roots");
 }
 
 int DetectorConfig::whitening_order(int output, int num_outputs) const {
-  check_residual_ar_orders(num_outputs);
+  check_whitening_entries(num_outputs);
   if (!residual_ar_orders.empty()) return residual_ar_orders[static_cast<std::size_t>(output)];
   return residual_ar_order > 0 ? residual_ar_order : arx_order_a;
+}
+
+double DetectorConfig::whitening_root(int output, int num_outputs) const {
+  check_whitening_entries(num_outputs);
+  if (residual_ma_roots.empty()) return 0.0;
+  return residual_ma_roots[static_cast<std::size_t>(output)];
 }
 
 int DetectorConfig::window_samples(double sample_time_s) const {
@@ -400,6 +411,7 @@ nlohmann::json config_to_json(const DetectorConfig& c) {
       {"laguerre_terms", c.laguerre_terms},
       {"residual_ar_order", c.residual_ar_order},
       {"residual_ar_orders", c.residual_ar_orders},
+      {"residual_ma_roots", c.residual_ma_roots},
       {"residual_steps", c.residual_steps},
       {"step_significance", c.step_significance},
       {"outlier_sigmas", c.outlier_sigmas},
@@ -492,6 +504,10 @@ DetectorConfig config_from_json(const nlohmann::json& j, const std::string& wher
       c.residual_ar_orders.clear();
       for (const auto& order : v)
         c.residual_ar_orders.push_back(static_cast<int>(integer(key, order)));
+    } else if (key == "residual_ma_roots") {
+      if (!v.is_array()) throw InputError(where + ": residual_ma_roots must be an array");
+      c.residual_ma_roots.clear();
+      for (const auto& root : v) c.residual_ma_roots.push_back(number(key, root));
     } else if (key == "residual_steps")
       c.residual_steps = static_cast<int>(integer(key, v));
     else if (key == "step_significance")

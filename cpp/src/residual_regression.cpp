@@ -181,10 +181,11 @@ bool fit_with_breaks(Eigen::MatrixXd& Z, const Eigen::VectorXd& z, const Breaks&
 
 // The rows of a window's AR fit (row i reads v(i) .. v(i + na)) among `usable` (those reading
 // no missing sample) that read no outlier: v's samples whose innovation in a first AR fit (with
-// the trend) exceeds `sigmas` robust sigmas. All usable rows when more than a tenth would go:
-// heavy tails, not isolated outliers.
+// the trend) exceeds `sigmas` robust sigmas. An outlier also leaves `memory` later samples of a
+// prefiltered v (the moving-average root's filter) carrying its tail, so the rows reading those
+// go too. All usable rows when more than a tenth would go: heavy tails, not isolated outliers.
 std::vector<Eigen::Index> rows_clear_of_outliers(const Eigen::VectorXd& v,
-                                                 const Eigen::MatrixXd& trend, int na,
+                                                 const Eigen::MatrixXd& trend, int na, int memory,
                                                  double sigmas,
                                                  const std::vector<Eigen::Index>& usable) {
   const Eigen::Index rows = static_cast<Eigen::Index>(usable.size());
@@ -206,7 +207,7 @@ std::vector<Eigen::Index> rows_clear_of_outliers(const Eigen::VectorXd& v,
   for (Eigen::Index r = 0; r < rows; ++r) {
     if (!(std::abs(e[r] - median) > limit)) continue;
     const Eigen::Index i = usable[static_cast<size_t>(r)];
-    for (Eigen::Index j = i; j <= std::min(trend.rows() - 1, i + na); ++j)
+    for (Eigen::Index j = i; j <= std::min(trend.rows() - 1, i + na + memory); ++j)
       out[static_cast<size_t>(j)] = true;
   }
   std::vector<Eigen::Index> kept;
@@ -242,11 +243,22 @@ Eigen::Index hold_lost_inputs(Eigen::MatrixXd& u) {
   return most;
 }
 
+// Samples until 1 / (1 - c q^-1)'s impulse response c^k falls below 1 % (0 for c = 0).
+int moving_average_memory(double c) {
+  return c > 0 ? static_cast<int>(std::ceil(std::log(0.01) / std::log(c))) : 0;
+}
+
+// x(t) + c x_f(t - 1) down every column, from rest: the block through 1 / (1 - c q^-1).
+void through_moving_average_root(Eigen::Ref<Eigen::MatrixXd> x, double c) {
+  for (Eigen::Index t = 1; t < x.rows(); ++t) x.row(t) += c * x.row(t - 1);
+}
+
 }  // namespace
 
 ResidualRegression::ResidualRegression(const Model& nominal, int output, std::vector<int> inputs,
                                        const DetectorConfig& config)
     : ar_order_(config.whitening_order(output, nominal.num_outputs())),
+      ma_root_(config.whitening_root(output, nominal.num_outputs())),
       settle_(0),
       max_steps_(config.residual_steps),
       step_significance_(config.step_significance),
@@ -297,6 +309,8 @@ ResidualRegression::ResidualRegression(const Model& nominal, int output, std::ve
     settle_ = std::max(
         {settle_, mpmpp::settling_samples(g) + 1, laguerre_settling(p, config.laguerre_terms)});
   }
+  // The moving-average root's filter starts from rest too.
+  settle_ += moving_average_memory(ma_root_);
 }
 
 bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -339,6 +353,21 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     if (nominal_[e]) v -= nominal_[e]->filter(ue);
     for (const auto& d : directions_[e]) X.col(c++) = d.filter(ue);
   }
+  // A disturbance with a moving-average root c, H = (1 - c q^-1) / A0: v and the directions
+  // through 1 / (1 - c q^-1) leave an AR disturbance for A(q). A wandering disturbance (c near
+  // 1) needs an AR far longer than a process change may meet (the whitening order, above); c
+  // is the training's and the same in every window, so it cannot absorb a change.
+  const int memory = moving_average_memory(ma_root_);
+  Eigen::Array<bool, Eigen::Dynamic, 1> known = present;
+  if (memory > 0) {
+    v = present.select(v, 0.0);  // a lost sample adds nothing to the filtered v after it
+    through_moving_average_root(v, ma_root_);
+    through_moving_average_root(X, ma_root_);
+    // A lost output sample (0 in v) stays in the filtered v for `memory` samples.
+    for (Eigen::Index t = 0; t < n; ++t)
+      if (!present[t])
+        known.segment(t, std::min<Eigen::Index>(memory + 1, n - t)).setConstant(false);
+  }
   const Eigen::VectorXd vv = v.tail(m);
   const Eigen::MatrixXd XX = X.bottomRows(m);
   const Eigen::Index rows = m - ar_order_;
@@ -347,7 +376,7 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
   trend.col(0).setOnes();
   trend.col(1) = Eigen::VectorXd::LinSpaced(rows, 0.0, 1.0);
   std::vector<Eigen::Index> usable;
-  const auto vv_present = present.tail(m);
+  const auto vv_present = known.tail(m);
   for (Eigen::Index i = 0; i < rows; ++i)
     if (vv_present.segment(i, ar_order_ + 1).all()) usable.push_back(i);
   if (static_cast<Eigen::Index>(usable.size()) < rows - rows / 10) {
@@ -355,7 +384,7 @@ bool ResidualRegression::estimate(const Eigen::Ref<const Eigen::VectorXd>& y,
     return false;
   }
   const std::vector<Eigen::Index> kept =
-      rows_clear_of_outliers(vv, trend, ar_order_, outlier_sigmas_, usable);
+      rows_clear_of_outliers(vv, trend, ar_order_, memory, outlier_sigmas_, usable);
   const Eigen::Index used = static_cast<Eigen::Index>(kept.size());
   Eigen::VectorXd b = Eigen::VectorXd::Zero(columns), coef;
   Eigen::MatrixXd cov;

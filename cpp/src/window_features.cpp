@@ -78,7 +78,7 @@ WindowFeatures::WindowFeatures(const Model& nominal, const DetectorConfig& confi
       noise_from_residual_(config.noise_test == NoiseTest::Residual),
       arx_oe_stretches_(!process_covariances_ && !noise_wald_ && !noise_from_residual_) {
   config.validate();
-  config.check_residual_ar_orders(num_outputs_);
+  config.check_whitening_entries(num_outputs_);
   window_ = config.window_samples(nominal.sample_time_s);
   step_ = config.step_samples(nominal.sample_time_s);
   channels_ = monitored_channels(nominal, config);

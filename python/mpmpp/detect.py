@@ -292,21 +292,24 @@ def record_span(time_s, sample_time_s: float) -> float:
 
 def _cover_disturbance(config: DetectorConfig, model, time_s, u, y, train_end_s: float):
     """(config, notes): the config with the ARX order raised to the disturbance models' AR order
-    where it falls short (mpmpp.disturbance), the residual test's whitening order per output set
-    to its disturbance's when the config leaves it open (``residual_ar_order`` 0), and a note per
+    where it falls short (mpmpp.disturbance), the residual test's whitening order and
+    moving-average root per output set to its disturbance's when the config leaves the order
+    open (``residual_ar_order`` 0), and a note per
     output whose disturbance model was estimated from the training rows because the model file
     has none."""
     open_order = str(config.process_test) == "residual" and config.residual_ar_order == 0 and not config.residual_ar_orders
     orders = disturbance_orders(model, time_s, u, y, train_end_s, config.window_samples(model.sample_time_s),
                                 whitening=open_order)
     needed = max([config.arx_order_a] + [d.order for d in orders])
-    whitening = []
+    whitening, roots = [], []
     if open_order:
         whitening = [needed if d.whitening is None else max(WHITENING_FLOOR, d.whitening) for d in orders]
+        roots = [d.whitening_root for d in orders] if any(d.whitening_root for d in orders) else []
     if needed != config.arx_order_a or whitening:
         config = DetectorConfig.from_json(config.to_json())
         config.arx_order_a = needed
         config.residual_ar_orders = whitening
+        config.residual_ma_roots = roots
     return config, [describe(d, needed, whitening[k] if whitening else None)
                     for k, d in enumerate(orders) if d.estimated]
 

@@ -27,6 +27,13 @@ output error (the model file's H is a claim; the training rows are the disturban
 ``detect`` whitens by at least ``WHITENING_FLOOR`` coefficients: a disturbance that changes
 colour after training (a noise change) needs some room, or the colour left in the whitened
 error biases beta and passes for a process change.
+
+A wandering disturbance (nearly integrated, IMA(1,1)-like: H = (1 - c q^-1) / (1 - a q^-1), a
+near 1, as most plants' are) needs a far longer AR than that; the whitening then also carries a
+moving-average root c (``whitening_root``), chosen with the order by BIC on the same training
+rows (the MA_ROOTS grid identify uses). Each window passes its output error and directions
+through 1 / (1 - c q^-1) before its AR fit (residual_regression.hpp). c is fixed by the
+training, so unlike a longer AR refitted per window it cannot absorb a change.
 """
 from __future__ import annotations
 
@@ -37,6 +44,7 @@ import numpy as np
 
 from . import _core
 from .diagnose.whitening import TREND_GRID, disturbance_steps, has_noise_model
+from .model_identification import MA_ROOTS
 from .signals import complete_runs
 
 MAX_ORDER = 30
@@ -57,7 +65,11 @@ class DisturbanceOrder:
     estimated: bool                 # True: fitted to the training rows (no noise model in the file)
     polynomial: np.ndarray = None   # A(q) = [1, a_1, ..., a_p] of the estimate; None when not estimable
     rows: int = 0                   # rows the estimate used (or had)
-    whitening: int | None = None    # BIC order of the training output error (every output); None when not estimable
+    # The residual test's whitening (every output): the BIC order of the training output error
+    # less its mean, through 1 / (1 - c q^-1) for the moving-average root c chosen with it
+    # (``whitening_root``); None when not estimable.
+    whitening: int | None = None
+    whitening_root: float = 0.0
 
 
 def inverse_order(h, cap: int) -> int:
@@ -67,10 +79,10 @@ def inverse_order(h, cap: int) -> int:
     return int(above[-1]) + 1 if above.size else 0
 
 
-def bic_ar(v: np.ndarray, begin: int, end: int, max_order: int) -> tuple[int, np.ndarray]:
-    """(p, A) minimising N log s2_p + p log N over p = 0..max_order, every order fitted on the
-    same rows of [begin, end): those whose v(t - max_order) .. v(t) are all present (v is NaN
-    where it is not known: a lost sample, a stretch's start-up), so begin >= max_order."""
+def bic_ar(v: np.ndarray, begin: int, end: int, max_order: int) -> tuple[int, np.ndarray, float, int]:
+    """(p, A, BIC, N) minimising N log s2_p + p log N over p = 0..max_order, every order fitted
+    on the same N rows of [begin, end): those whose v(t - max_order) .. v(t) are all present (v
+    is NaN where it is not known: a lost sample, a stretch's start-up), so begin >= max_order."""
     present = np.isfinite(v)
     missing = np.concatenate([[0], np.cumsum(~present)])
     t = np.arange(begin, end)
@@ -83,7 +95,7 @@ def bic_ar(v: np.ndarray, begin: int, end: int, max_order: int) -> tuple[int, np
         bic = n * math.log(float(np.mean(residual**2))) + p * math.log(n)
         if bic < best[0]:
             best = (bic, p, poly)
-    return best[1], best[2]
+    return best[1], best[2], best[0], n
 
 
 def _settling_samples(row, length: int) -> int:
@@ -101,18 +113,47 @@ def _settling_samples(row, length: int) -> int:
     return settle
 
 
+def whitening_root(w: np.ndarray, begin: int, end: int, cap: int) -> tuple[float, int]:
+    """(c, p): the moving-average root of MA_ROOTS and the AR order that minimise the BIC of w
+    (an output error less its steps and ramps; NaN where unknown) less its mean, through
+    1 / (1 - c q^-1), charged one coefficient for c > 0. The mean goes first because each
+    window fits its own level (residual_regression.hpp): left in, the filter's gain 1 / (1 - c)
+    on it let a root near 1 win on a white disturbance (tuning mpc_level seed 19). A monic
+    causal filter keeps the Gaussian likelihood's scale, and NaNs stay where they were, so the
+    roots compete on the same rows."""
+    w = w - np.nanmean(w[begin:end])
+    best = None
+    for c in MA_ROOTS:
+        p, _, bic, n = bic_ar(_through_root(w, c) if c else w, begin, end, cap)
+        bic += math.log(n) if c else 0.0
+        if best is None or bic < best[0]:
+            best = (bic, c, p)
+    return best[1], best[2]
+
+
+def _through_root(w: np.ndarray, c: float) -> np.ndarray:
+    """w through 1 / (1 - c q^-1) from rest at every run of known samples (NaN stays NaN; a run's
+    first samples miss the earlier ones' trail, which the thousands of rows after it outweigh)."""
+    out = np.full_like(w, np.nan)
+    for a, b in complete_runs(np.isfinite(w)):
+        out[a:b] = np.asarray(_core.TransferFunction(np.ones(1), np.array([1.0, -c]), 0).filter(w[a:b]),
+                              dtype=float).ravel()
+    return out
+
+
 def _training_error_ar(model, i: int, train: np.ndarray, u: np.ndarray, y: np.ndarray, cap: int):
-    """(p, A, rows): the BIC-chosen AR of output i's error y_i - G_i u, less its step and ramp
-    disturbances, on every complete stretch of the training rows (each filtered from rest, its
-    first rows, G's settling time plus the largest order, left out of the fit) in the rows'
-    time; (None, None, rows) when fewer than 10 rows per coefficient remain."""
+    """(p, A, rows, c, p_c): the BIC-chosen AR of output i's error y_i - G_i u, less its step and
+    ramp disturbances, on every complete stretch of the training rows (each filtered from rest,
+    its first rows, G's settling time plus the largest order, left out of the fit) in the rows'
+    time, and the moving-average root with its AR order (``whitening_root``); (None, None,
+    rows, 0.0, None) when fewer than 10 rows per coefficient remain."""
     name = model.outputs[i]
     row = [model.process(name, j) for j in model.inputs]
     used = [j for j, g in enumerate(row) if g is not None]
     ok = train & np.isfinite(y[:, i]) & np.isfinite(u[:, used]).all(axis=1)
     runs = complete_runs(ok)
     if not runs:
-        return None, None, 0
+        return None, None, 0, 0.0, None
     first, last = runs[0][0], runs[-1][1]
     # Deviations from the training operating point; G filters them from rest at each stretch's
     # first row, so v is unknown (NaN) until G has settled.
@@ -129,7 +170,7 @@ def _training_error_ar(model, i: int, train: np.ndarray, u: np.ndarray, y: np.nd
         fitted[a + settle + cap - first:b - first] = True
     rows = int(fitted.sum())
     if rows < 10 * cap:
-        return None, None, rows
+        return None, None, rows, 0.0, None
     begin = int(np.argmax(fitted))
     # Unmeasured step and ramp disturbances out first: an AR takes them for a random walk and
     # BIC then asks for 15-30 coefficients (tuning mpc_siso_1s, mpc_siso_disturbed), which
@@ -137,8 +178,11 @@ def _training_error_ar(model, i: int, train: np.ndarray, u: np.ndarray, y: np.nd
     # as breaks (residual_regression.hpp).
     _, steps = disturbance_steps(np.where(fitted, v, 0.0), fitted, _core.TransferFunction(), begin, TREND_GRID,
                                  begin + TREND_GRID, math.log(rows))
-    order, poly = bic_ar(v - steps, begin, last - first, cap)
-    return order, poly, rows
+    order, poly, _, _ = bic_ar(v - steps, begin, last - first, cap)
+    # The root is chosen on the error less its steps: filtered, a step or ramp grows into a
+    # random walk that the step search then reads differently for every root.
+    root, root_order = whitening_root(v - steps, begin, last - first, cap)
+    return order, poly, rows, root, root_order
 
 
 def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, train_end_s: float,
@@ -156,12 +200,13 @@ def disturbance_orders(model, time_s: np.ndarray, u: np.ndarray, y: np.ndarray, 
         if has_noise_model(h) and not whitening:
             out.append(DisturbanceOrder(name, inverse_order(h, cap), estimated=False))
             continue
-        order, poly, rows = _training_error_ar(model, i, train, u, y, cap)
+        order, poly, rows, root, root_order = _training_error_ar(model, i, train, u, y, cap)
         if has_noise_model(h):
-            out.append(DisturbanceOrder(name, inverse_order(h, cap), estimated=False, rows=rows, whitening=order))
+            out.append(DisturbanceOrder(name, inverse_order(h, cap), estimated=False, rows=rows, whitening=root_order,
+                                        whitening_root=root))
         else:  # the estimate; too short to estimate: order 0, the preset's order stands and the note says why
             out.append(DisturbanceOrder(name, order or 0, estimated=True, polynomial=poly, rows=rows,
-                                        whitening=order))
+                                        whitening=root_order, whitening_root=root))
     return out
 
 
@@ -173,7 +218,8 @@ def describe(d: DisturbanceOrder, arx_order: int, whitening: int | None = None) 
                 else f"the ARX order n_a = {arx_order} of the config stands")
         return (f"{d.output}: the model has no noise model, and the training period leaves {d.rows} complete "
                 f"rows after the process settles, too few to estimate one; {used}")
-    used = (f"the residual test whitens each window by an AR({whitening})" if whitening is not None
+    root = f" after 1/(1 - {d.whitening_root:g} q^-1) (a wandering disturbance)" if d.whitening_root else ""
+    used = (f"the residual test whitens each window by an AR({whitening}){root}" if whitening is not None
             else f"the ARX order n_a = {arx_order} covers it")
     return (f"{d.output}: the model has no noise model; its disturbance model was estimated from "
             f"{d.rows} training rows as H = 1/A(q), A the BIC-chosen AR({d.order}) of y - G u less its steps "

@@ -86,7 +86,10 @@ TEST(DetectorConfig, JsonRoundTripAndPresetOverrides) {
   auto back = DetectorConfig::from_json(c.to_json());
   EXPECT_EQ(back.to_json(), c.to_json());
   c.residual_ar_orders = {3, 5};
+  c.residual_ma_roots = {0.0, 0.8};
   EXPECT_EQ(DetectorConfig::from_json(c.to_json()).residual_ar_orders, (std::vector<int>{3, 5}));
+  EXPECT_EQ(DetectorConfig::from_json(c.to_json()).residual_ma_roots,
+            (std::vector<double>{0.0, 0.8}));
   auto o = DetectorConfig::from_json(R"({"preset": "paper_mimo", "alpha": 2.0})");
   EXPECT_EQ(o.arx_order_a, 18);
   EXPECT_DOUBLE_EQ(o.alpha, 2.0);
@@ -128,15 +131,23 @@ TEST(DetectorConfig, BadFieldsNameTheField) {
   expect_msg(R"({"preset": "mimo", "training_confirmation": 0})", "training_confirmation");
   expect_msg(R"({"preset": "siso", "residual_ar_orders": [3, 0]})", "residual_ar_orders");
   expect_msg(R"({"preset": "siso", "residual_ar_orders": 3})", "residual_ar_orders");
-  // One whitening order per output of the model.
-  DetectorConfig two = DetectorConfig::siso();
-  two.residual_ar_orders = {3, 4};
-  try {
-    mpmpp::WindowFeatures(mpmpp::test_loops::small_siso_model(), two);
-    FAIL() << "no error for two whitening orders on one output";
-  } catch (const mpmpp::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("residual_ar_orders has 2 entries"), std::string::npos)
-        << e.what();
+  expect_msg(R"({"preset": "siso", "residual_ma_roots": [0.5, 1.0]})", "residual_ma_roots");
+  expect_msg(R"({"preset": "siso", "residual_ma_roots": [-0.1]})", "residual_ma_roots");
+  expect_msg(R"({"preset": "siso", "residual_ma_roots": 0.5})", "residual_ma_roots");
+  // One whitening order and root per output of the model.
+  for (const char* key : {"residual_ar_orders", "residual_ma_roots"}) {
+    DetectorConfig two = DetectorConfig::siso();
+    if (std::string(key) == "residual_ar_orders")
+      two.residual_ar_orders = {3, 4};
+    else
+      two.residual_ma_roots = {0.5, 0.7};
+    try {
+      mpmpp::WindowFeatures(mpmpp::test_loops::small_siso_model(), two);
+      FAIL() << "no error for two entries of " << key << " on one output";
+    } catch (const mpmpp::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(key) + " has 2 entries"), std::string::npos)
+          << e.what();
+    }
   }
   EXPECT_THROW(DetectorConfig::paper_siso().window_samples(7.0), mpmpp::InputError);
 }

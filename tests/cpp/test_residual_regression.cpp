@@ -95,6 +95,49 @@ TEST(ResidualRegression, ALongWhiteningAbsorbsADeadTimeChangeUnderPureFeedback) 
   EXPECT_LT(wald(g.delay(), 3), 22.5);            // chi-square(6) at 0.001
 }
 
+// A wandering disturbance, (1 - 0.85 q^-1) / (1 - 0.995 q^-1) e, under the same feedback: an AR(3)
+// whitening leaves most of its memory in the error, the controller carries it into u, and beta
+// reads it as a process change; through the training's moving-average root (residual_ma_roots)
+// the same AR(3) whitens it, and a dead-time change still stands out.
+TEST(ResidualRegression, AMovingAverageRootWhitensAWanderingDisturbance) {
+  const Model m = test_loops::small_siso_model(2);
+  const TransferFunction& g = *m.process[0][0];
+  const double b = g.num()[0], a = -g.den()[1];
+  auto wald = [&](int plant_delay, double root, unsigned seed) {
+    const Eigen::Index n = 1440;
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> e(0.0, 0.05);
+    Eigen::VectorXd y(n);
+    Eigen::MatrixXd u = Eigen::MatrixXd::Zero(n, 1);
+    double x = 0.0, w = 0.0, e_last = 0.0;
+    for (Eigen::Index t = 0; t < n; ++t) {
+      x = a * x + (t >= plant_delay ? b * u(t - plant_delay, 0) : 0.0);
+      const double et = e(rng);
+      w = 0.995 * w + et - 0.85 * e_last;
+      e_last = et;
+      y[t] = x + w;
+      u(t, 0) = -3.0 * y[t];
+    }
+    DetectorConfig c = DetectorConfig::siso();
+    c.residual_ar_orders = {3};
+    c.residual_ma_roots = {root};
+    const ResidualRegression r(m, 0, {0}, c);
+    std::vector<Eigen::VectorXd> beta;
+    std::vector<Eigen::MatrixXd> cov;
+    EXPECT_TRUE(r.estimate(y, u, beta, cov));
+    return beta[0].dot(cov[0].ldlt().solve(beta[0]));
+  };
+  double plain = 0.0, rooted = 0.0, changed = 1e300;
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    plain += wald(g.delay(), 0.0, seed) / 20;
+    rooted += wald(g.delay(), 0.85, seed) / 20;
+    changed = std::min(changed, wald(g.delay() + 2, 0.85, seed));
+  }
+  EXPECT_GT(plain, 50.0);    // measured 327: mean Wald on chi-square(6), the model right
+  EXPECT_LT(rooted, 9.0);    // measured 3.2 (chi-square(6) mean 6; conservative under feedback)
+  EXPECT_GT(changed, 50.0);  // measured 101, the smallest of the 20 windows
+}
+
 // A level: the paper loop's lag before an integrator, u in absolute units far from zero (an OP
 // at 40 %), so the integrated input ramps through every window. The window's level and ramp
 // carry what the integrator remembers of the time before and the input's offset; the test

@@ -91,10 +91,11 @@ def usable_rows(v, na):
     return np.array([i for i in range(len(v) - na) if np.all(np.isfinite(v[i:i + na + 1]))], dtype=int)
 
 
-def rows_clear_of_outliers(v, trend, na, sigmas):
+def rows_clear_of_outliers(v, trend, na, sigmas, memory=0):
     """Rows of the AR fit (row i reads v[i .. i + na]) reading no missing sample and no sample
     whose innovation in a first AR fit on those rows exceeds `sigmas` robust sigmas (1.4826
-    MAD); all of them when none is, or more than a tenth of them would go."""
+    MAD), nor the `memory` samples after it (a moving-average root's filter carries its tail);
+    all of them when none is, or more than a tenth of them would go."""
     usable = usable_rows(v, na)
     if sigmas <= 0:
         return usable
@@ -104,7 +105,7 @@ def rows_clear_of_outliers(v, trend, na, sigmas):
     limit = sigmas * 1.4826 * np.median(np.abs(e - med))
     out = np.zeros(len(trend), bool)
     for i in usable[np.abs(e - med) > limit]:
-        out[i:i + na + 1] = True
+        out[i:i + na + memory + 1] = True
     if not out[usable].any() or out[usable].sum() > len(usable) // 10:
         return usable
     return usable[~out[usable]]
@@ -121,18 +122,19 @@ def held(U):
     return U
 
 
-def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01, outlier_sigmas=0.0):
+def reference_window(g, y, u, na, terms, settle, breaks=0, significance=0.01, outlier_sigmas=0.0, ma_root=0.0):
     """One channel g (a TransferFunction) of input u: (beta, its covariance, A(q)'s ar, theirs)."""
     b, cov, ar, ar_cov = reference_window_miso([g], y, u[:, None], na, terms, 0, settle, breaks,
-                                               significance, outlier_sigmas)
+                                               significance, outlier_sigmas, ma_root)
     return b[0], cov[0], ar, ar_cov
 
 
 def reference_window_miso(channels, y, U, na, terms, absent_terms, settle, breaks=0, significance=0.01,
-                          outlier_sigmas=0.0):
+                          outlier_sigmas=0.0, ma_root=0.0):
     """channels[e]: the model's channel from column e of U, or None where the model lacks one
     (its absent_terms Laguerre directions alone). Per input: beta_e and its covariance; then
-    A(q)'s ar and covariance."""
+    A(q)'s ar and covariance. ma_root c: v and X through 1 / (1 - c q^-1) first, a lost output
+    sample unknown for the filter's memory (c^k >= 1 %) after it."""
     modelled = [g for g in channels if g is not None]
     U = held(U)
     yc, Uc = y - np.nanmean(y), U - U.mean(0)
@@ -145,11 +147,18 @@ def reference_window_miso(channels, y, U, na, terms, absent_terms, settle, break
         v -= _tf(np.asarray(g.num), np.asarray(g.den), int(g.delay), x)
         blocks.append(_directions(g, x, terms))
     X = np.column_stack(blocks)
+    memory = int(np.ceil(np.log(0.01) / np.log(ma_root))) if ma_root else 0
+    if memory:
+        lost = np.flatnonzero(~np.isfinite(v))
+        v = lfilter([1.0], [1.0, -ma_root], np.nan_to_num(v))
+        X = lfilter([1.0], [1.0, -ma_root], X, axis=0)
+        for t in lost:
+            v[t:t + memory + 1] = np.nan
     skip = min(settle, len(y) // 3)
     v, X = v[skip:], X[skip:]
     rows = len(v) - na
     trend = np.column_stack([np.ones(rows), np.linspace(0.0, 1.0, rows)])
-    kept = rows_clear_of_outliers(v, trend, na, outlier_sigmas)
+    kept = rows_clear_of_outliers(v, trend, na, outlier_sigmas, memory)
     edge = max(na + 1, len(kept) // 20)
     threshold = -2.0 * np.log(significance / max(len(kept) - 2 * edge, 1))  # chi-square(2), Bonferroni
     b = np.zeros(X.shape[1])

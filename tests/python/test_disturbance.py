@@ -13,6 +13,7 @@ import mpmpp
 from mpmpp import _core, scenarios
 from mpmpp.detect import Detector, _arrays, _cover_disturbance, detect, make_config
 from mpmpp.disturbance import WHITENING_FLOOR, disturbance_orders, inverse_order
+from mpmpp.model_identification import MA_ROOTS
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
 
@@ -29,10 +30,10 @@ def model(noise=None):
     return mpmpp.Model.from_json(json.dumps(doc), "test")
 
 
-def loop_data(n=6000, seed=1, ar=AR_TRUE):
+def loop_data(n=6000, seed=1, ar=AR_TRUE, ma=(1.0,)):
     rng = np.random.default_rng(seed)
     u = 3.0 + np.repeat(rng.normal(0, 1, n // 40 + 1), 40)[:n]
-    v = lfilter([1.0], ar, rng.normal(0, 0.1, n))
+    v = lfilter(list(ma), ar, rng.normal(0, 0.1, n))
     g = lfilter(np.r_[np.zeros(G_DELAY), G_NUM], G_DEN, u - u.mean())
     return pd.DataFrame({"time": TS * np.arange(n), "u": u, "y": 10.0 + g + v})
 
@@ -176,12 +177,56 @@ def test_the_residual_test_whitens_by_the_training_error_order_at_least_the_floo
     _, det = detect(model(), data, 3 * 3600.0, {"preset": "siso", "residual_ar_orders": [9]}, return_detector=True)
     det.save(path)
     doc = json.loads(path.read_text())
-    assert doc["version"] == 11
+    assert doc["version"] == 12
     doc["version"] = 10
     del doc["config"]["residual_ar_orders"]
     old = _core.Detector.from_json(json.dumps(doc), "v10.json")
     assert old.config.residual_ar_orders == [] and old.config.arx_order_a == 9
     np.testing.assert_array_equal(Detector(old).monitor(data).scores, det.monitor(data).scores)
+
+
+def test_a_wandering_disturbance_gets_a_moving_average_root_in_the_whitening(tmp_path):
+    """A disturbance (1 - 0.8 q^-1) / (1 - 0.995 q^-1) e (a wandering operating point): the
+    whitening's root and order are the BIC choice over MA_ROOTS of the training output error less
+    its mean through 1 / (1 - c q^-1) (a NumPy reference: plain least squares per order, one
+    more coefficient for c > 0), 0.8 here with a short AR where c = 0 alone needs a long one; an AR(2)
+    disturbance keeps c = 0. The root travels in the config and the detector file (version 12);
+    a version 11 file, without the key, loads with none."""
+    for ar, ma, root in (([1.0, -0.995], [1.0, -0.8], 0.8), (AR_TRUE, [1.0], 0.0)):
+        data = loop_data(ar=np.array(ar), ma=ma)
+        t, u, y = _arrays(model(), data)
+        (d,) = disturbance_orders(model(), t, u, y, 5000 * TS, 1440)
+        rows, cap = 5000, min(30, 1440 // 24)
+        v = reference_output_error(u, y, rows)
+        begin = rows - d.rows
+        scores = {}
+        w = v[begin - cap:rows] - v[begin:rows].mean()   # known from begin - cap on (the process settled)
+        for c in MA_ROOTS:
+            vc = np.r_[np.zeros(begin - cap), lfilter([1.0], [1.0, -c], w)]
+            p, poly = numpy_bic_ar(vc, begin, rows, cap)
+            n = rows - begin
+            bic = n * math.log(np.mean(np.convolve(vc[begin - p:rows], poly, mode="valid") ** 2)) + p * math.log(n)
+            scores[c] = (bic + (math.log(n) if c else 0.0), p)
+        best = min(scores, key=lambda c: scores[c][0])
+        assert (d.whitening_root, d.whitening) == (best, scores[best][1]) and best == root
+        config, notes = _cover_disturbance(make_config("siso"), model(), t, u, y, 5000 * TS)
+        assert config.residual_ma_roots == ([root] if root else [])
+        if root:
+            assert scores[0.0][1] >= 3 * max(scores[root][1], 1)
+            assert notes[0].endswith(f"AR({config.residual_ar_orders[0]}) after 1/(1 - 0.8 q^-1) (a wandering "
+                                     "disturbance)")
+    data = loop_data(ar=np.array([1.0, -0.995]), ma=[1.0, -0.8])
+    _, det = detect(model(), data, 3 * 3600.0, "siso", return_detector=True)
+    t, u, y = _arrays(model(), data)
+    roots = _cover_disturbance(make_config("siso"), model(), t, u, y, 3 * 3600.0)[0].residual_ma_roots
+    assert det._core.config.residual_ma_roots == roots and roots[0] >= 0.7   # 0.7 on these 3 h
+    path = tmp_path / "d.json"
+    det.save(path)
+    doc = json.loads(path.read_text())
+    assert doc["version"] == 12 and doc["config"]["residual_ma_roots"] == roots
+    doc["version"] = 11
+    del doc["config"]["residual_ma_roots"]
+    assert _core.Detector.from_json(json.dumps(doc), "v11.json").config.residual_ma_roots == []
 
 
 def test_step_and_ramp_disturbances_do_not_raise_the_whitening_order():

@@ -56,15 +56,17 @@ def _window(pi_loop, sigmas=0.0, spikes=0.0):
     return model, y, data[["u1"]].to_numpy()[:1440]
 
 
-@pytest.mark.parametrize("sigmas,spikes,lost,lost_inputs",
-                         [(0.0, 0.0, False, False), (60.0, 0.0, False, False), (0.0, 20.0, False, False),
-                          (0.0, 0.0, True, False), (0.0, 20.0, True, False), (0.0, 0.0, False, True),
-                          (0.0, 20.0, True, True)])
-def test_one_window_matches_numpy(pi_loop, sigmas, spikes, lost, lost_inputs):
+@pytest.mark.parametrize("sigmas,spikes,lost,lost_inputs,root",
+                         [(0.0, 0.0, False, False, 0.0), (60.0, 0.0, False, False, 0.0), (0.0, 20.0, False, False, 0.0),
+                          (0.0, 0.0, True, False, 0.0), (0.0, 20.0, True, False, 0.0), (0.0, 0.0, False, True, 0.0),
+                          (0.0, 20.0, True, True, 0.0), (0.0, 0.0, False, False, 0.8), (60.0, 20.0, True, True, 0.7)])
+def test_one_window_matches_numpy(pi_loop, sigmas, spikes, lost, lost_inputs, root):
     """``lost``: output samples a historian lost (NaN) at rows 200, 201, 705 and 1300, one
     beside a spike: the rows that read them leave both fits, as the reference leaves them.
     ``lost_inputs``: input samples lost at rows 0 (the window's first), 200 (with the output's),
-    450, 451 and 1439 (its last): held at the last value present (the first, at the start)."""
+    450, 451 and 1439 (its last): held at the last value present (the first, at the start).
+    ``root``: the disturbance's moving-average root (residual_ma_roots): v and the directions
+    through 1 / (1 - root q^-1), the rows within its memory after a lost or outlying sample out."""
     model, y, u = _window(pi_loop, sigmas, spikes)
     u = u.copy()
     if lost:
@@ -73,10 +75,11 @@ def test_one_window_matches_numpy(pi_loop, sigmas, spikes, lost, lost_inputs):
         u[[0, 200, 450, 451, 1439], 0] = np.nan
     config = make_config("siso", model)
     assert config.residual_steps > 0 and config.outlier_sigmas > 0
+    config.residual_ma_roots = [root] if root else []
     beta, cov, settle = _core.residual_regression(model, 0, [0], config, y, u)
     ref_b, ref_c, _, _ = reference_window(model.process("y1", "u1"), y, u[:, 0], config.arx_order_a,
                                           config.laguerre_terms, settle, config.residual_steps,
-                                          config.step_significance, config.outlier_sigmas)
+                                          config.step_significance, config.outlier_sigmas, root)
     np.testing.assert_allclose(beta[0], ref_b, rtol=1e-6, atol=1e-9 * np.abs(ref_b).max())
     np.testing.assert_allclose(cov[0], ref_c, rtol=1e-6, atol=1e-9 * np.abs(ref_c).max())
 

@@ -179,7 +179,7 @@ class Detector {
   void save(const std::string& path) const;  // atomic: temporary file + rename
   static Detector load(const std::string& path);
 
-  static constexpr int kFormatVersion = 11;  // history in CHANGELOG.md, "File formats"
+  static constexpr int kFormatVersion = 12;  // history in CHANGELOG.md, "File formats"
 
  private:
   Model model_;

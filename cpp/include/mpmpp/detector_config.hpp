@@ -104,6 +104,12 @@ struct DetectorConfig {
   // absorb a process change, which under feedback alone is predictable from the output error's
   // past (docs/detection.md "The whitening order"). Empty = residual_ar_order.
   std::vector<int> residual_ar_orders;
+  // Residual: per output (one entry per model output), the moving-average root c in [0, 1) of
+  // its disturbance, H = (1 - c q^-1) / A(q): each window's output error and directions pass
+  // 1 / (1 - c q^-1) before the AR whitening. mpmpp.detect sets it with residual_ar_orders (the
+  // BIC choice on the training output error, python/mpmpp/disturbance.py; docs/detection.md
+  // "A wandering disturbance"). Empty = 0 for every output.
+  std::vector<double> residual_ma_roots;
   // Residual: at most this many breaks (a level shift and a hinge at one row: an unmeasured
   // step or ramp disturbance) fitted per window in the AR fit and the whitened regression
   // (residual_regression.hpp), each kept only when its chi-square(2) score passes
@@ -153,11 +159,15 @@ struct DetectorConfig {
 
   // InputError naming the first invalid field.
   void validate() const;
-  // InputError unless residual_ar_orders is empty or has one entry per output of the model.
-  void check_residual_ar_orders(int num_outputs) const;
+  // InputError unless residual_ar_orders and residual_ma_roots are each empty or have one entry
+  // per output of the model.
+  void check_whitening_entries(int num_outputs) const;
   // Residual: the whitening order of output `output` (of num_outputs): residual_ar_orders[output],
   // else residual_ar_order, else arx_order_a.
   int whitening_order(int output, int num_outputs) const;
+  // Residual: the moving-average root of output `output`'s whitening, residual_ma_roots[output]
+  // or 0 (check_whitening_entries first).
+  double whitening_root(int output, int num_outputs) const;
   // Conversions at the model's sample time; InputError when not a whole number.
   int window_samples(double sample_time_s) const;
   int step_samples(double sample_time_s) const;

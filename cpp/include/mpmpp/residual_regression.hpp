@@ -14,6 +14,8 @@
 //   dead time);
 //   laguerre_terms Laguerre filters of u_j from lag 1, with the channel's slowest pole
 //   (time constant and any other shape).
+// With a moving-average root c (residual_ma_roots[output], from the training: a wandering
+// disturbance), v and x_j first pass 1 / (1 - c q^-1).
 // A(q) (order residual_ar_orders[output], else residual_ar_order, else arx_order_a; with a level
 // and a ramp for drifting disturbances) and beta are estimated alternately (two passes). Its
 // order must stay near the disturbance's: under feedback alone the inputs are filtered output
@@ -73,6 +75,7 @@ class ResidualRegression {
   std::vector<std::optional<TransferFunction>> nominal_;   // G0_ij per input, none if absent
   std::vector<std::vector<TransferFunction>> directions_;  // x_j = directions_[e][k] u_j
   int ar_order_;
+  double ma_root_;  // c of the training disturbance's (1 - c q^-1): v and x_j pass 1 / (1 - c q^-1)
   int settle_;
   int max_steps_;
   double step_significance_;

@@ -60,6 +60,8 @@ void bind_change_scan(py::module_& m) {
         py::arg("weight"), py::arg("onset"));
   m.def("fit_ar", &fit_ar, py::arg("e"), py::arg("order"), py::arg("begin"), py::arg("end"),
         py::arg("span") = 0);
+  m.def("ar_residual_variances", &ar_residual_variances, py::arg("e"), py::arg("max_order"),
+        py::arg("begin"), py::arg("end"));
   m.def("split_ar", &split_ar, py::arg("e"), py::arg("order"), py::arg("min_segment"),
         py::arg("step"), py::call_guard<py::gil_scoped_release>());
 }

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mpmpp/error.hpp"
@@ -542,8 +543,13 @@ GridSums ProjectedOnsetScan::sums(const Eigen::Ref<const Eigen::VectorXd>& x,
   return sums;
 }
 
-Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,
-                       Eigen::Index end, int span) {
+namespace {
+
+// The lag Gram matrix sum_t [e(t) .. e(t - order)]' [e(t) .. e(t - order)] over the rows t of
+// [max(begin, span), end) whose e(t - span) .. e(t) are all present, and their number.
+std::pair<Eigen::MatrixXd, Eigen::Index> ar_gram(const Eigen::Ref<const Eigen::VectorXd>& e,
+                                                 int order, Eigen::Index begin, Eigen::Index end,
+                                                 int span) {
   if (order < 1) throw InputError("AR order must be >= 1");
   span = std::max(span, order);
   begin = std::max<Eigen::Index>(begin, span);
@@ -561,12 +567,35 @@ Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Ei
   }
   if (rows <= 2 * order)
     throw InputError("too few samples for an AR(" + std::to_string(order) + ") fit");
-  const Eigen::VectorXd a =
-      gram.bottomRightCorner(order, order).ldlt().solve(gram.col(0).tail(order));
+  return {gram, rows};
+}
+
+// The AR(p) coefficients a (e(t) ~ a' [e(t - 1) .. e(t - p)]) from the top-left block of a
+// lag Gram matrix of order >= p: the normal equations of the fit on the Gram's rows.
+Eigen::VectorXd ar_coefficients(const Eigen::MatrixXd& gram, int p) {
+  return gram.block(1, 1, p, p).ldlt().solve(gram.col(0).segment(1, p));
+}
+
+}  // namespace
+
+Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,
+                       Eigen::Index end, int span) {
+  const Eigen::MatrixXd gram = ar_gram(e, order, begin, end, span).first;
   Eigen::VectorXd poly(order + 1);
   poly[0] = 1.0;
-  poly.tail(order) = -a;
+  poly.tail(order) = -ar_coefficients(gram, order);
   return poly;
+}
+
+Eigen::VectorXd ar_residual_variances(const Eigen::Ref<const Eigen::VectorXd>& e, int max_order,
+                                      Eigen::Index begin, Eigen::Index end) {
+  const auto [gram, rows] = ar_gram(e, max_order, begin, end, max_order);
+  Eigen::VectorXd s2(max_order + 1);
+  s2[0] = gram(0, 0);
+  // Residual sum of squares of a least-squares fit: e'e - g'a (normal equations).
+  for (int p = 1; p <= max_order; ++p)
+    s2[p] = gram(0, 0) - gram.col(0).segment(1, p).dot(ar_coefficients(gram, p));
+  return s2 / static_cast<double>(rows);
 }
 
 ArSplit split_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index min_segment,

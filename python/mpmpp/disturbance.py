@@ -88,14 +88,11 @@ def bic_ar(v: np.ndarray, begin: int, end: int, max_order: int) -> tuple[int, np
     t = np.arange(begin, end)
     rows = t[missing[t + 1] == missing[t - max_order]]
     n = len(rows)
-    best = (n * math.log(float(np.mean(v[rows] ** 2))), 0, np.array([1.0]))
-    for p in range(1, max_order + 1):
-        poly = np.asarray(_core.fit_ar(v, p, begin, end, max_order), dtype=float).ravel()
-        residual = np.convolve(v[begin - p:end], poly, mode="valid")[rows - begin]
-        bic = n * math.log(float(np.mean(residual**2))) + p * math.log(n)
-        if bic < best[0]:
-            best = (bic, p, poly)
-    return best[1], best[2], best[0], n
+    s2 = np.asarray(_core.ar_residual_variances(v, max_order, begin, end), dtype=float).ravel()
+    bic = n * np.log(s2) + np.arange(max_order + 1) * math.log(n)
+    p = int(np.argmin(bic))
+    poly = np.asarray(_core.fit_ar(v, p, begin, end, max_order), dtype=float).ravel() if p else np.array([1.0])
+    return p, poly, float(bic[p]), n
 
 
 def _settling_samples(row, length: int) -> int:

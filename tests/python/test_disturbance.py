@@ -92,6 +92,24 @@ def test_estimate_matches_numpy_least_squares_and_bic():
     np.testing.assert_allclose(poly, AR_TRUE, atol=0.06)
 
 
+def test_residual_variances_of_every_order_match_numpy_least_squares():
+    """_core.ar_residual_variances (one Gram matrix for every order, bic_ar's search) against a
+    plain least-squares fit per order on the same rows, with a lost sample among them."""
+    v = lfilter([1.0, -0.8], AR_TRUE, np.random.default_rng(4).normal(0, 1, 3000))
+    v[1700] = np.nan
+    cap, begin, end = 12, 40, 3000
+    s2 = np.asarray(_core.ar_residual_variances(v, cap, begin, end), dtype=float).ravel()
+    t = np.arange(begin, end)
+    rows = t[[np.all(np.isfinite(v[k - cap:k + 1])) for k in t]]
+    assert len(rows) == end - begin - (cap + 1)
+    reference = [np.mean(v[rows] ** 2)]
+    for p in range(1, cap + 1):
+        lags = np.column_stack([v[rows - k] for k in range(1, p + 1)])
+        a, *_ = np.linalg.lstsq(lags, v[rows], rcond=None)
+        reference.append(np.mean((v[rows] - lags @ a) ** 2))
+    np.testing.assert_allclose(s2, reference, rtol=1e-9)
+
+
 def test_estimate_uses_every_complete_stretch_of_the_training():
     """A row lost every 500 (u and y missing, as a timestamp the historian missed): the estimate
     is fitted on every stretch, each filtered from rest at its first row and its first rows (G's

@@ -132,6 +132,12 @@ OnsetFit fit_at_onset(const Eigen::Ref<const Eigen::VectorXd>& r,
 Eigen::VectorXd fit_ar(const Eigen::Ref<const Eigen::VectorXd>& e, int order, Eigen::Index begin,
                        Eigen::Index end, int span = 0);
 
+// The residual mean square of every AR(p) fit, p = 0 .. max_order, each on the same rows as
+// fit_ar(e, p, begin, end, max_order) (element p; element 0 is the mean square of e): one Gram
+// matrix for all orders, as an order search (BIC) needs, instead of a fit per order.
+Eigen::VectorXd ar_residual_variances(const Eigen::Ref<const Eigen::VectorXd>& e, int max_order,
+                                      Eigen::Index begin, Eigen::Index end);
+
 // Two-segment AR split of e: for each candidate onset k (step apart, both segments at least
 // min_segment long) the Gaussian log-likelihood gain
 //   n log s2(all) - k log s2(before) - (n - k) log s2(after)

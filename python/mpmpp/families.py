@@ -503,7 +503,7 @@ FAMILIES = [
            noise_colours=("wander", "ar1"), model_forms=("discrete+noise", "discrete"), setpoint_steps=True),
     # Added 2026-12-02 (forty-second session): the same wandering disturbance under a SISO MPC,
     # where detect's residual test raised false MPM alarms (after noise changes and with none:
-    # 10 of 200 runs on seeds 0-99 of these two) until its whitening took a moving-average root
+    # 7 of 200 runs on seeds 0-99 of these two) until its whitening took a moving-average root
     # (docs/detection.md "A wandering disturbance"). mpc_siso_clip_wander shares its controller
     # with the held-out mpc_siso_wander, which keeps 2 and 15 s sampling and models without a
     # noise model.

@@ -131,10 +131,11 @@ def whitening_root(w: np.ndarray, begin: int, end: int, cap: int) -> tuple[float
 def _through_root(w: np.ndarray, c: float) -> np.ndarray:
     """w through 1 / (1 - c q^-1) from rest at every run of known samples (NaN stays NaN; a run's
     first samples miss the earlier ones' trail, which the thousands of rows after it outweigh)."""
-    out = np.full_like(w, np.nan)
-    for a, b in complete_runs(np.isfinite(w)):
-        out[a:b] = np.asarray(_core.TransferFunction(np.ones(1), np.array([1.0, -c]), 0).filter(w[a:b]),
-                              dtype=float).ravel()
+    known = np.isfinite(w)
+    starts = [a for a, _ in complete_runs(known)]
+    out = np.asarray(_core.TransferFunction(np.ones(1), np.array([1.0, -c]), 0).filter(
+        np.where(known, w, 0.0), stretch_starts=starts), dtype=float).ravel()
+    out[~known] = np.nan
     return out
 
 

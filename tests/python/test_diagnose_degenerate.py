@@ -297,7 +297,8 @@ def test_the_noise_correction_is_one_per_disturbance_regime_over_the_data_segmen
     free = lfilter([1.0], [1.0, -1.1, 0.3], rng.standard_normal(n))
     inputs = rng.standard_normal((n, 2))
     pieces = [(0, 290), (291, 600), (601, 900), (901, 1200)]
-    ar, sigma = _corrections(free, pieces, inputs)
+    ar, sigma, root = _corrections(free, pieces, inputs, (0.0,))
+    assert root == [0.0] * 4
     rows = np.concatenate([np.arange(a + SETTLE, b) for a, b in pieces])
     lagged = free[rows[:, None] - np.arange(1, AR_ORDER + 1)]
     ref = np.linalg.lstsq(np.column_stack([lagged, inputs[rows]]), free[rows], rcond=None)[0]
@@ -305,7 +306,7 @@ def test_the_noise_correction_is_one_per_disturbance_regime_over_the_data_segmen
         np.testing.assert_allclose(poly, np.r_[1.0, -ref[:AR_ORDER]], atol=1e-10)
     innovations = np.concatenate([lfilter(ar[0], [1.0], free[a:b])[SETTLE:] for a, b in pieces])
     assert sigma == [pytest.approx(np.sqrt(np.mean(innovations**2)), rel=1e-12)] * 4
-    split, _ = _corrections(free, pieces, inputs, cuts=[601])
+    split, _, _ = _corrections(free, pieces, inputs, (0.0,), cuts=[601])
     assert np.array_equal(split[0], split[1]) and np.array_equal(split[2], split[3])
     assert not np.allclose(split[0], split[2])
 

@@ -16,6 +16,10 @@ estimation noise. When the process changed instead, (G_true - G) u is in e and o
 filter predicts it. The residual tests of ``compare`` cannot separate the two (a wrong noise
 model makes e coloured and the controller then correlates it with the inputs); this joint fit
 can. It is the direct prediction-error method's consistency condition turned into a test.
+The disturbance side holds a moving-average root beside its AR (``root_ar``, chosen on the fold
+that fits), and both structures see e and the inputs through it: a wandering disturbance whose
+colour changed leaves e nearly differenced after the onset, which no AR of this order whitens,
+and the colour left was what the inputs, a filter of e's past under feedback, then predicted.
 """
 from __future__ import annotations
 
@@ -25,7 +29,7 @@ import numpy as np
 
 from ..signals import filtered_columns
 from .laguerre import laguerre_filters, laguerre_pole, output_basis
-from .whitening import NOISE_ORDER, OutputResidual
+from .whitening import NOISE_ORDER, OutputResidual, correction, filter_pieces, root_ar
 
 
 def input_driven_gain(out: OutputResidual, folds: list[np.ndarray], order: int = NOISE_ORDER) -> tuple[float, int]:
@@ -38,19 +42,28 @@ def input_driven_gain(out: OutputResidual, folds: list[np.ndarray], order: int =
     hinv = out.noise.inverse()
     whitened_u = filtered_columns(sig, [hinv], np.nan_to_num(sig.u))
     x = np.nan_to_num(output_basis(sig, out.i, whitened_u, laguerre_filters(laguerre_pole(sig, out.i))))
-    # [1, e lagged 1..order, x], column-major (x is); the disturbance side is its first columns
-    both = np.zeros((len(e), 1 + order + x.shape[1]), order="F")
-    both[:, 0] = 1.0
-    for k in range(1, order + 1):
-        both[k:, k] = e[:-k]
-    both[:, 1 + order:] = x
-    noise_side = both[:, :1 + order]
+    whole = [(0, len(e))]
     gain = 0.0
     for k in (0, 1):
         fit, test = folds[k], folds[1 - k]
+        c, _ = root_ar(e, whole, fit, None, out.roots, order)
+        through = correction(np.ones(1), c)
+        both = _design(through.filter(e), filter_pieces(through, x, whole), order) if c else _design(e, x, order)
+        target = both[:, 0]
         var = []
-        for z in (noise_side, both):
-            coef = np.linalg.lstsq(z[fit], e[fit], rcond=None)[0]
-            var.append(float(np.mean((e[test] - z[test] @ coef) ** 2)))
+        for z in (both[:, 1:2 + order], both[:, 1:]):  # the disturbance side is the first columns
+            coef = np.linalg.lstsq(z[fit], target[fit], rcond=None)[0]
+            var.append(float(np.mean((target[test] - z[test] @ coef) ** 2)))
         gain += int(test.sum()) * math.log(var[0] / var[1]) if var[1] > 0 else 0.0
     return gain, x.shape[1]
+
+
+def _design(e: np.ndarray, x: np.ndarray, order: int) -> np.ndarray:
+    """[e, 1, e lagged 1..order, x], column-major."""
+    both = np.zeros((len(e), 2 + order + x.shape[1]), order="F")
+    both[:, 0] = e
+    both[:, 1] = 1.0
+    for k in range(1, order + 1):
+        both[k:, 1 + k] = e[:-k]
+    both[:, 2 + order:] = x
+    return both

@@ -20,7 +20,7 @@ from .result import Finding, InsufficientData, ModelChange
 from .scoring import confidence
 from .spikes import without_spikes
 from .trend import trend_fit
-from .whitening import AR_ORDER, MIN_AR_ROWS_PER_COEFFICIENT, SETTLE, OutputResidual, masked_ar, stable
+from .whitening import AR_ORDER, MIN_AR_ROWS_PER_COEFFICIENT, SETTLE, OutputResidual, root_ar, stable
 
 DRIFT_POLES = (0.995, 0.998, 0.999, 0.9995)
 DRIFT_ZEROS = (0.8, 0.9, 0.95, 0.98)
@@ -125,11 +125,23 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
             gain += test.sum() * math.log(np.mean(e0[test] ** 2) / np.mean(w[test] ** 2))
         return gain
 
+    whole = [(0, len(e0))]
+    rooted = []
+
     def ar_on(mask):
-        return TransferFunction(masked_ar(e0, mask), [1.0], 0)
+        """The new colour fitted on ``mask``: an AR with a moving-average root (root_ar)."""
+        c, poly = root_ar(e0, whole, mask, None, out.roots)
+        rooted.append(c > 0.0)
+        return TransferFunction(poly, [1.0, -c], 0)
+
+    def new_noise(mask):
+        """H (1 - c q^-1) / A with the new colour fitted on ``mask``."""
+        c, poly = root_ar(e0, whole, mask, None, out.roots)
+        return TransferFunction(np.convolve(out.noise.num, [1.0, -c]), np.convolve(out.noise.den, stable(poly)), 0)
 
     candidates = []
     noise_gain = heldout_gain(ar_on)
+    colour_params = AR_ORDER + any(rooted)
     if noise_gain < min_effect * sum(f.sum() for f in fold):
         noise_gain = -math.inf     # a colour change too small to matter (see min_effect)
     level = 0.0
@@ -147,7 +159,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
     else:
         ratio = 1.0
     onset_params = 1 if onset > first_onset else 0
-    noise_score = max(noise_gain - (AR_ORDER + onset_params) * logn, level - (1 + onset_params) * logn)
+    noise_score = max(noise_gain - (colour_params + onset_params) * logn, level - (1 + onset_params) * logn)
     candidates.append(DisturbanceCandidate("noise_change", noise_score, noise_gain, level))
 
     # A slow drift on top of the modelled disturbance: v = H e + d with d a slowly wandering
@@ -177,17 +189,16 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
                 f"(held-out log-likelihood gain {input_gain / 2:.0f} of a linear input filter over a new "
                 f"noise model): a process change no candidate structure fits; no disturbance change is "
                 f"named"), input_driven=True)
-        poly = stable(masked_ar(e0, after))
-        noise = TransferFunction(out.noise.num, np.convolve(out.noise.den, poly), 0)
+        noise = new_noise(after)
         se = math.sqrt(2.0 / max(n_after, 1) + 2.0 / max(onset - first_onset, 1))
         estimate = {"variance_ratio": ratio, "ci95": [ratio * math.exp(-1.96 * se), ratio * math.exp(1.96 * se)],
                     "noise_den": list(map(float, noise.den))}
         text = (f"the disturbance on {out.name} changed {when} (innovation variance x{ratio:.2f}, "
                 f"new colour); {_process_claim(out, onset)}")
-        params = AR_ORDER + onset_params
+        params = colour_params + onset_params
         conf_stat = max(best.gain, best.level)
         # The noise model update writes is refitted on the fit blocks only (errors on the others).
-        written = TransferFunction(out.noise.num, np.convolve(out.noise.den, stable(masked_ar(e0, fold[0]))), 0)
+        written = new_noise(fold[0])
     else:
         written = TransferFunction(np.convolve(out.noise.num, [1.0, -drift.c]),
                                    np.convolve(out.noise.den, [1.0, -drift.rho]), 0)
@@ -201,7 +212,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
     # A pure level change is a real disturbance change the model file cannot hold (H is monic,
     # the innovation variance is not in docs/formats.md), so it need not lower the error.
     level_driven = best.effect == "noise_change" and best.level - (1 + onset_params) * logn >= noise_gain - (
-        AR_ORDER + onset_params) * logn
+        colour_params + onset_params) * logn
     if not err.improved and not level_driven:
         return DisturbanceVerdict(None, input_driven=input_driven)
     return DisturbanceVerdict(Finding(

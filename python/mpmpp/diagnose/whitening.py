@@ -33,6 +33,8 @@ from .result import InsufficientData
 from .trend import TrendScan, trend_fit
 
 AR_ORDER = 5                 # AR correction of the noise model (residual whitening)
+CORRECTION_ROOTS = (0.0, 0.5, 0.7, 0.8, 0.9, 0.95, 0.98, 0.99, 0.995)
+WANDERING_POLE = 0.95        # a noise model pole this close to 1: the disturbance wanders (root_grid)
 SETTLE = 60                  # samples left out after the start of each filtered segment
 NOISE_ORDER = 10             # AR order of a disturbance model estimated from the data
 MIN_AR_ROWS_PER_COEFFICIENT = 10
@@ -82,6 +84,7 @@ class OutputResidual:
     # (effect, input) of a change from the first row whose update the search dropped (process.py)
     refused: frozenset = frozenset()
     inputs: np.ndarray | None = field(repr=False, default=None)    # H^-1-filtered input basis (ARX fits)
+    root: list[float] = field(default_factory=list)  # moving-average root c_s per piece (0: none)
 
     @property
     def row(self) -> list:
@@ -91,6 +94,11 @@ class OutputResidual:
     def noise(self) -> TransferFunction:
         return self.sig.noise[self.i]
 
+    @property
+    def roots(self) -> tuple:
+        """The moving-average roots the noise side may take (``root_grid``)."""
+        return root_grid(self.noise)
+
     def whiten(self, x: np.ndarray) -> np.ndarray:
         """A_s H^-1 x / sigma_s per piece (filters restart at every piece)."""
         out = np.zeros_like(x, dtype=float)
@@ -99,8 +107,8 @@ class OutputResidual:
         return out
 
     def whiten_piece(self, p: int, x: np.ndarray) -> np.ndarray:
-        """A_p H^-1 x / sigma_p for x on piece p (filters start at rest)."""
-        return TransferFunction(self.ar[p], [1.0], 0).filter(self.noise.inverse().filter(x)) / self.sigma[p]
+        """A_p / (1 - c_p q^-1) H^-1 x / sigma_p for x on piece p (filters start at rest)."""
+        return correction(self.ar[p], self.root[p]).filter(self.noise.inverse().filter(x)) / self.sigma[p]
 
     def forgetting_rows(self, p: int) -> int:
         """Rows after which piece p's whitening filter, started at rest, gives what it gives
@@ -111,8 +119,7 @@ class OutputResidual:
         inverse = self.noise.inverse()
         a, b = self.pieces[p]
         fir = len(inverse.num) + len(self.ar[p]) + inverse.delay
-        poles = np.abs(inverse.poles())
-        rho = float(poles.max()) if len(poles) else 0.0
+        rho = float(np.abs(np.r_[inverse.poles(), self.root[p]]).max())
         if rho >= 1.0 - 1e-3:
             return b - a
         return min(b - a, fir + (math.ceil(50.0 / -math.log(rho)) if rho > 0.0 else 0))
@@ -173,13 +180,13 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
                                       max(first_onset, 2 * SETTLE), math.log(n))
     free = e0 - steps
     inputs = input_basis(sig, i, noise.inverse())
-    ar, sigma = _corrections(free, pieces, inputs, cuts)
+    ar, sigma, root = _corrections(free, pieces, inputs, root_grid(noise), cuts)
     parity = (np.arange(n) // block) % 2
     out = OutputResidual(sig=sig, i=i, name=sig.outputs[i], v=v, e=e, weight=weight, split=split,
                          split_onset=split_onset, split_significant=split_significant, pieces=pieces,
                          ar=ar, sigma=sigma, r=np.zeros(n), fold=[weight * (parity == 0), weight * (parity == 1)],
                          block=block, n=int(weight.sum()), noise_estimated=noise_estimated, disturbance_onsets=onsets,
-                         free=free, inputs=inputs)
+                         free=free, inputs=inputs, root=root)
     out.r = out.whiten(np.nan_to_num(v))
     return out
 
@@ -188,35 +195,112 @@ def without_split(out: OutputResidual) -> OutputResidual:
     """The same residual under the hypothesis that the disturbance did not change: one AR
     correction per data segment, no split."""
     pieces = _pieces(out.sig.segments, [])
-    ar, sigma = _corrections(out.free, pieces, out.inputs)
-    flat = dataclasses.replace(out, split_significant=False, pieces=pieces, ar=ar, sigma=sigma, nuisance=None)
+    ar, sigma, root = _corrections(out.free, pieces, out.inputs, out.roots)
+    flat = dataclasses.replace(out, split_significant=False, pieces=pieces, ar=ar, sigma=sigma, root=root,
+                               nuisance=None)
     flat.r = flat.whiten(np.nan_to_num(out.v))
     return flat
 
 
-def _corrections(free: np.ndarray, pieces: list[tuple[int, int]], inputs: np.ndarray,
-                 cuts=()) -> tuple[list[np.ndarray], list[float]]:
-    """The AR correction A_s and innovation RMS of each piece (the AR fitted beside ``inputs``,
-    the innovation without them: what the whitened residual's variance is), one pair per
-    disturbance regime (the pieces between the ``cuts``, the noise split's onsets): the data
-    segments a historian's lost samples cut a regime into share its disturbance, and a
-    correction fitted to each alone is noisier (tuning day-long records with the PV lost every
-    250 rows: 40 -> 49 of 60 changes named, 51 on the complete records) and needs
-    MIN_AR_ROWS_PER_COEFFICIENT * AR_ORDER rows after SETTLE in every segment."""
+def _corrections(free: np.ndarray, pieces: list[tuple[int, int]], inputs: np.ndarray, grid: tuple,
+                 cuts=()) -> tuple[list[np.ndarray], list[float], list[float]]:
+    """The AR correction A_s, innovation RMS and moving-average root c_s of each piece (the AR
+    fitted beside ``inputs``, the innovation without them: what the whitened residual's variance
+    is), one triple per disturbance regime (the pieces between the ``cuts``, the noise split's
+    onsets): the data segments a historian's lost samples cut a regime into share its
+    disturbance, and a correction fitted to each alone is noisier (tuning day-long records with
+    the PV lost every 250 rows: 40 -> 49 of 60 changes named, 51 on the complete records) and
+    needs MIN_AR_ROWS_PER_COEFFICIENT * AR_ORDER rows after SETTLE in every segment. The root,
+    one of ``grid`` (``root_grid``), is chosen (``root_ar``) on the rows after the slowest root's
+    start-up, so that every root is scored on the same rows (roots that need more than half the
+    regime's shortest piece to forget their start are not tried); A_s is fitted on the rows
+    after SETTLE."""
     regime = [int(np.searchsorted(np.sort(cuts), a, side="right")) for a, _ in pieces]
-    ar, sigma = [None] * len(pieces), [0.0] * len(pieces)
+    ar, sigma, root = [None] * len(pieces), [0.0] * len(pieces), [0.0] * len(pieces)
     for r in sorted(set(regime)):
-        mine = [k for k, g in enumerate(regime) if g == r]
-        rows = np.zeros(len(free), bool)
-        for k in mine:
-            a, b = pieces[k]
-            rows[a + SETTLE:b] = True
-        poly = masked_ar(free, rows, AR_ORDER, inputs)
-        w = np.concatenate([TransferFunction(poly, [1.0], 0).filter(free[a:b])[SETTLE:]
-                            for a, b in (pieces[k] for k in mine)])
-        for k in mine:
-            ar[k], sigma[k] = poly, float(np.sqrt(np.mean(w**2)))
-    return ar, sigma
+        mine = [pieces[k] for k, g in enumerate(regime) if g == r]
+        shortest = min(b - a for a, b in mine)
+        roots = [c for c in grid if _forgetting(c) <= shortest // 2]
+        skip = max(SETTLE, _forgetting(roots[-1]))
+        settled = _after_start(len(free), mine, SETTLE)
+        c, poly = root_ar(free, mine, _after_start(len(free), mine, skip), inputs, roots,
+                          fit_rows=settled if skip > SETTLE else None)
+        w = filter_pieces(correction(poly, c), free, mine)[settled]
+        for k, g in enumerate(regime):
+            if g == r:
+                ar[k], sigma[k], root[k] = poly, float(np.sqrt(np.mean(w**2))), c
+    return ar, sigma, root
+
+
+def root_grid(noise: TransferFunction) -> tuple:
+    """CORRECTION_ROOTS for an output whose noise model (the file's or the estimated one) has a
+    pole within 1 - WANDERING_POLE of the unit circle, a wandering disturbance (``root_ar``);
+    (0,) otherwise: no root. Offered on every output, a root near 1 took up a process change
+    present in the error (an unsplit regime after a dead-time change) as readily as it undid a
+    wandering disturbance (docs/diagnose.md "A wandering disturbance")."""
+    poles = np.abs(noise.poles())
+    return CORRECTION_ROOTS if len(poles) and poles.max() >= WANDERING_POLE else (0.0,)
+
+
+def root_ar(x: np.ndarray, pieces: list[tuple[int, int]], rows: np.ndarray, inputs: np.ndarray | None,
+            roots: tuple, order: int = AR_ORDER, fit_rows: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    """(c, A): the moving-average root c of ``roots`` and the AR(order) A that whiten x best,
+    A(q) / (1 - c q^-1) x, by BIC on ``rows`` with one coefficient charged for c > 0; A refitted
+    on ``fit_rows`` when given. Each root filters x (and ``inputs``, beside
+    which A is fitted) from rest in each of ``pieces``, as ``whiten_piece`` does.
+    A disturbance that wanders (nearly integrated, with white noise on top: (1 - c q^-1) /
+    (1 - a q^-1), a near 1) has an inverse whose memory c^k no AR of this order holds; after its
+    colour changes, its old inverse leaves the error nearly differenced, (1 - a q^-1) times the
+    new disturbance, which only a root near a undoes. The colour left is carried into the inputs
+    by the controller, where candidates take it for a process change (docs/diagnose.md "A
+    wandering disturbance")."""
+    best = None
+    for c in roots:
+        through = correction(np.ones(1), c)
+        # the rows and their lags lie inside the pieces, where no root is no filter
+        xc = filter_pieces(through, x, pieces) if c else x
+        zc = filter_pieces(through, inputs, pieces) if c and inputs is not None else inputs
+        poly = masked_ar(xc, rows, order, zc)
+        bic = _bic(poly, c, xc, pieces, rows) if len(roots) > 1 else 0.0
+        if best is None or bic < best[0]:
+            best = (bic, c, xc, zc, poly)
+    _, c, xc, zc, poly = best
+    return c, poly if fit_rows is None else masked_ar(xc, fit_rows, order, zc)
+
+
+def _bic(poly: np.ndarray, c: float, xc: np.ndarray, pieces: list[tuple[int, int]], rows: np.ndarray) -> float:
+    """BIC of the whitened xc on ``rows``, the AR's coefficients being common to every root."""
+    w = filter_pieces(TransferFunction(poly, [1.0], 0), xc, pieces)[rows]
+    return len(w) * math.log(np.mean(w**2)) + (math.log(len(w)) if c else 0.0)
+
+
+def filter_pieces(f: TransferFunction, x: np.ndarray, pieces: list[tuple[int, int]]) -> np.ndarray:
+    """f x (each column of x) from rest in each piece, zero outside them."""
+    out = np.zeros(x.shape)
+    for a, b in pieces:
+        if x.ndim == 1:
+            out[a:b] = f.filter(x[a:b])
+        for j in range(x.shape[1] if x.ndim == 2 else 0):
+            out[a:b, j] = f.filter(x[a:b, j])
+    return out
+
+
+def _after_start(n: int, pieces: list[tuple[int, int]], skip: int) -> np.ndarray:
+    """Rows of the pieces after their first ``skip``."""
+    rows = np.zeros(n, bool)
+    for a, b in pieces:
+        rows[a + skip:b] = True
+    return rows
+
+
+def _forgetting(c: float) -> int:
+    """Samples until 1 / (1 - c q^-1), started at rest, has forgotten its missing past to 1 %."""
+    return math.ceil(math.log(0.01) / math.log(c)) if c else 0
+
+
+def correction(ar: np.ndarray, c: float) -> TransferFunction:
+    """A(q) / (1 - c q^-1)."""
+    return TransferFunction(ar, [1.0, -c] if c else [1.0], 0)
 
 
 def input_basis(sig: Signals, i: int, prefilter: TransferFunction | None = None) -> np.ndarray:

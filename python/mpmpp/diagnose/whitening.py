@@ -246,9 +246,8 @@ def root_ar(x: np.ndarray, pieces: list[tuple[int, int]], rows: np.ndarray, inpu
             roots: tuple, order: int = AR_ORDER, fit_rows: np.ndarray | None = None) -> tuple[float, np.ndarray]:
     """(c, A): the moving-average root c of ``roots`` and the AR(order) A that whiten x best,
     A(q) / (1 - c q^-1) x, by BIC on ``rows`` with one coefficient charged for c > 0; A refitted
-    on ``fit_rows`` when given. Each root filters x (and ``inputs``, beside
-    which A is fitted) from rest in each of ``pieces``, as ``whiten_piece`` does.
-    A disturbance that wanders (nearly integrated, with white noise on top: (1 - c q^-1) /
+    on ``fit_rows`` when given. Each root filters x (and ``inputs``, beside which A is fitted)
+    from rest in each of ``pieces``, as ``whiten_piece`` does. A disturbance that wanders (nearly integrated, with white noise on top: (1 - c q^-1) /
     (1 - a q^-1), a near 1) has an inverse whose memory c^k no AR of this order holds; after its
     colour changes, its old inverse leaves the error nearly differenced, (1 - a q^-1) times the
     new disturbance, which only a root near a undoes. The colour left is carried into the inputs
@@ -257,7 +256,7 @@ def root_ar(x: np.ndarray, pieces: list[tuple[int, int]], rows: np.ndarray, inpu
     best = None
     for c in roots:
         through = correction(np.ones(1), c)
-        # the rows and their lags lie inside the pieces, where no root is no filter
+        # c = 0 filters nothing: x is used as it is (the rows and their lags lie in the pieces)
         xc = filter_pieces(through, x, pieces) if c else x
         zc = filter_pieces(through, inputs, pieces) if c and inputs is not None else inputs
         poly = masked_ar(xc, rows, order, zc)
@@ -276,13 +275,12 @@ def _bic(poly: np.ndarray, c: float, xc: np.ndarray, pieces: list[tuple[int, int
 
 def filter_pieces(f: TransferFunction, x: np.ndarray, pieces: list[tuple[int, int]]) -> np.ndarray:
     """f x (each column of x) from rest in each piece, zero outside them."""
-    out = np.zeros(x.shape)
+    columns = x.reshape(len(x), -1)
+    out = np.zeros(columns.shape)
     for a, b in pieces:
-        if x.ndim == 1:
-            out[a:b] = f.filter(x[a:b])
-        for j in range(x.shape[1] if x.ndim == 2 else 0):
-            out[a:b, j] = f.filter(x[a:b, j])
-    return out
+        for j in range(columns.shape[1]):
+            out[a:b, j] = f.filter(columns[a:b, j])
+    return out.reshape(x.shape)
 
 
 def _after_start(n: int, pieces: list[tuple[int, int]], skip: int) -> np.ndarray:

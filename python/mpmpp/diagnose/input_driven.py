@@ -46,7 +46,7 @@ def input_driven_gain(out: OutputResidual, folds: list[np.ndarray], order: int =
     gain = 0.0
     for k in (0, 1):
         fit, test = folds[k], folds[1 - k]
-        c, _ = root_ar(e, whole, fit, None, out.roots, order)
+        c, _ = root_ar(e, whole, fit, None, out.offered_roots, order)
         through = correction(np.ones(1), c)
         both = _design(through.filter(e), filter_pieces(through, x, whole), order) if c else _design(e, x, order)
         target = both[:, 0]

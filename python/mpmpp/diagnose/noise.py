@@ -20,7 +20,7 @@ from .result import Finding, InsufficientData, ModelChange
 from .scoring import confidence
 from .spikes import without_spikes
 from .trend import trend_fit
-from .whitening import AR_ORDER, MIN_AR_ROWS_PER_COEFFICIENT, SETTLE, OutputResidual, root_ar, stable
+from .whitening import AR_ORDER, MIN_AR_ROWS_PER_COEFFICIENT, SETTLE, OutputResidual, correction, root_ar, stable
 
 DRIFT_POLES = (0.995, 0.998, 0.999, 0.9995)
 DRIFT_ZEROS = (0.8, 0.9, 0.95, 0.98)
@@ -115,33 +115,27 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
         # first-order MA, at confidence 0.99, in every run of one draw). No candidate is fitted.
         return DisturbanceVerdict(None, input_driven=input_driven)
 
-    def heldout_gain(make_filter):
-        """sum over both folds of n_test log(var nominal / var filtered), filter fitted on the other fold."""
+    def heldout_gain(fold_filter):
+        """sum over both folds of n_test log(var nominal / var filtered), the filter of fold k
+        (``fold_filter(k)``) fitted on it and tested on the other fold."""
         gain = 0.0
         for k in (0, 1):
-            filt = make_filter(fold[k])
-            w = filt.filter(e0)
+            w = fold_filter(k).filter(e0)
             test = fold[1 - k]
             gain += test.sum() * math.log(np.mean(e0[test] ** 2) / np.mean(w[test] ** 2))
         return gain
 
+    # The new colour, an AR with a moving-average root (root_ar), fitted once on each fold.
     whole = [(0, len(e0))]
-    rooted = []
+    colours = [root_ar(e0, whole, f, None, out.offered_roots) for f in fold]
 
-    def ar_on(mask):
-        """The new colour fitted on ``mask``: an AR with a moving-average root (root_ar)."""
-        c, poly = root_ar(e0, whole, mask, None, out.roots)
-        rooted.append(c > 0.0)
-        return TransferFunction(poly, [1.0, -c], 0)
-
-    def new_noise(mask):
-        """H (1 - c q^-1) / A with the new colour fitted on ``mask``."""
-        c, poly = root_ar(e0, whole, mask, None, out.roots)
+    def new_noise(c, poly):
+        """H (1 - c q^-1) / A, the noise model of a new colour (c, A)."""
         return TransferFunction(np.convolve(out.noise.num, [1.0, -c]), np.convolve(out.noise.den, stable(poly)), 0)
 
     candidates = []
-    noise_gain = heldout_gain(ar_on)
-    colour_params = AR_ORDER + any(rooted)
+    noise_gain = heldout_gain(lambda k: correction(colours[k][1], colours[k][0]))
+    colour_params = AR_ORDER + any(c > 0.0 for c, _ in colours)
     if noise_gain < min_effect * sum(f.sum() for f in fold):
         noise_gain = -math.inf     # a colour change too small to matter (see min_effect)
     level = 0.0
@@ -168,7 +162,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
     drift = None
     for rho in DRIFT_POLES:
         for c in DRIFT_ZEROS:
-            g = heldout_gain(lambda mask, rho=rho, c=c: TransferFunction([1.0, -rho], [1.0, -c], 0))
+            g = heldout_gain(lambda k, rho=rho, c=c: TransferFunction([1.0, -rho], [1.0, -c], 0))
             if drift is None or g > drift.gain:
                 drift = DriftNoise(rho, c, g)
     candidates.append(DisturbanceCandidate("output_drift", drift.gain - (2 + onset_params) * logn, drift.gain, 0.0))
@@ -189,7 +183,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
                 f"(held-out log-likelihood gain {input_gain / 2:.0f} of a linear input filter over a new "
                 f"noise model): a process change no candidate structure fits; no disturbance change is "
                 f"named"), input_driven=True)
-        noise = new_noise(after)
+        noise = new_noise(*root_ar(e0, whole, after, None, out.offered_roots))
         se = math.sqrt(2.0 / max(n_after, 1) + 2.0 / max(onset - first_onset, 1))
         estimate = {"variance_ratio": ratio, "ci95": [ratio * math.exp(-1.96 * se), ratio * math.exp(1.96 * se)],
                     "noise_den": list(map(float, noise.den))}
@@ -198,7 +192,7 @@ def _disturbance_finding(out: OutputResidual, first_onset: int, logn: float, dri
         params = colour_params + onset_params
         conf_stat = max(best.gain, best.level)
         # The noise model update writes is refitted on the fit blocks only (errors on the others).
-        written = new_noise(fold[0])
+        written = new_noise(*colours[0])
     else:
         written = TransferFunction(np.convolve(out.noise.num, [1.0, -drift.c]),
                                    np.convolve(out.noise.den, [1.0, -drift.rho]), 0)

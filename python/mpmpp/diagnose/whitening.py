@@ -95,7 +95,7 @@ class OutputResidual:
         return self.sig.noise[self.i]
 
     @property
-    def roots(self) -> tuple:
+    def offered_roots(self) -> tuple:
         """The moving-average roots the noise side may take (``root_grid``)."""
         return root_grid(self.noise)
 
@@ -195,7 +195,7 @@ def without_split(out: OutputResidual) -> OutputResidual:
     """The same residual under the hypothesis that the disturbance did not change: one AR
     correction per data segment, no split."""
     pieces = _pieces(out.sig.segments, [])
-    ar, sigma, root = _corrections(out.free, pieces, out.inputs, out.roots)
+    ar, sigma, root = _corrections(out.free, pieces, out.inputs, out.offered_roots)
     flat = dataclasses.replace(out, split_significant=False, pieces=pieces, ar=ar, sigma=sigma, root=root,
                                nuisance=None)
     flat.r = flat.whiten(np.nan_to_num(out.v))
@@ -247,12 +247,13 @@ def root_ar(x: np.ndarray, pieces: list[tuple[int, int]], rows: np.ndarray, inpu
     """(c, A): the moving-average root c of ``roots`` and the AR(order) A that whiten x best,
     A(q) / (1 - c q^-1) x, by BIC on ``rows`` with one coefficient charged for c > 0; A refitted
     on ``fit_rows`` when given. Each root filters x (and ``inputs``, beside which A is fitted)
-    from rest in each of ``pieces``, as ``whiten_piece`` does. A disturbance that wanders (nearly integrated, with white noise on top: (1 - c q^-1) /
-    (1 - a q^-1), a near 1) has an inverse whose memory c^k no AR of this order holds; after its
-    colour changes, its old inverse leaves the error nearly differenced, (1 - a q^-1) times the
-    new disturbance, which only a root near a undoes. The colour left is carried into the inputs
-    by the controller, where candidates take it for a process change (docs/diagnose.md "A
-    wandering disturbance")."""
+    from rest in each of ``pieces``, as ``whiten_piece`` does. A disturbance that wanders
+    (nearly integrated, with white noise on top: (1 - c q^-1) / (1 - a q^-1), a near 1) has an
+    inverse whose memory c^k no AR of this order holds; after its colour changes, its old
+    inverse leaves the error nearly differenced, (1 - a q^-1) times the new disturbance, which
+    only a root near a undoes. The colour left is carried into the inputs by the controller,
+    where candidates take it for a process change (docs/diagnose.md "A wandering
+    disturbance")."""
     best = None
     for c in roots:
         through = correction(np.ones(1), c)

@@ -3,6 +3,11 @@
 Per output:
 - fit % = 100 (1 - ||y - yhat|| / ||y - mean y||) for the simulation (u only) and for the
   k-step-ahead prediction with the model's noise model, yhat(t|t-k) = W_k G u + (1 - W_k) y;
+- an output without a noise model (H = 1 in the file, the usual hand-written model) gets the
+  disturbance model ``diagnose`` estimates (AR of the output error fitted beside the inputs'
+  basis, so a wrong channel stays in the error), and a note says so. With H = 1 the one-step
+  error is the coloured disturbance itself: never white, and in closed loop correlated with
+  the past inputs, which react to it, so every test below would call a right model wrong;
 - residual tests with 99 % bounds on the one-step prediction error e = H^-1 (y - G u):
   whiteness (autocorrelation, lags 1..M) and cross-correlation with every input and every extra
   data column at lags -M..M. Positive lags (the column leads e) point at model error; in closed
@@ -18,15 +23,19 @@ Signals are deviations from the record's mean (see ``mpmpp.signals``).
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from . import _core
+from .diagnose.result import InsufficientData
+from .diagnose.whitening import estimated_noise_model, estimated_noise_note, has_noise_model
 from .record_length import MIN_ROWS, require_rows, scaled_rows
 from .held_values import frozen_inputs, frozen_note
 from .hysteresis_test import HysteresisCheck, hysteresis_check
+from .io import json_safe
 from .integrating import integrating_notes, row_integrates, without_line
 from .signals import Signals, bridged_reach, extract, per_segment
 
@@ -100,6 +109,7 @@ class CompareResult:
     interpolated_samples: int = 0   # lost output samples interpolated (signals.bridge_lost_outputs)
     frozen_inputs: list = field(default_factory=list)   # model inputs with one value throughout (held_values.frozen)
     integrating: list = field(default_factory=list)     # notes on integrating channels (integrating.py)
+    disturbance: list = field(default_factory=list)     # notes on disturbance models estimated from the data
     note: str = ("signals are deviations from the record mean; in closed loop, correlation at "
                  "negative lags (e leading the input) reflects feedback, not model error")
 
@@ -109,7 +119,7 @@ class CompareResult:
         for oc in self.outputs:
             item = {k: v for k, v in asdict(oc).items()
                     if k not in ("time_s", "measured", "simulated", "predicted", "residual")}
-            d["outputs"].append(_finite(item))
+            d["outputs"].append(json_safe(item))
         return d
 
     def summary(self, stamp=None) -> str:
@@ -144,7 +154,7 @@ class CompareResult:
                 lines.append(f"    fails {stamp(p.start_s)} .. {stamp(p.end_s)} "
                              f"(one-step error up to {p.worst_rms_ratio:.2f}x the early level)")
         lines += [f"  note: {frozen_note(name)}" for name in self.frozen_inputs]
-        lines += [f"  note: {n}" for n in self.integrating]
+        lines += [f"  note: {n}" for n in self.integrating + self.disturbance]
         lines.append(f"  note: {self.note}")
         return "\n".join(lines)
 
@@ -170,7 +180,7 @@ def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float |
     if max_lag < 1:
         raise ValueError(f"max_lag must be >= 1, got {max_lag}")
     require_rows(len(data), float(model.sample_time_s))
-    sig = extract(model, data, min_segment=MIN_ROWS)
+    sig, disturbance = _with_disturbance_models(extract(model, data, min_segment=MIN_ROWS))
     if window_s is None:
         window = scaled_rows(len(data), sig.sample_time_s, WINDOW_S, WINDOW_PARTS, WINDOW_FLOOR)
         window_s = window * sig.sample_time_s
@@ -185,7 +195,26 @@ def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float |
         interpolated_samples=int(sig.bridged.sum()),
         frozen_inputs=frozen_inputs(sig),
         integrating=integrating_notes(model),
+        disturbance=disturbance,
     )
+
+
+def _with_disturbance_models(sig: Signals) -> tuple[Signals, list[str]]:
+    """``sig`` with the disturbance model ``diagnose`` estimates on every output the model
+    gives none, and a note per output."""
+    noise, notes = list(sig.noise), []
+    every_row = np.ones(len(sig.time_s), bool)
+    for i, name in enumerate(sig.outputs):
+        if has_noise_model(noise[i]):
+            continue
+        try:
+            noise[i] = estimated_noise_model(sig, i, every_row)
+        except InsufficientData as exc:
+            notes.append(f"{name}: the model has no noise model, and none could be estimated ({exc}): the one-step "
+                         "error is the output error y - G u, coloured by the disturbance, and its tests read it so")
+            continue
+        notes.append(estimated_noise_note(name))
+    return dataclasses.replace(sig, noise=noise), notes
 
 
 def _compare_output(sig: Signals, i: int, horizon: int, max_lag: int, window: int,
@@ -304,17 +333,6 @@ def _failing_periods(starts: np.ndarray, rms: np.ndarray, window: int,
         else:
             periods.append(FailingPeriod(float(s), float(s + window_s), float(r / level)))
     return periods
-
-
-def _finite(obj):
-    """JSON has no NaN: map non-finite floats to None."""
-    if isinstance(obj, float):
-        return obj if np.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_finite(v) for v in obj]
-    return obj
 
 
 def _short(lags: list[int]) -> str:

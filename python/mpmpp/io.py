@@ -171,6 +171,17 @@ def save_data(path: PathLike, df: pd.DataFrame) -> None:
     _core.write_csv(table, os.fspath(path))
 
 
+def json_safe(obj):
+    """JSON has no NaN: non-finite floats become None, through dicts and lists."""
+    if isinstance(obj, float):
+        return obj if np.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [json_safe(v) for v in obj]
+    return obj
+
+
 @contextlib.contextmanager
 def atomic_output(path: PathLike, mode: str = "w"):
     """An open temporary file beside ``path`` that replaces ``path`` (fsync, then rename) only

@@ -58,7 +58,7 @@ from statistics import NormalDist
 import numpy as np
 
 from . import _core
-from .compare import _finite
+from .io import json_safe
 from .foptd import integrating_reading
 from .identify import arx_oe, oe
 from .record_length import MIN_ROWS, require_rows
@@ -210,7 +210,7 @@ class IdentificationResult:
         d["channels"] = [{**asdict(c), "dead_time_ci95": list(c.dead_time_ci95), "dead_time_sd": c.dead_time_sd,
                           "uncertain": c.uncertain, "kept": c.kept} for c in self.channels]
         d["outputs"] = [asdict(o) for o in self.outputs]
-        return _finite(d)
+        return json_safe(d)
 
     def summary(self) -> str:
         lines = [f"identify: {self.rows_used} rows at {self.sample_time_s:g} s"

@@ -1,4 +1,5 @@
 """compare: k-step prediction and residual tests against plain NumPy/SciPy references."""
+import importlib
 import json
 
 import numpy as np
@@ -9,7 +10,11 @@ from scipy.signal import lfilter
 import mpmpp
 from mpmpp import _core
 from mpmpp.compare import compare
+from mpmpp.diagnose.result import InsufficientData
+from mpmpp.diagnose.whitening import estimated_noise_model, estimated_noise_note
+from mpmpp.signals import extract
 
+import pi_loop
 from example_cases import NOISE_CHANGE, load_case
 
 G_NUM, G_DEN, G_DELAY = [0.1], [1.0, -0.9], 4
@@ -87,6 +92,58 @@ def test_true_model_passes_and_fit_matches_definition():
     assert len(oc.whiteness.positive_lag_violations) <= 2   # 25 lags at 99 %: ~0.25 expected
     assert not oc.failing
     json.dumps(res.to_dict())
+
+
+def _flow_model(gain_factor: float) -> mpmpp.Model:
+    """The FOPTD model a user writes for pi_loop's flow loop: no noise model."""
+    loop = pi_loop.FLOW
+    g = mpmpp.TransferFunction.from_foptd(loop.gain * gain_factor, loop.time_constant_s, loop.dead_time_s, 10.0)
+    return mpmpp.Model("flow", 10.0, ["OP"], ["PV"], {"PV": {"OP": g}}, {})
+
+
+def _model_error_flagged(oc) -> bool:
+    return bool(oc.cross[0].positive_lag_violations) or oc.attribution[0].significant
+
+
+def test_a_model_without_noise_model_is_judged_through_the_estimated_disturbance():
+    """A PI flow loop (2 h at 10 s, setpoint steps, an AR(1) disturbance of pole 0.9) and its
+    FOPTD model with no noise model. With H = 1 the one-step error is the coloured disturbance,
+    which the controller's past moves predict: the right model was read as wrong on every seed
+    (20 of 20, seeds 0-19, with either gain 2x or 0.5x off too). Through the disturbance model
+    diagnose estimates, the right model passes (1 of 20 flagged) and the wrong gains are flagged
+    (20 of 20 each); the error is A(q) (y - G u) with that A, as SciPy filters it."""
+    flagged = {f: 0 for f in (1.0, 2.0, 0.5)}
+    for seed in range(10):
+        data = pi_loop.simulate(pi_loop.FLOW, seed, setpoint_steps=True)
+        for f in flagged:
+            res = compare(_flow_model(f), data)
+            flagged[f] += _model_error_flagged(res.outputs[0])
+    assert flagged[1.0] <= 2 and flagged[2.0] == flagged[0.5] == 10
+    assert res.disturbance == [estimated_noise_note("PV")] and "AR(10)" in res.summary()
+
+    sig = extract(_flow_model(0.5), data)
+    a = estimated_noise_model(sig, 0, np.ones(len(data), bool)).den
+    g = sig.rows[0][0]
+    v = sig.y[:, 0] - lfilter(np.r_[np.zeros(g.delay), g.num], g.den, sig.u[:, 0])
+    np.testing.assert_allclose(res.outputs[0].residual, lfilter(a, [1.0], v), atol=1e-9)
+
+
+def test_a_disturbance_model_that_cannot_be_estimated_leaves_h_1_and_says_so(monkeypatch):
+    module = importlib.import_module("mpmpp.compare")   # mpmpp.compare is also the function's name
+
+    def refuse(*_):
+        raise InsufficientData("40 rows for an AR(10) fit")
+
+    monkeypatch.setattr(module, "estimated_noise_model", refuse)
+    data = pi_loop.simulate(pi_loop.FLOW, 0, setpoint_steps=True)
+    res = compare(_flow_model(1.0), data)
+    assert res.disturbance == ["PV: the model has no noise model, and none could be estimated (40 rows for an AR(10) "
+                               "fit): the one-step error is the output error y - G u, coloured by the disturbance, "
+                               "and its tests read it so"]
+    sig = extract(_flow_model(1.0), data)
+    g = sig.rows[0][0]
+    v = sig.y[:, 0] - lfilter(np.r_[np.zeros(g.delay), g.num], g.den, sig.u[:, 0])
+    np.testing.assert_allclose(res.outputs[0].residual, v, atol=1e-9)
 
 
 def test_unmodeled_column_and_noise_change_are_located():

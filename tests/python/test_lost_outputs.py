@@ -6,6 +6,7 @@ import pytest
 import mpmpp
 from mpmpp.compare import compare
 from mpmpp.diagnose import diagnose
+from mpmpp.diagnose.whitening import NOISE_ORDER, estimated_noise_note
 from mpmpp.model_identification import model_from_data
 from mpmpp.signals import MAX_BRIDGED_SHARE, bridge_lost_outputs, bridged_reach, extract
 
@@ -94,8 +95,13 @@ def test_compare_leaves_out_the_errors_that_read_an_interpolated_sample():
     res = compare(_flow_model(), data)
     assert res.interpolated_samples == 3 and res.skipped_rows == 0
     assert "3 lost output sample(s) interpolated" in res.summary()
-    assert np.isnan(res.outputs[0].residual[[200, 201, 500]]).all()
-    assert np.isfinite(res.outputs[0].residual[[199, 202, 499, 501]]).all()   # H = 1 reads one row
+    # the model has no noise model: compare estimates H = 1 / A(q), A of order NOISE_ORDER, so
+    # the one-step error at t reads y(t - NOISE_ORDER .. t)
+    reach = NOISE_ORDER
+    lost = np.r_[200:202 + reach, 500:501 + reach]
+    assert np.isnan(res.outputs[0].residual[lost]).all()
+    assert np.isfinite(res.outputs[0].residual[[199, 202 + reach, 499, 501 + reach]]).all()
+    assert res.disturbance == [estimated_noise_note("PV")]
 
 
 def test_identify_keeps_a_two_hour_record_whole_across_lost_pv_samples():

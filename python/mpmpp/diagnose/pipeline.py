@@ -26,7 +26,7 @@ from .result import DiagnoseResult, Finding, InsufficientData
 from .spikes import SPIKE_SIGMAS, output_spikes
 from .split_rivals import changes_the_split_absorbed
 from .valve import valve_findings
-from .whitening import AR_ORDER, NOISE_ORDER, estimated_noise_model, has_noise_model, output_residual
+from .whitening import AR_ORDER, estimated_noise_model, estimated_noise_note, has_noise_model, output_residual
 
 
 SEGMENT_S = 3600.0           # preferred shortest stretch a change is fitted on
@@ -115,9 +115,7 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
         except InsufficientData as exc:
             raise ValueError(f"data: cannot estimate a disturbance model for '{name}' ({exc})") from None
         estimated.append(name)
-        notes.append(f"{name}: the model has no noise model; its disturbance model was estimated from the "
-                     f"data (AR({NOISE_ORDER}) of the output error"
-                     + (", training rows)" if reference is not None else ")"))
+        notes.append(estimated_noise_note(name, training=reference is not None))
     sig = dataclasses.replace(sig, noise=noise, y=sig.y.copy())
     for i, name in enumerate(sig.outputs):
         at, size = output_spikes(sig, i)

@@ -439,6 +439,12 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray, beside_inputs:
     return TransferFunction([1.0], stable(first_part_ar(free, usable, basis)), 0)
 
 
+def estimated_noise_note(name: str, training: bool = False) -> str:
+    """What ``diagnose`` and ``compare`` say of an output whose disturbance model they estimated."""
+    return (f"{name}: the model has no noise model; its disturbance model was estimated from the data "
+            f"(AR({NOISE_ORDER}) of the output error" + (", training rows)" if training else ")"))
+
+
 def first_part_ar(free: np.ndarray, usable: np.ndarray, basis: np.ndarray | None) -> np.ndarray:
     """The disturbance AR (``disturbance_ar``) of the record, or of its first part when the
     record's AR is decisively wrong there. The first of REFERENCE_PARTS consecutive parts of the

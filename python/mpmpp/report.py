@@ -188,6 +188,8 @@ def _update_section(page: _Page, updated) -> None:
         page.para("Nothing to update: diagnose found no change to make.")
         return
     page.para(f"Applied {', '.join(updated.applied)}. Error: {updated.metric}.")
+    for caution in updated.cautions:
+        page.para(f"Caution: {caution}.", cls="note")
     page.table(["output", "error before", "error after", "change"],
                [[e.output, e.error_before, e.error_after,
                  f"{100 * (e.error_after / e.error_before - 1):+.1f} %" if e.error_before else "n/a"]

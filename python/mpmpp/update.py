@@ -16,6 +16,12 @@ How each effect lands in docs/formats.md's fixed model format:
   of an input driving several outputs: the channels get the describing-function gain (the
   linear scale that best reproduces the backlash response).
 
+An applied finding that changes what a controller given the new model would do beyond a
+re-tuning (a channel whose gain falls below a quarter of the model's, or reverses its sign) gets
+a caution: the model then says the input hardly acts, and a controller would move it several
+times as hard; that is more often a valve stuck or at a limit of its travel than a process
+change, and a reversed sign from routine closed-loop data deserves a step test first.
+
 Every refit uses the even held-out blocks (1 h, shorter in a short record) after the
 finding's onset only; the error before and after is reported on the odd blocks, which the
 refit never saw.
@@ -31,6 +37,7 @@ import numpy as np
 from .diagnose import DiagnoseResult, ModelChange, diagnose, one_step_errors
 from .diagnose.changes import apply_changes
 from .diagnose.pipeline import BLOCK_S, SEGMENT_S, diagnosis_signals, record_lengths
+from .diagnose.process import DEAD_CHANNEL, SCALED_CHANNEL_EFFECTS, ratio_text
 from .diagnose.process_error import process_errors
 from .diagnose.result import PROCESS_METRIC
 
@@ -51,6 +58,7 @@ class UpdateResult:
     errors: list[OutputError]
     model: object = field(repr=False)           # the new mpmpp.Model
     diagnosis: DiagnoseResult = field(repr=False, default=None)
+    cautions: list[str] = field(default_factory=list)   # controller_cautions
     metric: str = ("RMS of the one-step prediction error (deviation units) on held-out blocks "
                    "after each finding's onset, not used for the refit")
     process_metric: str = PROCESS_METRIC
@@ -61,7 +69,8 @@ class UpdateResult:
                            "error_before": _f(e.error_before), "error_after": _f(e.error_after),
                            "process_error_before": _f(e.process_error_before),
                            "process_error_after": _f(e.process_error_after)}
-                          for e in self.errors]}
+                          for e in self.errors],
+               "cautions": list(self.cautions)}
         if self.diagnosis is not None and self.diagnosis.notes:
             doc["notes"] = list(self.diagnosis.notes)  # how the data were read, as diagnose says
         return doc
@@ -75,6 +84,7 @@ class UpdateResult:
             lines.append(f"  {e.output}: error {e.error_before:.4g} -> {e.error_after:.4g} ({change:+.1f} %), "
                          f"process part {e.process_error_before:.4g} -> {e.process_error_after:.4g} "
                          f"({fall:+.1f} %) after t={e.onset_s / 3600:.1f} h")
+        lines += [f"  caution: {c}" for c in self.cautions]
         lines.append(f"  error = {self.metric}")
         lines.append(f"  {self.process_metric}")
         if self.diagnosis is not None:
@@ -123,7 +133,31 @@ def update(model, data, apply, train_end_s: float | None = None, name: str | Non
         ok[: 60] = False
         process_before, process_after = process_errors(sig, i, changes, sig.seconds_to_index(onset_s), block)
         errors.append(OutputError(out_name, onset_s, _rms(before[ok]), _rms(after[ok]), process_before, process_after))
-    return UpdateResult(applied=ids, errors=errors, model=new_model, diagnosis=diagnosis)
+    return UpdateResult(applied=ids, errors=errors, model=new_model, diagnosis=diagnosis,
+                        cautions=controller_cautions(findings))
+
+
+def controller_cautions(findings) -> list[str]:
+    """One line per applied channel finding that a controller given the new model would act on
+    differently than a re-tuning does: a gain cut below DEAD_CHANNEL of the model's, or a sign
+    reversed."""
+    cautions = []
+    for f in findings:
+        ratio = f.estimate.get("gain_ratio") if f.effect in SCALED_CHANNEL_EFFECTS else None
+        if ratio is None:
+            continue
+        channel = f"{f.output} <- {f.input}"
+        if ratio <= 0.0:
+            cautions.append(f"{f.id} reverses the sign of {channel} ({ratio_text(ratio)}x the model's gain): a "
+                            f"controller given this model pushes {f.output} the wrong way; confirm the sign with a "
+                            "step test before the model goes into a controller")
+        elif ratio < DEAD_CHANNEL:
+            cautions.append(f"{f.id} cuts the gain of {channel} to {ratio_text(ratio)}x: a controller given this model "
+                            f"moves {f.input} about {1.0 / ratio:.0f} times as hard for the same correction of "
+                            f"{f.output}; an input that has all but stopped acting is more often a valve stuck or at "
+                            "a limit of its travel than a process change: check the valve before the model goes "
+                            "into a controller")
+    return cautions
 
 
 def _rms(x: np.ndarray) -> float:

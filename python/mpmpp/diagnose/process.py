@@ -551,7 +551,7 @@ def _time_constant_s(g: TransferFunction, ts: float) -> float:
     return -ts / math.log(p) if 0.0 < p < 1.0 else 0.0
 
 
-def _ratio_text(theta: float) -> str:
+def ratio_text(theta: float) -> str:
     """A gain ratio as a user reads it: two decimals near 1, three significant digits beyond
     (a model 1000x off printed as 0.00x said nothing)."""
     return f"{theta:.2f}" if 0.01 <= abs(theta) < 100.0 else f"{theta:.3g}"
@@ -569,7 +569,7 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
     theta_fit = fit.folds[0].theta
     if s.effect == "gain":
         estimate = {"gain_ratio": theta, "ci95": ci}
-        text = f"gain of {name} about {_ratio_text(theta)}x the model's {when}"
+        text = f"gain of {name} about {ratio_text(theta)}x the model's {when}"
         if s.level_step:
             # its size is not reported: a disturbance step the search placed near the onset shares it
             text += (f", with a step of {out.name}'s level at the onset (the gain changed about another "

@@ -9,7 +9,7 @@ from scipy.signal import lfilter
 
 import mpmpp
 from mpmpp import _core
-from mpmpp.compare import compare
+from mpmpp.compare import _failing_periods, compare
 from mpmpp.diagnose.result import InsufficientData
 from mpmpp.diagnose.whitening import estimated_noise_model, estimated_noise_note
 from mpmpp.signals import extract
@@ -144,6 +144,34 @@ def test_a_disturbance_model_that_cannot_be_estimated_leaves_h_1_and_says_so(mon
     g = sig.rows[0][0]
     v = sig.y[:, 0] - lfilter(np.r_[np.zeros(g.delay), g.num], g.den, sig.u[:, 0])
     np.testing.assert_allclose(res.outputs[0].residual, v, atol=1e-9)
+
+
+def test_where_it_fails_is_where_the_gain_changed_and_nowhere_on_a_right_model():
+    """12 h of the PI flow loop, the FOPTD model without a noise model: right throughout, no
+    failing period (0 of 20 seeds); the process gain cut to 0.4x at 6 h, failing periods on 15
+    of 20, each ending after the change (1 h windows)."""
+    right, located = 0, 0
+    for seed in range(10):
+        data = pi_loop.simulate(pi_loop.FLOW, seed, rows=4320, setpoint_steps=True)
+        right += bool(compare(_flow_model(1.0), data).outputs[0].failing)
+        changed = pi_loop.simulate(pi_loop.FLOW, seed, rows=4320, setpoint_steps=True, gain_change=(2160, 0.4))
+        periods = compare(_flow_model(1.0), changed).outputs[0].failing
+        located += bool(periods) and all(p.end_s > 6 * 3600 for p in periods)
+    assert right <= 1 and located >= 6
+
+
+def test_a_failing_period_in_a_record_of_white_errors_is_rare():
+    """A day of white one-step errors at 10 s (1 h windows every 15 min, 93 of them): the chance
+    of any failing period is the record's FAILING_LEVEL of 1 % plus the reference's own error
+    (8 of 400 records). Three spreads per window, without the record's multiplicity, gave 32."""
+    n, window, step = 8640, 360, 90
+    first = np.arange(0, n - window + 1, step)
+    with_period = 0
+    for seed in range(400):
+        e = np.random.default_rng(seed).standard_normal(n)
+        rms = np.array([np.sqrt(np.mean(e[f:f + window] ** 2)) for f in first])
+        with_period += bool(_failing_periods(first * 10.0, rms, window, 10.0))
+    assert with_period <= 16   # 4 %: binomial(400, 0.02) exceeds it with probability ~0.1 %
 
 
 def test_unmodeled_column_and_noise_change_are_located():

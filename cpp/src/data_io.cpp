@@ -407,9 +407,19 @@ DataTable parse_csv_text(const std::string& text, const std::string& source) {
   for (std::size_t c = 0; c < header.size(); ++c)
     if (header[c] == "time") time_col = c;
   if (time_col == header.size()) {
-    if (header.size() == 1)
-      throw InputError(where + "not a CSV file with a header row: row 1 is " + quoted(header[0]) +
-                       " (expected comma-separated column names including \"time\")");
+    if (header.size() == 1) {
+      // a spreadsheet export in a locale with decimal commas separates its fields by ';' or tabs
+      const char* other = header[0].find(';') != std::string::npos    ? "';'"
+                          : header[0].find('\t') != std::string::npos ? "tabs"
+                                                                      : nullptr;
+      throw InputError(
+          where + "not a CSV file with a header row: row 1 is " + quoted(header[0]) +
+          " (expected comma-separated column names including \"time\"" +
+          (other ? std::string("; this row is separated by ") + other +
+                       ": save the file with ',' between fields and '.' as the decimal point"
+                 : std::string()) +
+          ")");
+    }
     throw InputError(where + "row 1: no \"time\" column (columns: " +
                      detail::printable(detail::comma_list(header), 200) + ")");
   }

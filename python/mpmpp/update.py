@@ -147,16 +147,17 @@ def controller_cautions(findings) -> list[str]:
         if ratio is None:
             continue
         channel = f"{f.output} <- {f.input}"
-        if ratio <= 0.0:
+        if ratio < 0.0:
             cautions.append(f"{f.id} reverses the sign of {channel} ({ratio_text(ratio)}x the model's gain): a "
-                            f"controller given this model pushes {f.output} the wrong way; confirm the sign with a "
-                            "step test before the model goes into a controller")
+                            f"controller given this model moves {f.input} the other way, which drives {f.output} "
+                            "away from its setpoint if the finding is wrong; confirm the sign with a step test "
+                            "before the model goes into a controller")
         elif ratio < DEAD_CHANNEL:
+            harder = f"about {1.0 / ratio:.0f} times as hard" if ratio > 0.0 else "without bound"
             cautions.append(f"{f.id} cuts the gain of {channel} to {ratio_text(ratio)}x: a controller given this model "
-                            f"moves {f.input} about {1.0 / ratio:.0f} times as hard for the same correction of "
-                            f"{f.output}; an input that has all but stopped acting is more often a valve stuck or at "
-                            "a limit of its travel than a process change: check the valve before the model goes "
-                            "into a controller")
+                            f"moves {f.input} {harder} for the same correction of {f.output}; an input that has all "
+                            "but stopped acting is more often a valve stuck or at a limit of its travel than a "
+                            "process change: check the valve before the model goes into a controller")
     return cautions
 
 

@@ -19,7 +19,9 @@ def _finding(effect, ratio, fid="F1"):
     ("gain", 2.0, None), ("gain", 0.5, None), ("gain", 0.26, None), ("noise_change", None, None),
     ("gain", 0.1, "cuts the gain of y1 <- u1 to 0.10x: a controller given this model moves u1 about 10 times"),
     ("time_constant", 0.2, "cuts the gain of y1 <- u1 to 0.20x: a controller given this model moves u1 about 5 times"),
-    ("delay", -0.5, "F1 reverses the sign of y1 <- u1 (-0.50x the model's gain)"),
+    ("delay", -0.5, "F1 reverses the sign of y1 <- u1 (-0.50x the model's gain): a controller given this model "
+                    "moves u1 the other way"),
+    ("gain", 0.0, "cuts the gain of y1 <- u1 to 0x: a controller given this model moves u1 without bound"),
 ])
 def test_a_caution_for_a_dead_or_reversed_channel_only(effect, ratio, says):
     cautions = controller_cautions([_finding(effect, ratio)])

@@ -31,8 +31,7 @@ from statistics import NormalDist
 import numpy as np
 
 from . import _core
-from .diagnose.result import InsufficientData
-from .diagnose.whitening import estimated_noise_model, estimated_noise_note, has_noise_model
+from .diagnose.whitening import estimated_noise_models, estimated_noise_note
 from .record_length import MIN_ROWS, require_rows, scaled_rows
 from .held_values import frozen_inputs, frozen_note
 from .hysteresis_test import HysteresisCheck, hysteresis_check
@@ -204,18 +203,11 @@ def compare(model, data, horizon: int = 10, max_lag: int = 25, window_s: float |
 def _with_disturbance_models(sig: Signals) -> tuple[Signals, list[str]]:
     """``sig`` with the disturbance model ``diagnose`` estimates on every output the model
     gives none, and a note per output."""
-    noise, notes = list(sig.noise), []
-    every_row = np.ones(len(sig.time_s), bool)
-    for i, name in enumerate(sig.outputs):
-        if has_noise_model(noise[i]):
-            continue
-        try:
-            noise[i] = estimated_noise_model(sig, i, every_row)
-        except InsufficientData as exc:
-            notes.append(f"{name}: the model has no noise model, and none could be estimated ({exc}): the one-step "
-                         "error is the output error y - G u, coloured by the disturbance, and its tests read it so")
-            continue
-        notes.append(estimated_noise_note(name))
+    noise, estimated, failed = estimated_noise_models(sig, np.ones(len(sig.time_s), bool))
+    notes = [estimated_noise_note(name) for name in estimated]
+    notes += [f"{name}: the model has no noise model, and none could be estimated ({why}): the one-step error is "
+              "the output error y - G u, coloured by the disturbance, and its tests read it so"
+              for name, why in failed.items()]
     return dataclasses.replace(sig, noise=noise), notes
 
 

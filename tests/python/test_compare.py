@@ -129,12 +129,10 @@ def test_a_model_without_noise_model_is_judged_through_the_estimated_disturbance
 
 
 def test_a_disturbance_model_that_cannot_be_estimated_leaves_h_1_and_says_so(monkeypatch):
-    module = importlib.import_module("mpmpp.compare")   # mpmpp.compare is also the function's name
-
     def refuse(*_):
         raise InsufficientData("40 rows for an AR(10) fit")
 
-    monkeypatch.setattr(module, "estimated_noise_model", refuse)
+    monkeypatch.setattr(importlib.import_module("mpmpp.diagnose.whitening"), "estimated_noise_model", refuse)
     data = pi_loop.simulate(pi_loop.FLOW, 0, setpoint_steps=True)
     res = compare(_flow_model(1.0), data)
     assert res.disturbance == ["PV: the model has no noise model, and none could be estimated (40 rows for an AR(10) "

@@ -26,7 +26,7 @@ from .result import DiagnoseResult, Finding, InsufficientData
 from .spikes import SPIKE_SIGMAS, output_spikes
 from .split_rivals import changes_the_split_absorbed
 from .valve import valve_findings
-from .whitening import AR_ORDER, estimated_noise_model, estimated_noise_note, has_noise_model, output_residual
+from .whitening import AR_ORDER, estimated_noise_model, estimated_noise_models, estimated_noise_note, output_residual
 
 
 SEGMENT_S = 3600.0           # preferred shortest stretch a change is fitted on
@@ -98,7 +98,7 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
         raise ValueError(f"--train-end {train_end_s} leaves fewer than 10 rows of training data")
     sig = extract(model, data, reference=reference)
     rows = np.ones(len(time_s), bool) if reference is None else reference
-    noise, estimated, notes = list(sig.noise), [], []
+    notes = []
     for name, lost in zip(sig.outputs, sig.bridged.sum(axis=0)):
         if lost:
             notes.append(f"{name}: {lost} lost sample(s) ({100 * lost / len(time_s):.2g} % of the rows) interpolated "
@@ -107,15 +107,11 @@ def diagnosis_signals(model, data, train_end_s: float | None = None) -> Diagnosi
     notes += integrating_notes(model)
     notes += [held_note(sig, name, s) for name, stretches in held_columns(sig.inputs, sig.u, sig.sample_time_s).items()
               for s in stretches]
-    for i, name in enumerate(sig.outputs):
-        if has_noise_model(noise[i]):
-            continue
-        try:
-            noise[i] = estimated_noise_model(sig, i, rows)
-        except InsufficientData as exc:
-            raise ValueError(f"data: cannot estimate a disturbance model for '{name}' ({exc})") from None
-        estimated.append(name)
-        notes.append(estimated_noise_note(name, training=reference is not None))
+    noise, estimated, failed = estimated_noise_models(sig, rows)
+    if failed:
+        name, why = next(iter(failed.items()))
+        raise ValueError(f"data: cannot estimate a disturbance model for '{name}' ({why})")
+    notes += [estimated_noise_note(name, training=reference is not None) for name in estimated]
     sig = dataclasses.replace(sig, noise=noise, y=sig.y.copy())
     for i, name in enumerate(sig.outputs):
         at, size = output_spikes(sig, i)

@@ -439,6 +439,21 @@ def estimated_noise_model(sig: Signals, i: int, rows: np.ndarray, beside_inputs:
     return TransferFunction([1.0], stable(first_part_ar(free, usable, basis)), 0)
 
 
+def estimated_noise_models(sig: Signals, rows: np.ndarray) -> tuple[list[TransferFunction], list[str], dict]:
+    """The outputs' noise models with ``estimated_noise_model`` (on ``rows``) for every output
+    the model gives none: (noise models, the outputs estimated, output -> why none could be)."""
+    noise, estimated, failed = list(sig.noise), [], {}
+    for i, name in enumerate(sig.outputs):
+        if has_noise_model(noise[i]):
+            continue
+        try:
+            noise[i] = estimated_noise_model(sig, i, rows)
+            estimated.append(name)
+        except InsufficientData as exc:
+            failed[name] = str(exc)
+    return noise, estimated, failed
+
+
 def estimated_noise_note(name: str, training: bool = False) -> str:
     """What ``diagnose`` and ``compare`` say of an output whose disturbance model they estimated."""
     return (f"{name}: the model has no noise model; its disturbance model was estimated from the data "

@@ -143,6 +143,8 @@ def _compare_section(page: _Page, model, data, clock, origin) -> None:
                  "; ".join(f"{h.column}: a play of about {h.width:.3g} explains {100 * h.explained:.0f} %"
                            for h in oc.hysteresis if h.significant) or "not seen"]
                 for oc in result.outputs])
+    for note in result.disturbance:   # the errors above are through a disturbance model estimated from the data
+        page.para(note, cls="note")
     with tempfile.TemporaryDirectory() as tmp:
         for path in plot_compare(result, Path(tmp), origin):
             if path.name.endswith(("_prediction.png", "_fit_over_time.png")):

@@ -106,3 +106,22 @@ def test_moving_rms_against_a_plain_loop():
         present = window[np.isfinite(window)]
         expected.append(np.sqrt(np.mean(present ** 2)) if len(present) >= n / 2 else np.nan)
     np.testing.assert_allclose(moving_rms(e, n), expected, rtol=1e-12)
+
+
+def test_a_model_without_noise_model_is_compared_through_the_estimated_disturbance(tmp_path):
+    """The page's compare section says when an output's errors are taken through a disturbance
+    model estimated from the data (a hand-written FOPTD model of a PI flow loop, 2 h at 10 s)."""
+    import mpmpp
+    import pi_loop
+
+    loop = pi_loop.FLOW
+    g = mpmpp.TransferFunction.from_foptd(loop.gain, loop.time_constant_s, loop.dead_time_s, 10.0)
+    mpmpp.save_model(mpmpp.Model("flow", 10.0, ["OP"], ["PV"], {"PV": {"OP": g}}, {}), tmp_path / "model.json")
+    pi_loop.simulate(loop, 0, setpoint_steps=True).to_csv(tmp_path / "data.csv", index=False)
+    path = tmp_path / "report.html"
+    code, out, err = run_cli("report", tmp_path / "model.json", tmp_path / "data.csv", "-o", path)
+    assert code == 0, err
+    text = path.read_text(encoding="utf-8")
+    compare_part = text[text.index('id="compare"'):text.index('id="diagnose"')]
+    assert ('<p class="note">PV: the model has no noise model; its disturbance model was estimated from the data'
+            in compare_part)

@@ -238,11 +238,12 @@ def _compare_output(sig: Signals, i: int, horizon: int, max_lag: int, window: in
                   if (c := hysteresis_check(sig, i, j, err, ok & np.isfinite(sig.u[:, j]))) is not None]
     # Window fits on the kept rows (a window never spans a gap: windows are per segment).
     starts, fit_s, fit_p, rms = [], [], [], []
+    step = max(window // 4, 1)
     for a, b in sig.segments:
         if b - a < window:
             continue
-        ws = _core.windowed_fit(y[a:b], sim[a:b], window, max(window // 4, 1))
-        wp = _core.windowed_fit(y[a:b], pred[a:b], window, max(window // 4, 1))
+        ws = _core.windowed_fit(y[a:b], sim[a:b], window, step)
+        wp = _core.windowed_fit(y[a:b], pred[a:b], window, step)
         first = ws[:, 0].astype(int)
         starts += list(sig.time_s[a + first])
         fit_s += list(ws[:, 1])
@@ -258,7 +259,7 @@ def _compare_output(sig: Signals, i: int, horizon: int, max_lag: int, window: in
         whiteness=whiteness, cross=cross, attribution=attribution,
         window_start_s=[float(s) for s in starts], window_fit_simulation=fit_s,
         window_fit_prediction=fit_p, window_rms_error=rms,
-        failing=_failing_periods(np.array(starts), np.array(rms), window, sig.sample_time_s),
+        failing=_failing_periods(np.array(starts), np.array(rms), window, step, sig.sample_time_s),
         hysteresis=hysteresis,
         time_s=sig.time_s, measured=y, simulated=sim, predicted=pred, residual=err,
     )
@@ -301,9 +302,10 @@ def _attribute(name, kind, modeled, err, x, valid, lags) -> Attribution:
     return Attribution(name, kind, modeled, r2, bool(len(rows) * r2 > _chi2_quantile(lags)))
 
 
-def _failing_periods(starts: np.ndarray, rms: np.ndarray, window: int,
+def _failing_periods(starts: np.ndarray, rms: np.ndarray, window: int, step: int,
                      sample_time_s: float) -> list[FailingPeriod]:
-    """Windows whose one-step error RMS rises above the early-data level.
+    """Windows (``window`` rows, one every ``step`` rows) whose one-step error RMS rises above
+    the early-data level.
 
     The reference is the first quarter of the windows (the model is usually best where it
     was last tuned), its level their mean RMS and the spread the larger of their standard
@@ -323,7 +325,6 @@ def _failing_periods(starts: np.ndarray, rms: np.ndarray, window: int,
     ref = rms[:n_ref]
     level = float(np.mean(ref))
     spread = max(float(np.std(ref, ddof=1)), level * np.sqrt(1.0 / (2.0 * window)))
-    step = float(np.median(np.diff(starts))) / sample_time_s      # rows between window starts
     disjoint = max(len(rms) * step / window, 1.0)
     z = NormalDist().inv_cdf(1.0 - FAILING_LEVEL / disjoint)
     bad = rms > level + z * spread * np.sqrt(1.0 + window / (n_ref * step))

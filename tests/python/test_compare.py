@@ -168,7 +168,7 @@ def test_a_failing_period_in_a_record_of_white_errors_is_rare():
     for seed in range(400):
         e = np.random.default_rng(seed).standard_normal(n)
         rms = np.array([np.sqrt(np.mean(e[f:f + window] ** 2)) for f in first])
-        with_period += bool(_failing_periods(first * 10.0, rms, window, 10.0))
+        with_period += bool(_failing_periods(first * 10.0, rms, window, step, 10.0))
     assert with_period <= 16   # 4 %: binomial(400, 0.02) exceeds it with probability ~0.1 %
 
 

@@ -43,10 +43,11 @@ def input_driven_gain(out: OutputResidual, folds: list[np.ndarray], order: int =
     whitened_u = filtered_columns(sig, [hinv], np.nan_to_num(sig.u))
     x = np.nan_to_num(output_basis(sig, out.i, whitened_u, laguerre_filters(laguerre_pole(sig, out.i))))
     whole = [(0, len(e))]
+    roots = out.offered_roots
     gain = 0.0
     for k in (0, 1):
         fit, test = folds[k], folds[1 - k]
-        c, _ = root_ar(e, whole, fit, None, out.offered_roots, order)
+        c = root_ar(e, whole, fit, None, roots, order)[0] if len(roots) > 1 else 0.0   # (0,): nothing to choose
         through = correction(np.ones(1), c)
         both = _design(through.filter(e), filter_pieces(through, x, whole), order) if c else _design(e, x, order)
         target = both[:, 0]

@@ -148,6 +148,21 @@ def used_rows(sig: Signals, i: int, hinv: TransferFunction, reach: int) -> np.nd
     return used & ~bridged_reach(sig, i, hinv, reach)
 
 
+def disturbance_split(e: np.ndarray, weight: np.ndarray, hinv: TransferFunction, first_onset: int,
+                      min_segment: int):
+    """The best change of the disturbance's level or colour in the one-step error ``e`` after
+    ``first_onset`` (``_core.split_ar``). A slow drift changes the AR fit too, and a split inside
+    it lets each side's correction absorb a different part of it; so the split is made on e with
+    its best step + ramp removed (the drift itself is a candidate of the process pool)."""
+    trend = trend_fit(e, weight > 0, hinv, first_onset, 4 * min_segment // 12, max(first_onset, 2 * SETTLE)).trend
+    return _core.split_ar((e - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
+
+
+def split_is_significant(split, n: int) -> bool:
+    """Whether the split beats its parameters (AR coefficients, variance, onset)."""
+    return split.statistic > (AR_ORDER + 2) * math.log(n)
+
+
 def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, block: int,
                     noise_estimated: bool = False) -> OutputResidual:
     """Residuals of output i, its disturbance split and whitening, and the held-out blocks
@@ -158,16 +173,9 @@ def output_residual(sig: Signals, i: int, min_segment: int, first_onset: int, bl
     e = per_segment(sig, lambda vv: noise.inverse().filter(vv), v)
     weight = used_rows(sig, i, noise.inverse(), AR_ORDER).astype(float)
     e0 = np.nan_to_num(e)
-    # The split looks for a change of the disturbance's level or colour. A slow drift
-    # changes the AR fit too, and a split inside it lets each side's correction absorb a
-    # different part of it; so the split is made on e with its best step + ramp removed
-    # (the drift itself is a candidate of the process pool).
-    trend = trend_fit(e0, weight > 0, noise.inverse(), first_onset, 4 * min_segment // 12,
-                      max(first_onset, 2 * SETTLE)).trend
-    split = _core.split_ar((e0 - trend)[first_onset:], AR_ORDER, min_segment, max(min_segment // 60, 1))
+    split = disturbance_split(e0, weight, noise.inverse(), first_onset, min_segment)
     split_onset = first_onset + split.onset if split.statistic > 0 else None
-    # The split is kept when it beats its parameters (AR coefficients, variance, onset).
-    split_significant = split.statistic > (AR_ORDER + 2) * math.log(n)
+    split_significant = split_is_significant(split, n)
     cuts = [split_onset] if split_significant else []
     pieces = _pieces(sig.segments, cuts)
     # The corrections and levels are those of the disturbance less its steps and ramps: fitted

@@ -109,6 +109,19 @@ def test_actuator_that_sets_in_is_named_and_a_linear_valve_is_not(family, seed, 
     assert not any(f.effect == "input_nonlinearity" for f in control.findings)
 
 
+@pytest.mark.parametrize("family, seed", [("mpc_2x2", 1), ("mpc_2x2_spiky", 2)])
+def test_a_deadband_between_the_width_grid_points_is_found_at_its_width(family, seed):
+    # Tuning draws whose deadband lies between two grid widths (thirds of an octave of the
+    # median move): a width 2 % off loses most of the fit, so nothing was found before the
+    # grid's best width of each kind was refined (ActuatorSearch.best_hysteresis).
+    spec, _, actuator = _case(family, seed)
+    res = diagnose(nominal_model(spec), simulate(spec))
+    top = res.findings[0]
+    assert (top.effect, top.input, top.estimate["kind"]) == ("input_nonlinearity", actuator["input"], "deadband")
+    assert top.estimate["width"] == pytest.approx(actuator["deadband"], rel=0.03)
+    assert abs(top.onset_s - actuator["time_s"]) < 3600.0
+
+
 def test_a_channel_all_but_switched_off_says_a_valve_does_that_too():
     """A valve pinned in a band far narrower than the MV's moves (mpc_2x2_clip seed 19: u2
     limited to +-0.2 around 47.4, the MPC winding up to 133) fits as well as a gain near 0 of

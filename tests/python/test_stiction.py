@@ -446,7 +446,9 @@ def test_a_disturbance_with_a_slow_moving_average_zero_is_no_valve(monkeypatch):
         short = fit_valve(op, pv, first_lag=7)
     assert short.verdict and short.confidence > 0.9
     both = fit_valve(op, pv, first_lag=7)
-    assert not both.verdict and both.gain_per_sample < 0
+    # g 0.0017 per sample (negative on the grid alone: the refined sizes are a maximum over
+    # more candidates), far below the map's midpoint
+    assert not both.verdict and both.confidence < 0.3
 
 
 def _per_fold_lstsq(x, target):

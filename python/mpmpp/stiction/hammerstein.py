@@ -59,10 +59,12 @@ MIN_VALVE_ROWS = 100   # rows the valve fit needs (inside its stretches)
 # fitted on the TUNING families of studies/stiction_benchmark.py (which prints the fit). A
 # negative gain (the linear explanation predicts better) is no evidence either way: how much
 # better a sinusoid explains an external oscillation says nothing about the valve.
-CAL_SLOPE = 380.0
-CAL_GAIN_AT_HALF = 0.0034
+CAL_SLOPE = 337.5
+CAL_GAIN_AT_HALF = 0.005563
 
 HYSTERESIS_KINDS = ("stick_slip", "he", "backlash", "deadband")
+REFINE_RATIO = 2.0      # the widest step of the size grid (0.03 -> 0.06 of the OP's spread)
+REFINE_STEPS = 5
 
 
 @dataclass
@@ -182,6 +184,36 @@ def _structure_columns(n_y: int, valve_lags: int, window: tuple, periodic: bool,
     return np.array(list(range(n_y)) + valve + [const] + ([const + 1, const + 2] if periodic else []))
 
 
+def _valve(kind: str, params: dict) -> ActuatorNonlinearity:
+    """The engine's valve of hysteresis candidate ``kind`` with its reported ``params``."""
+    if kind == "backlash":
+        return ActuatorNonlinearity(backlash=params["S"])
+    if kind == "deadband":
+        return ActuatorNonlinearity(deadband=params["width"])
+    law = StictionLaw.he if kind == "he" else StictionLaw.choudhury
+    return ActuatorNonlinearity(stiction_law=law, stiction_s=params["S"], stiction_j=params["J"])
+
+
+def _refined(best: Candidate, cv_sse) -> Candidate:
+    """The grid's best hysteresis candidate refined: each of its sizes (S, J or the width)
+    scaled by r and 1/r, r the square root of the last, from the grid's widest ratio
+    (REFINE_STEPS times, to 2.2 %), J kept at most S. A stick-slip band a few per cent off
+    predicts its slips at other samples. ``cv_sse(kind, params)``: a candidate's held-out error."""
+    sizes = [k for k in ("S", "J", "width") if best.params.get(k)]
+    ratio = REFINE_RATIO
+    for _ in range(REFINE_STEPS):
+        ratio = ratio ** 0.5
+        for key in sizes:
+            for factor in (1.0 / ratio, ratio):
+                params = {**best.params, key: best.params[key] * factor}
+                if params.get("J", 0.0) > params.get("S", np.inf):
+                    continue
+                tried = Candidate(best.kind, params, cv_sse(best.kind, params))
+                if tried.cv_sse < best.cv_sse:
+                    best = tried
+    return best
+
+
 def _candidate_grid(u: np.ndarray) -> list[tuple[str, ActuatorNonlinearity, dict]]:
     """(kind, actuator, reported params) over sizes relative to the OP's spread."""
     spread = float(np.percentile(u, 97.5) - np.percentile(u, 2.5))
@@ -287,6 +319,9 @@ def fit_valve(op, pv, stretches=None, first_lag: int = 0) -> HammersteinResult:
     periodic = with_sine.cv_sse < without.cv_sse and is_oscillating(u[widest])
     ranking = [linear] + [Candidate(kind, params, best_sse(fold_grams(actuator)))
                           for kind, actuator, params in _candidate_grid(u_in)]
+    grid_best = min((c for c in ranking if c.kind in HYSTERESIS_KINDS), key=lambda c: c.cv_sse, default=None)
+    if grid_best is not None:
+        ranking.append(_refined(grid_best, lambda kind, params: best_sse(fold_grams(_valve(kind, params)))))
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")
     # An OP that moves more per sample than the grid's largest valve leaves no hysteresis

@@ -48,10 +48,11 @@ def changes_the_split_absorbed(out, verdict, *search) -> list[Finding]:
 
 def _split_remains(out, redo: list[Finding], first_onset: int, min_segment: int) -> bool:
     """Whether the disturbance split is still significant in the one-step error with the process
-    changes ``redo`` applied from their onsets. When it is not, those changes explain everything the split's new
-    colour did, with a few parameters instead of an AR correction's: the nested comparison, where
-    the two scores are not on one baseline (the noise change's gain is counted against the
-    nominal noise model, the process change's against the correction refitted throughout)."""
+    changes ``redo`` applied from their onsets. When it is not, those changes explain everything
+    the split's new colour did, with a few parameters instead of an AR correction's: the nested
+    comparison, where the two scores are not on one baseline (the noise change's gain is counted
+    against the nominal noise model, the process change's against the correction refitted
+    throughout)."""
     t = np.arange(len(out.e))
     e, changes = out.e, []
     for f in sorted(redo, key=lambda f: f.onset_s):    # each change from its onset on

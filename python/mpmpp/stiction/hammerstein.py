@@ -222,17 +222,14 @@ def _candidate_grid(u: np.ndarray) -> list[tuple[str, ActuatorNonlinearity, dict
     # such candidates only add selection noise to the comparison with the linear valve
     floor = 2.0 * float(np.median(np.abs(np.diff(u))))
     sizes = spread * np.array([0.03, 0.06, 0.1, 0.15, 0.2, 0.3, 0.4, 0.55, 0.7, 0.85, 1.0])
-    grid = []
+    hysteresis = []
     for s in sizes[sizes >= floor]:
-        grid.append(("backlash", ActuatorNonlinearity(backlash=s), {"S": s, "J": 0.0}))
+        hysteresis.append(("backlash", {"S": s, "J": 0.0}))
         for ratio in (0.25, 0.5, 0.75, 1.0):
-            j = ratio * s
-            grid.append(("stick_slip", ActuatorNonlinearity(stiction_s=s, stiction_j=j), {"S": s, "J": j}))
-            grid.append(("he", ActuatorNonlinearity(stiction_law=StictionLaw.he, stiction_s=s, stiction_j=j),
-                         {"S": s, "J": j}))
+            hysteresis += [(kind, {"S": s, "J": ratio * s}) for kind in ("stick_slip", "he")]
     widths = spread * np.array([0.02, 0.05, 0.1, 0.2])
-    for d in widths[widths >= floor]:
-        grid.append(("deadband", ActuatorNonlinearity(deadband=d), {"width": d}))
+    hysteresis += [("deadband", {"width": d}) for d in widths[widths >= floor]]
+    grid = [(kind, _valve(kind, params), params) for kind, params in hysteresis]
     for q in (0.5, 1.0, 2.5, 5.0, 10.0):
         lo, hi = np.percentile(u, q), np.percentile(u, 100 - q)
         grid.append(("saturation_high", ActuatorNonlinearity(max=float(hi)), {"upper": float(hi)}))
@@ -320,8 +317,9 @@ def fit_valve(op, pv, stretches=None, first_lag: int = 0) -> HammersteinResult:
     ranking = [linear] + [Candidate(kind, params, best_sse(fold_grams(actuator)))
                           for kind, actuator, params in _candidate_grid(u_in)]
     grid_best = min((c for c in ranking if c.kind in HYSTERESIS_KINDS), key=lambda c: c.cv_sse, default=None)
-    if grid_best is not None:
-        ranking.append(_refined(grid_best, lambda kind, params: best_sse(fold_grams(_valve(kind, params)))))
+    refined = grid_best and _refined(grid_best, lambda kind, params: best_sse(fold_grams(_valve(kind, params))))
+    if refined is not grid_best:
+        ranking.append(refined)
     ranking.sort(key=lambda c: c.cv_sse)
     best = next(c for c in ranking if c.kind != "linear")
     # An OP that moves more per sample than the grid's largest valve leaves no hysteresis

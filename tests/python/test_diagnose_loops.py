@@ -1,6 +1,5 @@
 """diagnose on single PI loops as a historian gives them: 2 h at 10 s (751 rows), the model
 identified from the same data (`mpmpp identify`), or a hand-written one."""
-import importlib
 import json
 
 import numpy as np
@@ -76,18 +75,7 @@ def test_doubled_hand_written_gain_is_found_on_a_2h_record(loop, seed):
     assert not [n for n in res.notes if "withheld" in n]
 
 
-def _earlier_valve_fit(monkeypatch):
-    """The valve fit before 2026-12-03: the size grid without refinement and its map, in the fit
-    and in diagnose's valve gate."""
-    from mpmpp.stiction import hammerstein
-
-    monkeypatch.setattr(hammerstein, "REFINE_STEPS", 0)
-    monkeypatch.setattr(hammerstein, "CAL_SLOPE", 380.0)
-    for module in (hammerstein, importlib.import_module("mpmpp.diagnose.valve")):
-        monkeypatch.setattr(module, "CAL_GAIN_AT_HALF", 0.0034)
-
-
-def test_a_wrong_gain_stays_beside_an_unsure_valve_verdict(monkeypatch):
+def test_a_wrong_gain_stays_beside_an_unsure_valve_verdict(earlier_valve_fit):
     """A 2 h flow loop with a linear valve (seed 8) on which the valve fit says stick-slip at a
     confidence of about 0.6, as it does on about a tenth of linear loops. With a hand-written model
     of half the plant's gain, the gain finding used to be replaced by the valve finding; a valve
@@ -96,7 +84,6 @@ def test_a_wrong_gain_stays_beside_an_unsure_valve_verdict(monkeypatch):
     fit before 2026-12-03 gave this verdict; refined and with its map refitted it calls this loop
     linear (rightly), so the test keeps the earlier fit: it is about what diagnose does with an
     unsure valve verdict."""
-    _earlier_valve_fit(monkeypatch)
     loop = pi_loop.FLOW
     data = pi_loop.simulate(loop, 8, setpoint_steps=True)
     res = diagnose(_hand_written_model(loop, 0.5), data)
@@ -115,7 +102,7 @@ def test_right_hand_written_model_gets_no_process_finding_on_a_2h_record(loop):
         assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS], (loop.name, seed)
 
 
-def test_a_deadband_fit_of_the_valve_is_reported_not_a_crash(monkeypatch):
+def test_a_deadband_fit_of_the_valve_is_reported_not_a_crash(monkeypatch, earlier_valve_fit):
     """A 2 h flow loop whose plant gain halves an hour in, the model's gain half the plant's: the
     valve fit with N_Y PV lags only found a positioner deadband here, which has a width and no S
     or J, and diagnose raised KeyError 'S' on it. (With LONG_N_Y lags as well the fit finds no
@@ -124,7 +111,6 @@ def test_a_deadband_fit_of_the_valve_is_reported_not_a_crash(monkeypatch):
     from mpmpp.stiction import hammerstein
 
     monkeypatch.setattr(hammerstein, "LONG_N_Y", hammerstein.N_Y)
-    _earlier_valve_fit(monkeypatch)
     loop = pi_loop.FLOW
     data = pi_loop.simulate(loop, 3, setpoint_steps=True, gain_change=(360, 0.5))
     res = diagnose(_hand_written_model(loop, 0.5), data)

@@ -30,8 +30,11 @@ def test_a_missing_coupling_is_not_also_read_as_an_actuator_of_the_output_own_in
     res = diagnose(nominal_model(spec), simulate(spec))
     channel = [f for f in res.findings if f.effect in CHANNEL_EFFECTS and f.output == output]
     assert [(f.effect, f.input) for f in channel] == [("missing_coupling", new_input)]
+    assert not any(f.effect == "input_nonlinearity" for f in res.findings)
+    # the actuator of the output's own input, when its search proposes one, is withheld in
+    # favour of the coupling (with the actuator widths refined, 2026-12-03, none is proposed)
     withheld = [n for n in res.notes if "withheld" in n]
-    assert withheld and all(f"-> {output}" in n and new_input in n for n in withheld)
+    assert all(f"-> {output}" in n and new_input in n for n in withheld)
 
 
 def standing_gain(model, ratio, onset_s=0.0):

@@ -85,11 +85,12 @@ def test_an_op_ramping_at_its_rate_limit_is_not_compression():
     assert interpolated_share(compressed) > 0.3 and "straight lines" in record_notes({"OP": compressed})[0]
 
 
-def test_no_valve_verdict_on_a_rate_limited_op(monkeypatch):
+def test_no_valve_verdict_on_a_rate_limited_op(monkeypatch, earlier_valve_fit):
     """A DMC clipping its moves (tuning family mpc_siso_clip, seed 7, no change: a linear valve):
     the OP moves by its limit in most samples and the valve fit with N_Y PV lags, free, calls a
     backlash; held to the limit, it calls nothing, and a free OP's largest move is rare. (With
-    LONG_N_Y PV lags as well the fit itself finds the valve linear on this record.)"""
+    LONG_N_Y PV lags as well the fit itself finds the valve linear on this record, and so does
+    the refined fit of 2026-12-03 with N_Y lags: the test keeps the earlier fit, which called it.)"""
     from mpmpp import families
     from mpmpp.simulate import simulate
     from mpmpp.stiction import hammerstein

@@ -93,8 +93,12 @@ def main() -> None:
                         help="records' first seed (7001-7008 were looked at while choosing; report on others)")
     parser.add_argument("--families", default="tuning,held_out", help="comma-separated: tuning, held_out")
     args = parser.parse_args()
+    families = args.families.split(",")
+    unknown = [f for f in families if f not in FAMILIES]
+    if unknown:
+        parser.error(f"--families: unknown {', '.join(unknown)} (choose from {', '.join(FAMILIES)})")
     rows = defaultdict(lambda: {"records": 0, "refused": 0, "named": 0, "flips": 0, "before": [], "after": []})
-    for row, data, model in tallied_records(rows, args.families.split(","), args.seeds, args.first_seed):
+    for row, data, model in tallied_records(rows, families, args.seeds, args.first_seed):
         found = diagnose(model, data).findings
         row["flips"] += sign_flips(found)
         if found and found[0].effect == "input_nonlinearity":

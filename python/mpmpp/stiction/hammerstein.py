@@ -34,11 +34,12 @@ from math import exp
 
 import numpy as np
 
-from .._core import ActuatorNonlinearity, StictionLaw, actuator_positions
+from .._core import ActuatorNonlinearity, actuator_positions
 from ..held_values import require_computable
 from ..signals import longest
 from .oscillation import is_oscillating
 from .record_quality import NOTABLE_SHARE, rate_limited_share
+from .valve import actuator_from_fit, nonlinearity
 
 # ARX orders shared by every candidate (so the valve parameters are the only difference):
 # y lags 1..N_Y carry the process poles and the disturbance colour, valve lags 1..N_U cover a
@@ -186,12 +187,7 @@ def _structure_columns(n_y: int, valve_lags: int, window: tuple, periodic: bool,
 
 def _valve(kind: str, params: dict) -> ActuatorNonlinearity:
     """The engine's valve of hysteresis candidate ``kind`` with its reported ``params``."""
-    if kind == "backlash":
-        return ActuatorNonlinearity(backlash=params["S"])
-    if kind == "deadband":
-        return ActuatorNonlinearity(deadband=params["width"])
-    law = StictionLaw.he if kind == "he" else StictionLaw.choudhury
-    return ActuatorNonlinearity(stiction_law=law, stiction_s=params["S"], stiction_j=params["J"])
+    return nonlinearity(actuator_from_fit(kind, params))
 
 
 def _refined(best: Candidate, cv_sse) -> Candidate:

@@ -60,9 +60,9 @@ def test_a_noise_change_finding_is_right_at_an_earlier_noise_change():
 def test_tables_count_what_the_runs_say():
     def run(split, effect, right, false=False, update=None, conf=1.0):
         findings = [{"effect": "gain", "confidence": conf, "right": right}] if right or false else []
-        top = {"effect": "gain"} if (right or false) else None
+        top = {"effect": "gain", "onset_s": 5000.0} if (right or false) else None
         return {"family": f"a_{split}_family", "split": split, "effect": effect, "top_right": right, "false_process": false,
-                "refused": None, "top_process": top, "findings": findings, "update": update}
+                "refused": None, "top_process": top, "findings": findings, "update": update, "onset_s": 3000.0}
     up = {"true_before": 1.0, "true_after": 0.4, "shown_before": 1.0, "shown_after": 0.9, "process_before": 1.0, "process_after": 0.3}
     bad = {"true_before": 1.0, "true_after": 1.2, "shown_before": 1.0, "shown_after": 0.99, "process_before": 1.0, "process_after": 0.9}
     runs = [run(fam.HELD_OUT, "gain", True, update=up), run(fam.HELD_OUT, "gain", False, update=bad, conf=0.7),
@@ -71,6 +71,12 @@ def test_tables_count_what_the_runs_say():
     acc = {(r["split"], r["effect"]): r for r in ds.accuracy_rows(runs)}
     assert (acc[(fam.HELD_OUT, "gain")]["k"], acc[(fam.HELD_OUT, "gain")]["n"]) == (1, 2)
     assert acc[(fam.HELD_OUT, "none")]["k"] == 1 and acc[(fam.TUNING, "none")]["k"] == 0
+    assert acc[(fam.HELD_OUT, "gain")]["dated"] == 1 and acc[(fam.HELD_OUT, "none")]["dated"] is None
+    runs[0]["onset_s"] = 5000.0 - ds.DATED_WITHIN_S - 1.0      # named, but dated more than an hour off
+    assert acc[(fam.HELD_OUT, "gain")]["dated"] == 1 and not ds.dated(runs[0])
+    late = next(r for r in ds.accuracy_rows(runs) if (r["split"], r["effect"]) == (fam.HELD_OUT, "gain"))
+    assert (late["k"], late["dated"], late["n"]) == (1, 0, 2)
+    runs[0]["onset_s"] = 3000.0
     upd = ds.update_rows(runs)[0]
     assert (upd["n"], upd["halved"], upd["misleading"]) == (2, 1, 1)   # the second: shown error fell, true rose
     rel = {(r["split"], r["bin"]): r for r in ds.reliability_rows(runs)}
@@ -89,7 +95,7 @@ def test_tables_count_what_the_runs_say():
     assert (held["split"], held["effect"]) == (fam.HELD_OUT, "gain")
     assert (held["n"], held["right"], held["n_high"], held["right_high"]) == (2, 1, 2, 1)
     text = ds.format_tables({"runs": runs, "seeds": [0], "where": "x", "wall_seconds": 0.0})
-    assert "| held_out | gain | 1/2 (50%)" in text
+    assert "| held_out | gain | 1/2 (50%) | 1/2 (50%) |" in text
     tables = [[line for line in block.splitlines() if line.startswith("|")] for block in text.split("\n\n")]
     tables = [t for t in tables if t]
     assert len(tables) == 7   # accuracy, two evidence tables, update, two reliability tables, families

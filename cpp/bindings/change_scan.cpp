@@ -15,7 +15,10 @@ void bind_change_scan(py::module_& m) {
       .def_readonly("statistic", &OnsetFit::statistic)
       .def_readonly("theta", &OnsetFit::theta)
       .def_readonly("theta_se", &OnsetFit::theta_se)
-      .def_readonly("step", &OnsetFit::step);
+      .def_readonly("step", &OnsetFit::step)
+      .def_readonly("onset_first", &OnsetFit::onset_first)
+      .def_readonly("onset_last", &OnsetFit::onset_last);
+  m.attr("ONSET_SET_DROP") = kOnsetSetDrop;
   py::class_<CrossValidatedOnset>(m, "CrossValidatedOnset",
                                   "onset scan on all samples and two-fold cross-validated")
       .def_readonly("full", &CrossValidatedOnset::full)

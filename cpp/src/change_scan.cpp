@@ -26,7 +26,7 @@ void check_same_length(Eigen::Index a, Eigen::Index b, Eigen::Index c, Eigen::In
 OnsetFit make_fit(Eigen::Index k, double drop, double rp, double pp,
                   std::optional<double> held = std::nullopt) {
   OnsetFit f;
-  f.onset = k;
+  f.onset = f.onset_first = f.onset_last = k;
   f.statistic = drop;
   f.theta = held.value_or(0.0);
   if (pp <= 0.0) return f;
@@ -45,7 +45,7 @@ OnsetFit make_step_fit(Eigen::Index k, double drop, double rp, double pp, double
   const double det = pp * qq - pq * pq;
   if (!(qq > 0.0) || !(det > 1e-12 * pp * qq)) return make_fit(k, drop, rp, pp, held);
   OnsetFit f;
-  f.onset = k;
+  f.onset = f.onset_first = f.onset_last = k;
   f.theta = held ? *held : (qq * rp - pq * rq) / det;
   f.step = held ? (rq - f.theta * pq) / qq : (pp * rq - pq * rp) / det;
   f.statistic = drop + 2.0 * f.theta * rp - f.theta * f.theta * pp + 2.0 * f.step * rq -
@@ -197,7 +197,9 @@ class GridSums {
   OnsetFit scan(int j, Eigen::Index* row = nullptr, bool latest_tie = false,
                 double onset_penalty = 0.0, std::optional<double> held = std::nullopt) const {
     Eigen::Index best_row = 0;
+    std::vector<double> scores(static_cast<std::size_t>(drop_.rows()));
     double best = statistic(0, j, held), s = best - onset_penalty;
+    scores[0] = best;
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
       // a fold's sums stand still through the other fold's blocks: same sums, same statistic
       if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) ||
@@ -205,13 +207,28 @@ class GridSums {
           (has_step() && (rq_(i, j) != rq_(i - 1, j) || pq_(i, j) != pq_(i - 1, j) ||
                           qq_(i, j) != qq_(i - 1, j))))
         s = statistic(i, j, held) - onset_penalty;
+      scores[static_cast<std::size_t>(i)] = s;
       if (s > best || (latest_tie && s == best)) {
         best = s;
         best_row = i;
       }
     }
     if (row) *row = best_row;
-    return fit_at(best_row, j, held);
+    OnsetFit fit = fit_at(best_row, j, held);
+    Eigen::Index first = best_row, last = best_row;
+    for (Eigen::Index i = 0; i < drop_.rows(); ++i) {
+      if (scores[static_cast<std::size_t>(i)] >= best - kOnsetSetDrop) {
+        first = std::min(first, i);
+        last = std::max(last, i);
+      }
+    }
+    // a change between two grid onsets fits between them: the set runs to the next grid onset
+    // beyond each end, within the grid's regular part (not back across its first gap to `begin`)
+    if (first > 1) --first;
+    if (last + 1 < drop_.rows()) ++last;
+    fit.onset_first = (*onsets_)[first];
+    fit.onset_last = (*onsets_)[last];
+    return fit;
   }
 
   OnsetFit fit_at(Eigen::Index i, int j, std::optional<double> held = std::nullopt) const {

@@ -23,7 +23,7 @@ _UNITS = {"ms": 1e-3, "s": 1.0, "sec": 1.0, "min": 60.0, "m": 60.0, "h": 3600.0,
 _DURATION = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]*)\s*$")
 _EPOCH = datetime(1970, 1, 1, tzinfo=timezone.utc)
 # Points in time among the result fields (durations such as delay_s are left alone).
-TIME_POINT_KEYS = ("start_s", "end_s", "onset_s", "train_end_s")
+TIME_POINT_KEYS = ("start_s", "end_s", "onset_s", "onset_earliest_s", "onset_latest_s", "train_end_s")
 
 
 def parse_duration(text, option: str = "duration") -> float:

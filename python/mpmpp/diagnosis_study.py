@@ -374,6 +374,24 @@ def reliability_rows(runs: list, key: str = "confidence") -> list:
     return rows
 
 
+def onset_set_rows(runs: list) -> list:
+    """Per split and effect, over the right top findings that carry an onset set (a channel
+    change: onset_earliest_s .. onset_latest_s): how many, how many hold the change's onset, and
+    the sets' median width in hours."""
+    rows = []
+    for split in (fam.TUNING, fam.HELD_OUT):
+        for effect in EFFECT_ORDER:
+            rs = [r for r in runs if r["split"] == split and r["effect"] == effect and r["top_right"]
+                  and r.get("onset_s") is not None and "onset_earliest_s" in r["top_process"]]
+            if rs:
+                sets = [(r["top_process"]["onset_earliest_s"], r["top_process"]["onset_latest_s"], r["onset_s"])
+                        for r in rs]
+                rows.append({"split": split, "effect": effect, "n": len(rs),
+                             "held": sum(a <= t <= b for a, b, t in sets),
+                             "width_h": float(np.median([(b - a) / 3600.0 for a, b, _ in sets]))})
+    return rows
+
+
 def reliability_by_effect(runs: list, high: float = 0.9) -> list:
     """Per split and reported effect: findings and how many right, all and at >= ``high``."""
     rows = []
@@ -439,6 +457,11 @@ def format_tables(study: dict) -> str:
                   ["split", "finding", "findings", "right", "at >= 0.9", "right at >= 0.9"],
                   [[r["split"], r["effect"], r["n"], _frac(r["right"], r["n"]), r["n_high"],
                     _frac(r["right_high"], r["n_high"])] for r in reliability_by_effect(runs)])
+    out += _table("Onset sets (right top findings of a channel change: the onsets the data cannot tell from the "
+                  "reported one, diagnose's onset_earliest_s .. onset_latest_s; does the set hold the change's onset)",
+                  ["split", "effect", "findings with a set", "set holds the onset", "median width (h)"],
+                  [[r["split"], r["effect"], r["n"], _frac(r["held"], r["n"]), f"{r['width_h']:.2f}"]
+                   for r in onset_set_rows(runs)])
     out += _table("Per family (top process finding right / change runs; control runs with a false process finding; "
                   "findings at >= 0.9 right)", ["split", "family", "right", "controls false", "right at >= 0.9"],
                   [[r["split"], r["family"], _frac(r["right"], r["changes"]), _frac(r["false"], r["controls"]),

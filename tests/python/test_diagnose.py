@@ -78,6 +78,13 @@ def test_top_finding_matches_the_hidden_effect(case):
     assert set(d) == {"findings"}
     assert {"id", "effect", "output", "onset_s", "confidence", "estimate", "error_before", "error_after",
             "explanation"} <= set(d["findings"][0])
+    if top.effect in ("gain", "missing_coupling"):   # a channel change: its onset set, the onset in it
+        assert top.onset_earliest_s <= top.onset_s <= top.onset_latest_s
+        assert d["findings"][0]["onset_earliest_s"] == pytest.approx(top.onset_earliest_s)
+        assert ("fits as well" in top.explanation) == (top.onset_latest_s > top.onset_earliest_s)
+        assert "t=" not in top.explanation.split("(any onset")[-1]   # only the onset is a point in time
+    else:
+        assert "onset_earliest_s" not in d["findings"][0]
     if case == NOISE_CHANGE:
         assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS]
     if truth["effect"] == "gain":

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.stats import chi2
 
 import mpmpp
 from mpmpp import TransferFunction, _core
@@ -237,6 +238,17 @@ def test_level_step_scan_matches_least_squares(case, width, held):
     onset, stat, theta, c = best(weight)
     assert (cv.full.onset, cv.full.statistic, cv.full.theta, cv.full.step) == (
         onset, pytest.approx(stat, rel=1e-9), pytest.approx(theta, rel=1e-9), pytest.approx(c, rel=1e-9))
+    # the onset set: every grid onset whose charged statistic is within the chi-square 95 % point
+    # of the best, by its first and last onsets, each widened to the grid onset beyond it (not
+    # back across the grid's first gap to ``begin``)
+    assert _core.ONSET_SET_DROP == pytest.approx(chi2.ppf(0.95, 1), rel=1e-3)
+    grid = [(f[0], f[1] - (penalty if f[0] > begin else 0.0))
+            for f in level_step_fits(r, r_without, psi, q_of, weight, begin, 60, 7, held)]
+    inside = [i for i, (_, s) in enumerate(grid) if s >= max(s for _, s in grid) - _core.ONSET_SET_DROP]
+    first, last = min(inside), max(inside)
+    first, last = first - 1 if first > 1 else first, min(last + 1, len(grid) - 1)
+    assert (cv.full.onset_first, cv.full.onset_last) == (grid[first][0], grid[last][0])
+    assert cv.full.onset_first < cv.full.onset < cv.full.onset_last
     if case == "full" and held is None:
         assert abs(onset - 500) <= 7 and abs(c - 1.5) < 0.3 and abs(theta - 0.6) < 0.2
     folds = [weight * (odd == 0), weight * (odd != 0)]

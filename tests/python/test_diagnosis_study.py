@@ -77,6 +77,14 @@ def test_tables_count_what_the_runs_say():
     late = next(r for r in ds.accuracy_rows(runs) if (r["split"], r["effect"]) == (fam.HELD_OUT, "gain"))
     assert (late["k"], late["dated"], late["n"]) == (1, 0, 2)
     runs[0]["onset_s"] = 3000.0
+    assert ds.onset_set_rows(runs) == []              # no finding carries an onset set
+    runs[0]["top_process"].update(onset_earliest_s=2000.0, onset_latest_s=5240.0)   # holds 3000
+    [onsets] = ds.onset_set_rows(runs)
+    assert (onsets["split"], onsets["effect"], onsets["n"], onsets["held"], onsets["width_h"]) == (
+        fam.HELD_OUT, "gain", 1, 1, pytest.approx(0.9))
+    runs[0]["onset_s"] = 6000.0                       # outside the set (and not dated)
+    assert ds.onset_set_rows(runs)[0]["held"] == 0
+    runs[0]["onset_s"] = 3000.0
     upd = ds.update_rows(runs)[0]
     assert (upd["n"], upd["halved"], upd["misleading"]) == (2, 1, 1)   # the second: shown error fell, true rose
     rel = {(r["split"], r["bin"]): r for r in ds.reliability_rows(runs)}
@@ -98,7 +106,7 @@ def test_tables_count_what_the_runs_say():
     assert "| held_out | gain | 1/2 (50%) | 1/2 (50%) |" in text
     tables = [[line for line in block.splitlines() if line.startswith("|")] for block in text.split("\n\n")]
     tables = [t for t in tables if t]
-    assert len(tables) == 7   # accuracy, two evidence tables, update, two reliability tables, families
+    assert len(tables) == 8   # accuracy, two evidence tables, update, two reliability tables, onset sets, families
     for table in tables:      # every row as many cells as its header, the separator below it
         assert set(table[1].replace(" ", "")) == {"|", "-"}
         assert all(row.count("|") == table[0].count("|") for row in table)

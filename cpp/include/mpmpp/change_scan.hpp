@@ -21,12 +21,21 @@ namespace mpmpp {
 // The statistic is the drop of the residual sum of squares against the nominal model,
 //   sum_{t>=k} (r^2 - r_without^2) + (sum_{t>=k} r_without psi)^2 / sum_{t>=k} psi^2,
 // the likelihood-ratio statistic of the candidate for a fixed onset.
+// The onsets a scan cannot tell from its best: those whose statistic lies within this of the
+// best one's (the chi-square 95 % point of one parameter; the statistic is twice a
+// log-likelihood ratio). A likelihood-ratio set for the onset, reported as its first and last
+// grid onsets widened to the grid onset beyond each (the change may lie between two); a change
+// the input did not excite for hours fits equally anywhere in that time.
+constexpr double kOnsetSetDrop = 3.84;
+
 struct OnsetFit {
   Eigen::Index onset = 0;  // first sample of the changed segment
   double statistic = 0.0;  // drop of the residual sum of squares at that onset
   double theta = 0.0;      // least-squares channel scale after the onset
   double theta_se = 0.0;   // its standard error (unit noise variance)
   double step = 0.0;       // the output's level step at the onset (fit_with_level_step; else 0)
+  // the onset set's first and last grid onsets (a scan's; else both onset)
+  Eigen::Index onset_first = 0, onset_last = 0;
 };
 
 // Best onset among k = 0 and k = min_segment, min_segment + step, ..., N - min_segment.

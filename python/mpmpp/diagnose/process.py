@@ -33,6 +33,7 @@ from .. import _core
 from .._core import TransferFunction
 from ..signals import per_segment
 from ..step_response import step_response_deviation, step_response_error
+from ..timeaxis import format_duration
 from .errors import held_out_error, held_out_error_beside
 from .noise import drift_finding
 from .process_error import process_errors
@@ -100,6 +101,9 @@ class Fit:
     profile: list[ProfilePoint] = field(default_factory=list)   # same effect and column
     step: float = 0.0             # the output's level step at the onset (Shape.level_step)
     step_alone_heldout: float = 0.0   # held-out drop of that step alone, the channel kept (level_step)
+    # the first and last onsets the scan cannot tell from ``onset`` (change_scan.hpp kOnsetSetDrop)
+    onset_first: int = 0
+    onset_last: int = 0
 
 
 def _without_channel(r: np.ndarray, w: WhitenedShape) -> np.ndarray:
@@ -242,7 +246,7 @@ def _scan_arguments(shape: Shape, responses: ShapeResponses) -> tuple:
 def _as_fit(shape: Shape, cv) -> Fit:
     folds = [FoldFit(f.statistic, h, f.theta) for f, h in zip(cv.folds, cv.heldout)]
     return Fit(shape, cv.full.onset, cv.full.statistic, 0.0, cv.full.theta, cv.full.theta_se, folds, 0.0,
-               step=cv.full.step)
+               step=cv.full.step, onset_first=cv.full.onset_first, onset_last=cv.full.onset_last)
 
 
 def _line_fits(scan: _core.ProjectedOnsetScan, responses: ShapeResponses, lines: list[list[Shape]],
@@ -564,6 +568,12 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
     theta, se = fit.theta, fit.theta_se
     ci = [theta - 1.96 * se, theta + 1.96 * se]
     when = f"since t={onset_s / 3600:.1f} h" if fit.onset > 0 else "throughout the record"
+    earliest_s, latest_s = (float(sig.time_s[k]) for k in (fit.onset_first, fit.onset_last))
+    if latest_s > earliest_s:
+        # an onset the input did not excite: the data fit it anywhere in this stretch (said
+        # relative to the onset, which is the one point in time the text names)
+        when += f" (any onset from {format_duration(onset_s - earliest_s)} before to " \
+                f"{format_duration(latest_s - onset_s)} after it fits as well)"
     name = f"{out.name} <- {s.column}"
     # The model update uses the fold-0 estimate (fitted on the even blocks); errors on odd ones.
     theta_fit = fit.folds[0].theta
@@ -609,4 +619,4 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
     return Finding(id="", effect=s.effect, output=out.name, input=s.column, onset_s=onset_s,
                    confidence=confidence(fit.heldout, params), estimate=estimate,
                    error_before=err.before, error_after=err.after, explanation=text, score=fit.score,
-                   change=change)
+                   change=change, onset_earliest_s=earliest_s, onset_latest_s=latest_s)

@@ -87,6 +87,10 @@ class Finding:
     # ``output`` (the one the finding is reported on), and every output it drives.
     extra_changes: list[ModelChange] = field(repr=False, default_factory=list)
     outputs_driven: tuple[str, ...] = field(repr=False, default=())
+    # A channel change's onset set (process.py): the first and last onsets whose fit is within
+    # the chi-square 95 % point of the best; None where the search gives no such set.
+    onset_earliest_s: float | None = None
+    onset_latest_s: float | None = None
 
     def model_changes(self) -> list[ModelChange]:
         """Every change ``update`` applies for this finding."""
@@ -104,6 +108,8 @@ class Finding:
                  process_error_before=rounded(self.process_error_before),
                  process_error_after=rounded(self.process_error_after),
                  explanation=self.explanation)
+        if self.onset_earliest_s is not None:
+            d.update(onset_earliest_s=round(self.onset_earliest_s, 3), onset_latest_s=round(self.onset_latest_s, 3))
         return d
 
 

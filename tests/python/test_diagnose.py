@@ -83,6 +83,7 @@ def test_top_finding_matches_the_hidden_effect(case):
         assert d["findings"][0]["onset_earliest_s"] == pytest.approx(top.onset_earliest_s)
         assert ("fits as well" in top.explanation) == (top.onset_latest_s > top.onset_earliest_s)
         assert "t=" not in top.explanation.split("(any onset")[-1]   # only the onset is a point in time
+        assert " 0 s " not in top.explanation
     else:
         assert "onset_earliest_s" not in d["findings"][0]
     if case == NOISE_CHANGE:

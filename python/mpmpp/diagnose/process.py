@@ -572,8 +572,10 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
     if latest_s > earliest_s:
         # an onset the input did not excite: the data fit it anywhere in this stretch (said
         # relative to the onset, which is the one point in time the text names)
-        when += f" (any onset from {format_duration(onset_s - earliest_s)} before to " \
-                f"{format_duration(latest_s - onset_s)} after it fits as well)"
+        before, after = (format_duration(d) for d in (onset_s - earliest_s, latest_s - onset_s))
+        when += (f" (any onset up to {after} later fits as well)" if earliest_s == onset_s else
+                 f" (any onset up to {before} earlier fits as well)" if latest_s == onset_s else
+                 f" (any onset from {before} before to {after} after it fits as well)")
     name = f"{out.name} <- {s.column}"
     # The model update uses the fold-0 estimate (fitted on the even blocks); errors on odd ones.
     theta_fit = fit.folds[0].theta

@@ -7,7 +7,7 @@ import pytest
 
 import mpmpp
 from mpmpp import _core
-from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
+from mpmpp.diagnose import PROCESS_EFFECTS, diagnose, process
 from mpmpp.update import update
 
 import closed_loop_case as loop
@@ -81,7 +81,7 @@ def test_top_finding_matches_the_hidden_effect(case):
     if top.effect in ("gain", "missing_coupling"):   # a channel change: its onset set, the onset in it
         assert top.onset_earliest_s <= top.onset_s <= top.onset_latest_s
         assert d["findings"][0]["onset_earliest_s"] == pytest.approx(top.onset_earliest_s)
-        assert ("fits as well" in top.explanation) == (top.onset_latest_s > top.onset_earliest_s)
+        assert ("fits as well" in top.explanation) == (top.onset_latest_s - top.onset_earliest_s > process.ONSET_SET_SHOWN_S)
         assert "t=" not in top.explanation.split("(any onset")[-1]   # only the onset is a point in time
         assert " 0 s " not in top.explanation
     else:

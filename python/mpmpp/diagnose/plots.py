@@ -1,6 +1,7 @@
 """Figures of a diagnosis: per output, the model's one-step error before and after each
 finding's update on the same axes, with the findings' onsets, and below it the output's process
-part (the input-explained part of y - G u) before and after, where a right fix shows."""
+part (the input-explained part of y - G u) before and after, where a right fix shows. A channel
+change's onset set (the onsets the data fit as well) is shaded around its onset line."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -50,6 +51,9 @@ def plot_residuals(result, out_dir, origin=None) -> list[Path]:
             if f.output == name or (f.output is None and f.effect == "input_nonlinearity"):
                 onset = convert(f.onset_s)
                 ax.axvline(onset, color="r", ls="--")
+                if f.onset_earliest_s is not None and f.onset_latest_s > f.onset_earliest_s:
+                    # the onsets the data cannot tell from this one (the finding's onset set)
+                    ax.axvspan(convert(f.onset_earliest_s), convert(f.onset_latest_s), color="r", alpha=0.12, lw=0)
                 ax.text(onset, ax.get_ylim()[1] * 0.9, f" {f.id} {f.effect}", color="r")
         ax.set_ylabel(name)
         ax.set_title(f"{name}: one-step prediction error before and after the findings' updates")

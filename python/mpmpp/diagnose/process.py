@@ -58,6 +58,10 @@ DEAD_CHANNEL = 0.25
 # A gain this many times off (or its inverse) from the record's start reads as a unit error
 # in the hand-written model (kg/h for t/h is 1000, % for a fraction 100) more than as a change.
 UNIT_FACTOR = 10.0
+# An onset set narrower than this is the onset grid's own resolution (the set is widened to the
+# grid onset beyond each end, and the grid steps by a 60th of a segment, at most a minute): the
+# explanation spells the set out only when the data leave more open.
+ONSET_SET_SHOWN_S = 300.0
 # A changed channel of the opposite sign needs overwhelming evidence (|theta| / se): in closed
 # loop the controller's feedback path has the inverse sign and fits readily as a "process".
 SIGN_FLIP_Z = 5.0
@@ -569,7 +573,7 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
     ci = [theta - 1.96 * se, theta + 1.96 * se]
     when = f"since t={onset_s / 3600:.1f} h" if fit.onset > 0 else "throughout the record"
     earliest_s, latest_s = (float(sig.time_s[k]) for k in (fit.onset_first, fit.onset_last))
-    if latest_s > earliest_s:
+    if latest_s - earliest_s > ONSET_SET_SHOWN_S:
         # an onset the input did not excite: the data fit it anywhere in this stretch (said
         # relative to the onset, which is the one point in time the text names)
         before, after = (format_duration(d) for d in (onset_s - earliest_s, latest_s - onset_s))

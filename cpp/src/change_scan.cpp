@@ -194,12 +194,15 @@ class GridSums {
   // then only counted from where the fold saw it (the earliest onset would charge the other
   // fold for a change applied before it happened).
   // An onset after the first grid onset competes with its statistic less `onset_penalty`.
+  // With `scores`, each grid onset's statistic as the scan compares it (less the onset penalty
+  // after the first) is written there, for onset_set.
   OnsetFit scan(int j, Eigen::Index* row = nullptr, bool latest_tie = false,
-                double onset_penalty = 0.0, std::optional<double> held = std::nullopt) const {
+                double onset_penalty = 0.0, std::optional<double> held = std::nullopt,
+                std::vector<double>* scores = nullptr) const {
     Eigen::Index best_row = 0;
-    std::vector<double> scores(static_cast<std::size_t>(drop_.rows()));
+    if (scores) scores->resize(static_cast<std::size_t>(drop_.rows()));
     double best = statistic(0, j, held), s = best - onset_penalty;
-    scores[0] = best;
+    if (scores) (*scores)[0] = best;
     for (Eigen::Index i = 1; i < drop_.rows(); ++i) {
       // a fold's sums stand still through the other fold's blocks: same sums, same statistic
       if (drop_(i, j) != drop_(i - 1, j) || rp_(i, j) != rp_(i - 1, j) ||
@@ -207,28 +210,33 @@ class GridSums {
           (has_step() && (rq_(i, j) != rq_(i - 1, j) || pq_(i, j) != pq_(i - 1, j) ||
                           qq_(i, j) != qq_(i - 1, j))))
         s = statistic(i, j, held) - onset_penalty;
-      scores[static_cast<std::size_t>(i)] = s;
+      if (scores) (*scores)[static_cast<std::size_t>(i)] = s;
       if (s > best || (latest_tie && s == best)) {
         best = s;
         best_row = i;
       }
     }
     if (row) *row = best_row;
-    OnsetFit fit = fit_at(best_row, j, held);
+    return fit_at(best_row, j, held);
+  }
+
+  // Sets fit.onset_first / onset_last from a scan's `scores` and its best row: the grid onsets
+  // within kOnsetSetDrop of the best, widened to the grid onset beyond each end (a change
+  // between two grid onsets fits between them), within the grid's regular part (not back across
+  // its first gap to `begin`).
+  void onset_set(OnsetFit& fit, const std::vector<double>& scores, Eigen::Index best_row) const {
+    const double floor = scores[static_cast<std::size_t>(best_row)] - kOnsetSetDrop;
     Eigen::Index first = best_row, last = best_row;
     for (Eigen::Index i = 0; i < drop_.rows(); ++i) {
-      if (scores[static_cast<std::size_t>(i)] >= best - kOnsetSetDrop) {
+      if (scores[static_cast<std::size_t>(i)] >= floor) {
         first = std::min(first, i);
         last = std::max(last, i);
       }
     }
-    // a change between two grid onsets fits between them: the set runs to the next grid onset
-    // beyond each end, within the grid's regular part (not back across its first gap to `begin`)
     if (first > 1) --first;
     if (last + 1 < drop_.rows()) ++last;
     fit.onset_first = (*onsets_)[first];
     fit.onset_last = (*onsets_)[last];
-    return fit;
   }
 
   OnsetFit fit_at(Eigen::Index i, int j, std::optional<double> held = std::nullopt) const {
@@ -261,7 +269,10 @@ class GridSums {
   CrossValidatedOnset cross_validated(double onset_penalty = 0.0,
                                       std::optional<double> held = std::nullopt) const {
     CrossValidatedOnset out;
-    out.full = scan(0, nullptr, false, onset_penalty, held);
+    std::vector<double> scores;
+    Eigen::Index best_row = 0;
+    out.full = scan(0, &best_row, false, onset_penalty, held, &scores);
+    onset_set(out.full, scores, best_row);  // the full scan's only: the folds' are not reported
     for (int k = 0; k < 2; ++k) {
       Eigen::Index row = 0;
       out.fold[k] = scan(1 + k, &row, true, onset_penalty, held);

@@ -34,7 +34,8 @@ struct OnsetFit {
   double theta = 0.0;      // least-squares channel scale after the onset
   double theta_se = 0.0;   // its standard error (unit noise variance)
   double step = 0.0;       // the output's level step at the onset (fit_with_level_step; else 0)
-  // the onset set's first and last grid onsets (a scan's; else both onset)
+  // the onset set's first and last grid onsets (the full scan of a cross-validated fit; else
+  // both onset)
   Eigen::Index onset_first = 0, onset_last = 0;
 };
 

@@ -17,6 +17,7 @@ sys.path[:0] = [str(ROOT / "python"), str(ROOT / "tests" / "python")]
 
 # the imports below need the paths above
 from mpmpp._core import ActuatorNonlinearity, actuator_positions  # noqa: E402
+from mpmpp.periodic_disturbance import dominant_frequency  # noqa: E402
 from mpmpp.stiction import BASELINES, fit_valve, hammerstein  # noqa: E402
 from mpmpp.stiction.loop import Process, coloured_noise, simulate_pi_loop  # noqa: E402
 from valve_reference import choudhury_reference, per_fold_lstsq_losses  # noqa: E402
@@ -51,7 +52,7 @@ def main() -> int:
     print(f"Hammerstein fit of a week at 10 s ({n} samples, with the dead-time window): {t_week:.2f} s")
     window = hammerstein.dead_time_window(5)
     y = (week["pv"] - week["pv"].mean()) / week["pv"].std()
-    f = hammerstein.dominant_frequency(y)
+    f = dominant_frequency(y)
     phi, target = hammerstein._lagged(y, week["op"], f, hammerstein.N_U, 0, window, 12, hammerstein.LONG_N_Y)
     structures = [hammerstein._structure_columns(n_y, k, w, periodic, window)
                   for n_y in (hammerstein.N_Y, hammerstein.LONG_N_Y) for k in range(hammerstein.N_U + 1)

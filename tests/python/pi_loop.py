@@ -71,10 +71,12 @@ def foptd_coefficients(loop: Loop, ts: float):
 
 def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_steps: bool = False,
              step_size: float | None = None, op0: float = 50.0, pv0: float = 20.0,
-             gain_change: tuple[int, float] | None = None) -> pd.DataFrame:
+             gain_change: tuple[int, float] | None = None, oscillation: tuple[float, float] | None = None) -> pd.DataFrame:
     """One record: time, OP, PV, PV_sp. With ``setpoint_steps`` the setpoint alternates +-step_size
     (default 4 disturbance sds of PV) every 20 minutes. ``gain_change`` (row, factor): from that
-    row of the record on, the process gain is ``factor`` times the loop's (self-regulating loops)."""
+    row of the record on, the process gain is ``factor`` times the loop's (self-regulating loops).
+    ``oscillation`` (amplitude, period_s): a sinusoid added to the disturbance (an upstream loop
+    cycling), its phase drawn from the seed."""
     rng = np.random.default_rng(seed)
     kc, ti = loop.pi_tuning(ts)
     warm = 200  # settle the disturbance and controller before the record starts
@@ -85,6 +87,9 @@ def simulate(loop: Loop, seed: int, rows: int = 751, ts: float = 10.0, setpoint_
         v[t] = loop.noise_pole * v[t - 1] + e[t]
     if loop.integrating and loop.inflow_disturbance:
         v = np.cumsum(v)
+    if oscillation is not None:
+        amplitude, period_s = oscillation
+        v = v + amplitude * np.sin(2 * np.pi * np.arange(n) * ts / period_s + rng.uniform(0, 2 * np.pi))
     sp = np.full(n, pv0)
     if setpoint_steps:
         size = step_size if step_size is not None else 4 * loop.noise_sd / np.sqrt(1 - loop.noise_pole**2)

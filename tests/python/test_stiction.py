@@ -264,17 +264,6 @@ def test_coloured_noise_is_the_ar1_filter():
     np.testing.assert_allclose(x, 2.0 * ref / np.std(ref), rtol=1e-12)
 
 
-def test_dominant_frequency_is_the_periodogram_peak():
-    from mpmpp.stiction.hammerstein import dominant_frequency
-    from scipy.signal import periodogram
-    rng = np.random.default_rng(3)
-    x = np.sin(2 * np.pi * np.arange(751) / 41.3 + 0.7) + 0.5 * rng.standard_normal(751)
-    f, p = periodogram(x, window="hann", nfft=16 * 751, detrend="constant")
-    band = (f >= 4 / 751) & (f <= 0.25)
-    assert dominant_frequency(x) == pytest.approx(f[band][np.argmax(p[band])], abs=1e-12)
-    assert 1 / dominant_frequency(x) == pytest.approx(41.3, rel=0.01)
-
-
 def test_external_oscillation_is_a_linear_valve_with_an_oscillating_disturbance():
     """A sinusoid entering the loop is explained by the linear valve's sinusoidal disturbance
     term, not by a hysteresis valve; a sticking valve in the same loop still is."""

@@ -36,6 +36,7 @@ import numpy as np
 
 from .._core import ActuatorNonlinearity, actuator_positions
 from ..held_values import require_computable
+from ..periodic_disturbance import dominant_frequency
 from ..signals import longest
 from .oscillation import is_oscillating
 from .record_quality import NOTABLE_SHARE, rate_limited_share
@@ -110,18 +111,6 @@ def _lagged(y: np.ndarray, v: np.ndarray, frequency: float | None = None,
         phase = 2 * np.pi * frequency * np.arange(first_row + start, first_row + n)
         cols += [np.sin(phase), np.cos(phase)]
     return np.column_stack(cols), y[start:]
-
-
-def dominant_frequency(x: np.ndarray) -> float:
-    """Frequency (cycles per sample) of the periodogram's peak of x (Hann window, 16-fold zero
-    padding), among periods from 4 samples (a visible cycle) to a quarter of the record (at
-    least four cycles make an oscillation)."""
-    n = len(x)
-    m = 16 * n
-    power = np.abs(np.fft.rfft((x - x.mean()) * np.hanning(n), m)) ** 2
-    f = np.fft.rfftfreq(m)
-    band = (f >= 4.0 / n) & (f <= 0.25)
-    return float(f[band][np.argmax(power[band])])
 
 
 class FoldGrams:

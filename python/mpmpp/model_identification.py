@@ -360,8 +360,7 @@ def model_from_data(data, inputs, outputs, *, setpoints=None, name: str | None =
             process[out] = {c.input: tf[j] for j, c in enumerate(chans) if c.kept}
             na = len(best.a)
             if oscillation is not None:
-                kept = [g if c.kept else _core.TransferFunction(np.zeros(1), np.ones(1), 0) for g, c in zip(tf, chans)]
-                na, a = _disturbance_with_oscillation(kept, cls, root, Y[:, i], U, search)
+                na, a = _disturbance_with_oscillation(process[out], cls, root, Y[:, i], U, search)
             noise[out] = _core.TransferFunction(np.array([1.0, -root]) if root else np.ones(1), _stable_monic(a), 0)
             summaries += chans
             e = np.concatenate([_core.prediction_error(tf, noise[out], Y[a:b, i], U[a:b]) for a, b in st.spans()])
@@ -479,11 +478,12 @@ def _external_oscillation(y, U, rows, chosen: _OutputChoice, classes, action: in
     return _ExternalOscillation(other, 1.0 / frequency, float(amplitude[0]))
 
 
-def _disturbance_with_oscillation(tf: list, cls: ProcessClass, root: float, y, U, search: _OutputSearch):
-    """(na, the model file's noise denominator) for the process ``tf`` fitted with a sinusoid set
-    apart: the AR of the output error y - G u on the data as they are, cycle included (in the
-    class's noise domain, through the moving-average root), its order by BIC up to two beyond
-    the orders searched (a cycle is a pair of poles). The model file has no place for a
+def _disturbance_with_oscillation(row: dict, cls: ProcessClass, root: float, y, U, search: _OutputSearch):
+    """(na, the model file's noise denominator) for the output's channels ``row`` (input name ->
+    transfer function, those the model file keeps) fitted with a sinusoid set apart: the AR of
+    the output error y - G u on the data as they are, cycle included (in the class's noise
+    domain, through the moving-average root), its order by BIC up to two beyond the orders
+    searched (a cycle is a pair of poles). The model file has no place for a
     sinusoid, and with the cycle-free H of the projected fit `diagnose` on the same record read
     the cycle as process changes (the stiction study's flow loop with an external sinusoid,
     seeds 12-19: time-constant, delay and noise-change findings on 6 of 6; with this H, 3 of 6;
@@ -491,7 +491,7 @@ def _disturbance_with_oscillation(tf: list, cls: ProcessClass, root: float, y, U
     from .disturbance import bic_ar   # disturbance builds on this module
 
     st = search.st
-    v = y - sum(st.filter(g, U[:, j]) for j, g in enumerate(tf))
+    v = y - sum(st.filter(g, U[:, search.inputs.index(name)]) for name, g in row.items())
     if cls.noise_integrates:
         v = st.filter(_core.TransferFunction(np.array([1.0, -1.0]), np.ones(1), 0), v)
     if root:

@@ -36,7 +36,7 @@ import numpy as np
 
 from .._core import ActuatorNonlinearity, actuator_positions
 from ..held_values import require_computable
-from ..periodic_disturbance import dominant_frequency
+from ..periodic_disturbance import dominant_frequency, sinusoid_columns
 from ..signals import longest
 from .oscillation import is_oscillating
 from .record_quality import NOTABLE_SHARE, rate_limited_share
@@ -108,8 +108,7 @@ def _lagged(y: np.ndarray, v: np.ndarray, frequency: float | None = None,
     cols += [v[start - k:n - k] for k in lags]
     cols.append(np.ones(n - start))
     if frequency is not None:
-        phase = 2 * np.pi * frequency * np.arange(first_row + start, first_row + n)
-        cols += [np.sin(phase), np.cos(phase)]
+        cols += list(sinusoid_columns(np.arange(first_row + start, first_row + n), frequency)[:, 1:].T)
     return np.column_stack(cols), y[start:]
 
 

@@ -4,8 +4,12 @@ pass, the change, judged against the standing channel refitted on the rows befor
 (diagnose/pipeline.py _with_later_changes, reference_refit.py).
 Sizes against the truth; the second pass runs only when a standing finding exists; update
 applies a second-pass finding to the user's model as it is."""
+import json
+
 import pytest
 
+import mpmpp
+import pi_loop
 from mpmpp import families as fam
 from mpmpp.diagnose import PROCESS_EFFECTS, diagnose
 from mpmpp.diagnose import pipeline
@@ -122,3 +126,43 @@ def test_no_reference_refit_for_an_output_with_two_input_channels():
     standing = [Finding(id="F1", effect="gain", output=out, input="u1", onset_s=0.0, confidence=1.0,
                         estimate={}, error_before=1.0, error_after=1.0, explanation="", score=1.0)]
     assert refitted_before(model, simulate(spec), standing, 9.0 * HOUR) is None
+
+
+def _hand_written_flow_loop(tmp_path, seed, gain_change):
+    """The NumPy reference PI loop (tests/python/pi_loop.py, independent of mpmpp's simulator),
+    flow dynamics, 6 h at 10 s with setpoint steps, and the model a user wrote for it: gain
+    1.3x, time constant 0.7x the plant's. ``gain_change``: (row, factor) or None."""
+    loop = pi_loop.FLOW
+    path = tmp_path / "flow.json"
+    path.write_text(json.dumps({
+        "name": "flow", "sample_time_s": 10.0, "inputs": ["OP"], "outputs": ["PV"],
+        "process": {"PV": {"OP": {"gain": 1.3 * loop.gain, "time_constant_s": 0.7 * loop.time_constant_s,
+                                  "dead_time_s": loop.dead_time_s}}}}))
+    data = pi_loop.simulate(loop, seed, rows=2161, ts=10.0, setpoint_steps=True, gain_change=gain_change)
+    return mpmpp.load_model(path), data
+
+
+@pytest.mark.parametrize("seed", [1, 21, 27])
+def test_a_later_change_when_the_standing_error_is_withheld(tmp_path, seed):
+    """The plant's gain falls to 0.6x at row 1300 (3.6 h). Averaged over the record the model's
+    error reads as a gain about 0.5x throughout, which its check withholds (the update does not
+    lower the process part's error: the change is later); before, the output then got a
+    disturbance finding saying the process model still fits, or nothing. The withheld
+    correction's pass, or the first pass's withheld dated finding, dates the change; against the
+    channel refitted on the rows before it the gain change is named (_with_later_changes)."""
+    model, data = _hand_written_flow_loop(tmp_path, seed, (1300, 0.6))
+    result = diagnose(model, data)
+    later = [f for f in result.findings if f.effect in PROCESS_EFFECTS and f.onset_s > 0.0]
+    assert [f.effect for f in later] == ["gain"]
+    assert abs(later[0].onset_s - 1300 * 10.0) < 0.5 * HOUR
+    assert later[0].estimate["gain_ratio"] == pytest.approx(0.6, abs=0.12)
+    assert later[0].explanation.startswith("against the channel refitted on the data before")
+    assert not [f for f in result.findings if f.effect in ("noise_change", "output_drift")]
+
+
+@pytest.mark.parametrize("seed", [1, 21, 27])
+def test_no_later_change_on_the_hand_written_flow_loop_without_one(tmp_path, seed):
+    """The same loops without the gain change: no process change dated inside the record."""
+    model, data = _hand_written_flow_loop(tmp_path, seed, None)
+    result = diagnose(model, data)
+    assert not [f for f in result.findings if f.effect in PROCESS_EFFECTS and f.onset_s > 0.0]

@@ -152,13 +152,16 @@ def diagnose(model, data, train_end_s: float | None = None, min_segment_s: float
     an onset inside the record are reported beside them (``_with_later_changes``).
     """
     lengths = record_lengths(len(data), model.sample_time_s, min_segment_s, block_s)
-    first = _one_pass(model, data, train_end_s, lengths, min_effect, actuator_search)
-    return _with_later_changes(first, model, data, train_end_s, lengths, min_effect, actuator_search)
+    first, withheld = _one_pass(model, data, train_end_s, lengths, min_effect, actuator_search)
+    return _with_later_changes(first, withheld, model, data, train_end_s, lengths, min_effect, actuator_search)
 
 
 def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, min_effect: float,
-              actuator_search: bool | None) -> DiagnoseResult:
-    """One diagnosis of ``data`` against ``model`` (``diagnose`` without the second pass)."""
+              actuator_search: bool | None) -> tuple[DiagnoseResult, list[Finding]]:
+    """One diagnosis of ``data`` against ``model`` (``diagnose`` without the second pass), and
+    the linear channel changes it withheld: present from the first row
+    (``_without_unconfirmed_standing_changes``) or dated once those were refused
+    (``_later_changes_than_refused``)."""
     prepared = diagnosis_signals(model, data, train_end_s)
     sig, notes = prepared.sig, list(prepared.notes)
     time_s = sig.time_s
@@ -209,10 +212,12 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
     for out in outputs:
         pairs = out.refused | {(f.effect, f.input) for f in refused if f.output == out.name}
         if pairs:
-            later, withheld = _later_changes_than_refused(out, found, pairs, prepared, outputs, block, first_onset,
-                                                          min_segment, step, logn, min_effect, actions_of(out))
+            later, withheld, dated = _later_changes_than_refused(out, found, pairs, prepared, outputs, block,
+                                                                 first_onset, min_segment, step, logn, min_effect,
+                                                                 actions_of(out))
             found += later
             notes += withheld
+            refused += dated
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:
         if out.name not in with_process:
@@ -250,45 +255,71 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
                           process_parts=shown,
-                          notes=notes)
+                          notes=notes), refused
 
 
-def _with_later_changes(first: DiagnoseResult, model, data, train_end_s: float | None, lengths: RecordLengths,
-                        min_effect: float, actuator_search: bool | None) -> DiagnoseResult:
+def _with_later_changes(first: DiagnoseResult, withheld: list[Finding], model, data, train_end_s: float | None,
+                        lengths: RecordLengths, min_effect: float, actuator_search: bool | None) -> DiagnoseResult:
     """``first`` and, when linear channel findings of it stand from the record's start (or from
     ``train_end_s``), the findings of a second pass against the model with them applied whose
     onset lies inside the record: the changes the standing error hid. A linear channel change of
     that pass must hold against the standing channels refitted in full on the rows before it
     (reference_refit.py); where that refit can be had, the later findings are those of a pass
     against it. Every finding keeps the figures of its own pass; the later findings' errors
-    before are those of the model they were found against."""
+    before are those of the model they were found against.
+
+    When none stands but the first pass ``withheld`` such findings on an output it left
+    without a channel finding, the same passes start from them: a withheld change throughout
+    is what a change later in the record looks like on a model also wrong from the start (a
+    hand-written one), averaged over the record. The second pass, or else a dated change the
+    first pass withheld, gives the onset the channel is refitted before, and only linear
+    changes found against that refit are kept. They replace the first pass's disturbance
+    findings on their outputs, which said the process model still fits."""
     start = first.start_s
     standing = [f for f in first.findings if f.effect in LINEAR_CHANNEL_EFFECTS and f.onset_s <= start]
+    set_aside = not standing
+    if set_aside:   # only for outputs the first pass left without a channel finding
+        named = {f.output for f in first.findings if f.effect in CHANNEL_EFFECTS}
+        withheld = [f for f in withheld if f.output not in named]
+        standing = [f for f in withheld if f.onset_s <= start]
     if not standing:
         return first
     corrected = apply_changes(model, [c for f in standing for c in f.model_changes()])
-    second = _one_pass(corrected, data, train_end_s, lengths, min_effect, actuator_search)
+    second, _ = _one_pass(corrected, data, train_end_s, lengths, min_effect, actuator_search)
     later = [f for f in second.findings if f.onset_s > start]
     dated = [f for f in later if f.effect in LINEAR_CHANNEL_EFFECTS]
+    if set_aside and not dated:
+        dated = sorted((f for f in withheld if f.onset_s > start), key=lambda f: f.onset_s)
     refits = refitted_before(model, data, standing, dated[0].onset_s) if dated else None
     if refits:
-        second = _one_pass(apply_changes(corrected, refits), data, train_end_s, lengths, min_effect,
-                           actuator_search)
+        second, _ = _one_pass(apply_changes(corrected, refits), data, train_end_s, lengths, min_effect,
+                              actuator_search)
         later = [f for f in second.findings if f.onset_s > start]
+    if set_aside:
+        outputs = {f.output for f in standing}
+        later = [f for f in later if f.effect in LINEAR_CHANNEL_EFFECTS and f.output in outputs] if refits else []
     if not later:
         return first
+    kept = first.findings
+    if set_aside:
+        changed = {f.output for f in later}
+        kept = [f for f in kept if not (f.effect in DISTURBANCE_EFFECTS and f.output in changed)]
     residuals_after, process_parts = {}, {}
-    for source, findings in ((first, first.findings), (second, later)):
+    for source, findings in ((first, kept), (second, later)):
         for f in findings:
             residuals_after[id(f)] = source.residuals_after.get(f.id)
             process_parts[id(f)] = source.process_parts.get(f.id)
-    found = sorted(first.findings + later, key=lambda f: -f.score)
+    found = sorted(kept + later, key=lambda f: -f.score)
     for k, f in enumerate(found, start=1):
         f.id = f"F{k}"
-    basis = ", ".join(f.id for f in standing)
-    against = (f"against {basis}'s channel refitted on the data before t={dated[0].onset_s / 3600:.1f} h (the "
-               "model as it was before the change)" if refits else
-               f"with {basis} applied (the model as it should have been from the start)")
+    if set_aside:
+        against = (f"against the channel refitted on the data before t={dated[0].onset_s / 3600:.1f} h (the model "
+                   "as it was before the change; its error from the start, withheld in a note, set aside)")
+    else:
+        basis = ", ".join(f.id for f in standing)
+        against = (f"against {basis}'s channel refitted on the data before t={dated[0].onset_s / 3600:.1f} h (the "
+                   "model as it was before the change)" if refits else
+                   f"with {basis} applied (the model as it should have been from the start)")
     for f in later:
         f.explanation = f"{against}: {f.explanation}"
     notes = first.notes + [n for n in second.notes if n not in first.notes]
@@ -300,6 +331,7 @@ def _with_later_changes(first: DiagnoseResult, model, data, train_end_s: float |
 
 LINEAR_CHANNEL_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input")
 CHANNEL_EFFECTS = LINEAR_CHANNEL_EFFECTS + ("input_nonlinearity",)
+DISTURBANCE_EFFECTS = ("noise_change", "output_drift")   # "the process model still fits"
 
 
 def _strongest_input_per_output(found: list[Finding]) -> tuple[list[Finding], list[str]]:
@@ -408,14 +440,14 @@ def _unconfirmed(f: Finding, prepared: DiagnosisSignals, outputs: list, start: i
 
 def _later_changes_than_refused(out, found: list[Finding], refused: frozenset, prepared: DiagnosisSignals,
                                 outputs: list, block: int, first_onset: int, min_segment: int, step: int, logn: float,
-                                *search) -> tuple[list[Finding], list[str]]:
+                                *search) -> tuple[list[Finding], list[str], list[Finding]]:
     """For output ``out``, whose channel changes ``refused`` ((effect, input) pairs) present from
     the first row were withheld or dropped, when it has no other channel finding: the channel
     changes the onset scan dates inside the record, the refused ones left out (``process_findings``
     with ``later_only``; ``search``: its arguments after ``logn``), each confirmed on the rows
     after its onset as a standing change is on the record (``_unconfirmed``) and rejected by
     the rows before it (its held-out gain there, the correction refitted, below -log N: dated
-    from both sides), and the notes of those withheld. A change later in the record is what
+    from both sides), the notes of those withheld, and those withheld. A change later in the record is what
     the withheld note names as a likelier cause, and in the first search the standing candidate
     outscored it, beside step + ramp disturbances chosen with its help: tuning mpc_siso_1s
     seed 1, a gain doubled at 10 h (evidence 424 chi-square units) was read as a time constant
@@ -429,10 +461,10 @@ def _later_changes_than_refused(out, found: list[Finding], refused: frozenset, p
     first hour does not reject (gain -4.9 there; the doubled gain of mpc_siso_1s seed 1: -2126)."""
     n = len(out.e)
     if any(f.output == out.name and f.effect in CHANNEL_EFFECTS for f in found) or n - first_onset < 2 * min_segment:
-        return [], []
+        return [], [], []
     later, notes = _strongest_input_per_output(process_findings(out, first_onset, min_segment, step, logn, *search,
                                                                 later_only=True, refused=refused))
-    kept = []
+    kept, withheld = [], []
     sig = prepared.sig
     for f in later:
         onset = sig.seconds_to_index(f.onset_s)
@@ -447,9 +479,10 @@ def _later_changes_than_refused(out, found: list[Finding], refused: frozenset, p
         if why is None:
             kept.append(f)
         else:
+            withheld.append(f)
             notes.append(f"{f.explanation}: withheld, {why}; found once the change throughout was refused, "
                          "it has to show after its onset and not before")
-    return kept, notes
+    return kept, notes, withheld
 
 
 def _refitted_gains_per_half(out, after_e: np.ndarray, start: int, mid: int) -> list[float]:

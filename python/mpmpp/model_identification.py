@@ -497,9 +497,7 @@ def _disturbance_with_oscillation(row: dict, cls: ProcessClass, root: float, y, 
     if root:
         v = st.filter(_core.TransferFunction(np.ones(1), np.array([1.0, -root]), 0), v)
     # each stretch's start-up (filters from rest) is left out, as in the search's criterion
-    start_up = search.max_delay + max(search.na_orders)
-    for a, _ in st.spans():
-        v[a:a + start_up] = np.nan
+    v[~st.after(search.max_delay + max(search.na_orders))] = np.nan
     order = max(search.na_orders) + 2
     p, poly, _, _ = bic_ar(v, order, len(v), order)
     return p, (np.convolve(poly, [1.0, -1.0]) if cls.noise_integrates else poly)

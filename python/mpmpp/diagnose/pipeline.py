@@ -208,6 +208,7 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
     kept, withheld = _without_unconfirmed_standing_changes(found, prepared, outputs, first_onset, block, logn)
     notes += withheld
     refused = [f for f in found if all(f is not k for k in kept)]
+    withheld_later = []
     found = kept
     for out in outputs:
         pairs = out.refused | {(f.effect, f.input) for f in refused if f.output == out.name}
@@ -217,7 +218,7 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
                                                                  actions_of(out))
             found += later
             notes += withheld
-            refused += dated
+            withheld_later += dated
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:
         if out.name not in with_process:
@@ -255,7 +256,7 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
     return DiagnoseResult(model=str(model.name), train_end_s=train_end_s, findings=found,
                           time_s=time_s, residuals={o.name: o.e for o in outputs}, residuals_after=after,
                           process_parts=shown,
-                          notes=notes), refused
+                          notes=notes), refused + withheld_later
 
 
 def _with_later_changes(first: DiagnoseResult, withheld: list[Finding], model, data, train_end_s: float | None,

@@ -487,12 +487,14 @@ def _disturbance_with_oscillation(row: dict, cls: ProcessClass, root: float, y, 
     sinusoid, and with the cycle-free H of the projected fit `diagnose` on the same record read
     the cycle as process changes (the stiction study's flow loop with an external sinusoid,
     seeds 12-19: time-constant, delay and noise-change findings on 6 of 6; with this H, 3 of 6;
-    with the cycle as a pole pair of H at radius 0.999, 6 of 6)."""
+    with the cycle as a pole pair of H at radius 0.999, 6 of 6; measured while a self-regulating
+    output's H still got the integrating classes' differencing, docs/identify.md)."""
     from .disturbance import bic_ar   # disturbance builds on this module
 
     st = search.st
     v = y - sum(st.filter(g, U[:, search.inputs.index(name)]) for name, g in row.items())
-    if cls.noise_integrates:
+    integrates = cls.integrating and cls.noise_integrates   # the noise domain of _output_domain
+    if integrates:
         v = st.filter(_core.TransferFunction(np.array([1.0, -1.0]), np.ones(1), 0), v)
     if root:
         v = st.filter(_core.TransferFunction(np.ones(1), np.array([1.0, -root]), 0), v)
@@ -500,7 +502,7 @@ def _disturbance_with_oscillation(row: dict, cls: ProcessClass, root: float, y, 
     v[~st.after(search.max_delay + max(search.na_orders))] = np.nan
     order = max(search.na_orders) + 2
     p, poly, _, _ = bic_ar(v, order, len(v), order)
-    return p, (np.convolve(poly, [1.0, -1.0]) if cls.noise_integrates else poly)
+    return p, (np.convolve(poly, [1.0, -1.0]) if integrates else poly)
 
 
 def _moving_average_root(y, U, chosen: "_ClassFit", search: _OutputSearch) -> tuple[float, "_ClassFit", int]:

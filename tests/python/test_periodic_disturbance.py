@@ -68,6 +68,10 @@ def test_an_upstream_oscillation_no_longer_poses_as_dead_time(seed):
     assert o.oscillation_amplitude == pytest.approx(np.hypot(coef[1], coef[2]), rel=0.1)
     assert f"an oscillation from outside the loop set apart (period {o.oscillation_period_s:.4g} s" in result.summary()
     assert result.to_dict()["outputs"][0]["oscillation_period_s"] == o.oscillation_period_s
+    # the model file's disturbance model, the AR of y - G u with the cycle in it, is stationary
+    # for a self-regulating loop (a first version gave it the integrating classes' unit root)
+    assert o.process_class == model_identification.SELF_REGULATING.name
+    assert np.max(np.abs(np.roots(result.model.noise("PV").den))) < 0.99
 
 
 @pytest.mark.parametrize("loop", [pi_loop.PRESSURE, pi_loop.LEVEL], ids=lambda lp: lp.name)

@@ -387,6 +387,7 @@ def test_integrating_level_loop_is_identified_as_integrating():
     g = r.model.process("PV", "OP")
     assert np.asarray(g.den) == pytest.approx([1.0, -1.0]) and np.sum(g.num) == pytest.approx(c.gain * 10.0)
     assert "integrating, rate gain" in r.summary() and "per s" in r.summary()
+    assert r.outputs[0].class_open is None and "class is open" not in r.summary()
     # the same fit as SciPy's joint prediction-error fit of the differenced level
     y = df["PV"].to_numpy() - df["PV"].mean()
     dy = np.r_[0.0, np.diff(y)]
@@ -402,6 +403,28 @@ def test_self_regulating_flow_loop_is_not_called_integrating(seed):
     integrator as first order's tau -> infinity limit keeps the first-order class."""
     r = model_from_data(pi_loop.simulate(pi_loop.FLOW, seed=seed), ["OP"], ["PV"])
     assert r.outputs[0].process_class == "first order plus dead time" and not r.channels[0].integrating
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_integrator_chosen_over_a_better_settling_fit_says_the_class_is_open(seed):
+    """A routine pressure-like loop (tau 120 s, 2 h at 10 s) is called integrating: first order
+    plus dead time fits it better by 12-17 in BIC but its gain is not determined, while the
+    integrator's rate is. The summary and the JSON say the class is open and what first order
+    reads, near the truth (gain -2.5, 120 s)."""
+    r = model_from_data(pi_loop.simulate(pi_loop.PRESSURE, seed=seed), ["OP"], ["PV"])
+    o = r.outputs[0]
+    assert r.channels[0].integrating and o.class_open is not None
+    margin = float(o.class_open.split("better by ")[1].split(" in BIC")[0])
+    assert 12.0 <= margin <= 17.0
+    assert "does not determine its gain (-" in o.class_open and "--process self-regulating" in o.class_open
+    assert "    the class is open: first order plus dead time" in r.summary()
+    assert r.to_dict()["outputs"][0]["class_open"] == o.class_open
+
+
+def test_settling_fit_is_not_named_when_first_order_is_chosen():
+    """The flow loop's routine record: first order is chosen, nothing is open."""
+    r = model_from_data(pi_loop.simulate(pi_loop.FLOW, seed=1), ["OP"], ["PV"])
+    assert not r.channels[0].integrating and r.outputs[0].class_open is None
 
 
 def test_cli_integrating_level_json_and_forced_class(tmp_path, capsys):

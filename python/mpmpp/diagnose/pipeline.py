@@ -313,14 +313,14 @@ def _with_later_changes(first: DiagnoseResult, withheld: list[Finding], model, d
     found = sorted(kept + later, key=lambda f: -f.score)
     for k, f in enumerate(found, start=1):
         f.id = f"F{k}"
-    if set_aside:
-        against = (f"against the channel refitted on the data before t={dated[0].onset_s / 3600:.1f} h (the model "
-                   "as it was before the change; its error from the start, withheld in a note, set aside)")
+    basis = ", ".join(f.id for f in standing)
+    if refits:   # always so when set aside (else ``later`` is empty)
+        whose = "the" if set_aside else f"{basis}'s"
+        against = (f"against {whose} channel refitted on the data before t={dated[0].onset_s / 3600:.1f} h (the model "
+                   "as it was before the change" + ("; its error from the start, withheld in a note, set aside)"
+                                                    if set_aside else ")"))
     else:
-        basis = ", ".join(f.id for f in standing)
-        against = (f"against {basis}'s channel refitted on the data before t={dated[0].onset_s / 3600:.1f} h (the "
-                   "model as it was before the change)" if refits else
-                   f"with {basis} applied (the model as it should have been from the start)")
+        against = f"with {basis} applied (the model as it should have been from the start)"
     for f in later:
         f.explanation = f"{against}: {f.explanation}"
     notes = first.notes + [n for n in second.notes if n not in first.notes]

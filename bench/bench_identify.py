@@ -37,6 +37,8 @@ import pi_loop  # noqa: E402
 from timing import best_of  # noqa: E402
 
 import mpmpp.model_identification as mi  # noqa: E402
+from mpmpp import structure_search  # noqa: E402
+from mpmpp.process_class import SELF_REGULATING  # noqa: E402
 from mpmpp.io import load_data  # noqa: E402
 
 
@@ -58,7 +60,7 @@ def main(argv=None):
         assert r1.to_dict() == rw.to_dict()
         print(f"search, threads  {label} ({len(df)} rows, {r1.outputs[0].candidates} candidates): "
               f"1 thread {one:.2f} s, {args.workers} threads {many:.2f} s, ratio {one / many:.2f}")
-        fo, _ = best_of(lambda: mi.model_from_data(df, [u], [y], workers=1, classes=(mi.SELF_REGULATING,)),
+        fo, _ = best_of(lambda: mi.model_from_data(df, [u], [y], workers=1, classes=(SELF_REGULATING,)),
                         args.repeat)
         print(f"classes          {label}: first order only {fo:.2f} s, all classes {one:.2f} s, ratio {one / fo:.2f}")
         c = r1.channels[0]
@@ -70,8 +72,8 @@ def main(argv=None):
         na, t0 = r1.outputs[0].noise_order, 1 + max(mi.NA_ORDERS)
 
         def ours():
-            c0 = mi._fit(yd, ud, na, [c.delay_samples], [c.numerator_length], mi.SELF_REGULATING, t0)
-            return mi._refine(yd, ud, c0, mi.SELF_REGULATING, t0)
+            c0 = structure_search.fit_candidate(yd, ud, na, [c.delay_samples], [c.numerator_length], SELF_REGULATING, t0)
+            return structure_search.refine(yd, ud, c0, SELF_REGULATING, t0)
 
         def scipy_peer():
             return ref.pem_ar_noise(yv, uv, na, c.numerator_length, c.delay_samples)

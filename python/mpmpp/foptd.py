@@ -83,6 +83,26 @@ def _from_step(g, delay: int, ts: float) -> Foptd | None:
     return Foptd(gain, max(t63 - dead, 0.0), dead, False)
 
 
+def foptd_reading(b, f, delay, ts):
+    """(K, tau, theta) of G = q^-delay (b0 + b1 q^-1) / (1 + f1 q^-1), the inverse of the ZOH
+    discretisation (docs/formats.md), for the parameters ``identify``'s first-order class fits
+    (looser than ``_exact``, which reads a model file's channel); None when G is not of that form (pole outside (0, 1) is allowed
+    down to 0: tau below the sample resolution; b1 / (b0 + b1) outside [0, 1) is not a dead time)."""
+    a = -f[1]
+    if not (a < 1.0) or b.sum() == 0.0:
+        return None
+    gain = b.sum() / (1.0 - a)
+    tau = -ts / np.log(a) if a > 0 else 0.0
+    share = b[1] / b.sum() if len(b) > 1 else 0.0
+    if not (-1e-9 <= share < 1.0):
+        return None
+    if len(b) > 1 and 0 < a:
+        frac = 1.0 - np.log(a + (1.0 - a) * share) / np.log(a)
+    else:
+        frac = share  # a pure gain: the dead time splits linearly between the two samples
+    return gain, tau, (delay - 1 + frac) * ts
+
+
 def integrating_reading(b, f, delay, ts):
     """(K, tau, theta) of the differenced channel G' = q^-delay (b0 + b1 q^-1) / F, F = 1 or
     1 - a q^-1, of K e^(-theta s) / (s (tau s + 1)); K is the rate gain (per second). Without a

@@ -18,9 +18,11 @@ import pi_loop
 from mpmpp import io
 from mpmpp.cli import main
 from mpmpp.identify import model_from_data
+from mpmpp import structure_search as search
+from mpmpp.channel_reading import SIGN_FLIP_Z, ChannelSummary, _profile_interval
+from mpmpp.model_identification import NotIdentified, _check_verdict
+from mpmpp.process_class import INTEGRATING, SELF_REGULATING
 from mpmpp.stretches import Stretches
-from mpmpp.model_identification import (SIGN_FLIP_Z, ChannelSummary, NotIdentified, _check_verdict,
-                                        _profile_interval)
 
 
 @pytest.mark.parametrize("loop", [pi_loop.FLOW, pi_loop.PRESSURE, pi_loop.LEVEL], ids=lambda l: l.name)
@@ -156,7 +158,7 @@ def test_miso_keeps_the_real_channels_and_leaves_out_an_input_without_effect():
 
 
 def test_significance_threshold_grows_with_the_dead_times_searched():
-    from mpmpp.model_identification import significance_z
+    from mpmpp.channel_reading import significance_z
 
     assert significance_z(1) == pytest.approx(1.959964, abs=1e-6)
     assert 3.2 < significance_z(61) < 3.4
@@ -197,8 +199,6 @@ def test_every_stretch_between_missing_values_is_fitted_as_scipy_does_it():
     """Three stretches (PV missing at rows 200-204 and 480-482): the estimate is scipy's joint
     prediction-error fit over the three, each filtered from rest, and its covariance the
     finite-difference one of that criterion."""
-    import mpmpp.model_identification as mi
-
     df = pi_loop.simulate(pi_loop.PRESSURE, seed=3, setpoint_steps=True)
     gapped, kept, stretches = _with_gaps(df, [*range(200, 205), *range(480, 483)])
     r = model_from_data(gapped, "OP", "PV")
@@ -217,9 +217,9 @@ def test_every_stretch_between_missing_values_is_fitted_as_scipy_does_it():
 
     st = Stretches([q - p for p, q in stretches])
     y, U = pv - pv.mean(), (op - op.mean())[:, None]
-    cls = mi.SELF_REGULATING
-    cand = mi._refine(y, U, mi._fit(y, U, 2, [4], [2], cls, 69, st), cls, 69, st)
-    cov = mi._joint_covariance(y, U, cand, st)
+    cls = SELF_REGULATING
+    cand = search.refine(y, U, search.fit_candidate(y, U, 2, [4], [2], cls, 69, st), cls, 69, st)
+    cov = search.joint_covariance(y, U, cand, st)
     tf = cand.tf[0]
     expected = ref.pem_ar_noise_covariance(pv, op, 2, 2, 4, np.asarray(tf.num), np.asarray(tf.den),
                                            np.r_[1.0, cand.a], stretches=stretches)
@@ -294,14 +294,12 @@ def test_timestamps_in_the_time_column_are_a_one_line_error_not_nanoseconds():
 
 
 def test_joint_covariance_is_the_finite_difference_one():
-    import mpmpp.model_identification as mi
-
     df = pi_loop.simulate(pi_loop.FLOW, seed=4)
     y = df["PV"].to_numpy() - df["PV"].mean()
     U = df[["OP"]].to_numpy() - df["OP"].mean()
-    cls = mi.SELF_REGULATING
-    c = mi._refine(y, U, mi._fit(y, U, 2, [2], [1], cls, 60), cls, 60)
-    cov = mi._joint_covariance(y, U, c)
+    cls = SELF_REGULATING
+    c = search.refine(y, U, search.fit_candidate(y, U, 2, [2], [1], cls, 60), cls, 60)
+    cov = search.joint_covariance(y, U, c)
     g = c.tf[0]
     expected = ref.pem_ar_noise_covariance(df["PV"].to_numpy(), df["OP"].to_numpy(), 2, 1, 2,
                                            np.asarray(g.num), np.asarray(g.den), np.r_[1.0, c.a])
@@ -345,13 +343,13 @@ def test_integrating_channel_parameters_invert_the_zoh():
     """K e^(-theta s) / (s (tau s + 1)) at a whole number of samples of dead time: SciPy's ZOH
     coefficients give back K, tau and theta (the first-moment dead time is exact); without a lag
     the dead time between samples is exact too."""
-    from mpmpp.model_identification import INTEGRATING, INTEGRATING_LAG, _continuous
+    from mpmpp.process_class import INTEGRATING_LAG
 
     b, a = _zoh_integrator_with_lag(0.004, 60.0, 10.0)
-    k, tau, theta = _continuous(b, np.r_[1.0, -a], 3 + 1, 10.0, INTEGRATING_LAG)
+    k, tau, theta = INTEGRATING_LAG.reading(b, np.r_[1.0, -a], 3 + 1, 10.0)
     assert (k, tau, theta) == pytest.approx((0.004, 60.0, 30.0), rel=1e-9)
     # pure integrator, theta = 15 s = 1.5 samples: b0 = K Ts (1 - 0.5), b1 = K Ts 0.5 from q^-2
-    assert _continuous(np.array([0.02, 0.02]), np.ones(1), 2, 10.0, INTEGRATING) == pytest.approx((0.004, 0.0, 15.0))
+    assert INTEGRATING.reading(np.array([0.02, 0.02]), np.ones(1), 2, 10.0) == pytest.approx((0.004, 0.0, 15.0))
 
 
 @pytest.mark.parametrize("tau, theta", [(60.0, 30.0), (0.0, 15.0)])
@@ -445,28 +443,28 @@ def test_cli_integrating_level_json_and_forced_class(tmp_path, capsys):
 def test_class_choice_prefers_first_order_unless_clearly_beaten_or_at_its_boundary():
     from types import SimpleNamespace
 
-    from mpmpp.model_identification import CLASS_MARGIN, INTEGRATING, SELF_REGULATING, _ClassFit, _choose_class
+    from mpmpp.class_choice import CLASS_MARGIN, ClassFit, choose_class
 
     def fit(cls, bic, significant, tau=30.0, dead=10.0):
         c = ChannelSummary("PV", "OP", 1.0, 0.1, tau, 5.0, dead, (0.0, 20.0), 2, 1, significant)
-        return _ClassFit(cls, SimpleNamespace(bic=bic), [c])
+        return ClassFit(cls, SimpleNamespace(bic=bic), [c])
 
     record, ts = 7500.0, 10.0
     # integrator better, but by less than the margin: first order kept
-    assert _choose_class([fit(SELF_REGULATING, 0.0, True), fit(INTEGRATING, -CLASS_MARGIN + 0.5, True)],
-                         record, ts)[0] is SELF_REGULATING
-    assert _choose_class([fit(SELF_REGULATING, 0.0, True), fit(INTEGRATING, -CLASS_MARGIN - 0.5, True)],
-                         record, ts)[0] is INTEGRATING
+    assert choose_class([fit(SELF_REGULATING, 0.0, True), fit(INTEGRATING, -CLASS_MARGIN + 0.5, True)],
+                        record, ts)[0] is SELF_REGULATING
+    assert choose_class([fit(SELF_REGULATING, 0.0, True), fit(INTEGRATING, -CLASS_MARGIN - 0.5, True)],
+                        record, ts)[0] is INTEGRATING
     # first order identifies nothing: the integrator replaces it at first order's boundary, or
     # when it has a dead time of a sample or more; without one it does not (and the verdict refuses)
-    assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=1e5), fit(INTEGRATING, 2.0, True, dead=0.0)],
-                         record, ts)[0] is INTEGRATING
-    assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=400.0), fit(INTEGRATING, 2.0, True)],
-                         record, ts)[0] is INTEGRATING
-    assert _choose_class([fit(SELF_REGULATING, 0.0, False, tau=400.0), fit(INTEGRATING, 2.0, True, dead=5.0)],
-                         record, ts)[0] is SELF_REGULATING
+    assert choose_class([fit(SELF_REGULATING, 0.0, False, tau=1e5), fit(INTEGRATING, 2.0, True, dead=0.0)],
+                        record, ts)[0] is INTEGRATING
+    assert choose_class([fit(SELF_REGULATING, 0.0, False, tau=400.0), fit(INTEGRATING, 2.0, True)],
+                        record, ts)[0] is INTEGRATING
+    assert choose_class([fit(SELF_REGULATING, 0.0, False, tau=400.0), fit(INTEGRATING, 2.0, True, dead=5.0)],
+                        record, ts)[0] is SELF_REGULATING
     # forced integrating classes: plain BIC
-    assert _choose_class([fit(INTEGRATING, 1.0, True), fit(INTEGRATING, 0.0, True)], record, ts)[1].bic == 0.0
+    assert choose_class([fit(INTEGRATING, 1.0, True), fit(INTEGRATING, 0.0, True)], record, ts)[1].bic == 0.0
 
 
 def test_threads_do_not_change_the_result():
@@ -513,13 +511,13 @@ def test_integrating_class_taken_when_first_order_loses_its_gain():
 def test_refusal_names_the_integrating_reading_when_the_class_is_open():
     from types import SimpleNamespace
 
-    from mpmpp.model_identification import INTEGRATING, SELF_REGULATING, _ClassFit, _integrating_alternative
+    from mpmpp.class_choice import ClassFit, integrating_alternative
 
     def fit(cls, significant):
         c = ChannelSummary("PV", "OP", 0.05, 0.002, 0.0, float("nan"), 0.0, (0.0, 1.0), 1, 1, significant, True)
-        return _ClassFit(cls, SimpleNamespace(bic=0.0), [c])
+        return ClassFit(cls, SimpleNamespace(bic=0.0), [c])
 
-    text = _integrating_alternative([fit(SELF_REGULATING, False), fit(INTEGRATING, True)], SELF_REGULATING)
+    text = integrating_alternative([fit(SELF_REGULATING, False), fit(INTEGRATING, True)], SELF_REGULATING)
     assert text.startswith("; as an integrating process: rate gain 0.05 +- 0.002 per s from 'OP', dead time 0 s")
 
 
@@ -537,26 +535,25 @@ def test_identified_level_model_goes_through_diagnose(tmp_path, capsys):
 def test_lag_class_is_skipped_only_when_the_output_clearly_settles():
     from types import SimpleNamespace
 
-    from mpmpp.model_identification import PRUNE, INTEGRATING, SELF_REGULATING, _ClassFit, _lag_worth_searching
+    from mpmpp.class_choice import ClassFit, lag_worth_searching
 
     def fit(cls, bic):
-        return _ClassFit(cls, SimpleNamespace(bic=bic), [])
+        return ClassFit(cls, SimpleNamespace(bic=bic), [])
 
-    assert _lag_worth_searching([fit(SELF_REGULATING, 0.0), fit(INTEGRATING, PRUNE - 1.0)])
-    assert not _lag_worth_searching([fit(SELF_REGULATING, 0.0), fit(INTEGRATING, PRUNE + 1.0)])
-    assert _lag_worth_searching([fit(INTEGRATING, 5.0)])  # forced integrating classes
+    assert lag_worth_searching([fit(SELF_REGULATING, 0.0), fit(INTEGRATING, search.PRUNE - 1.0)])
+    assert not lag_worth_searching([fit(SELF_REGULATING, 0.0), fit(INTEGRATING, search.PRUNE + 1.0)])
+    assert lag_worth_searching([fit(INTEGRATING, 5.0)])  # forced integrating classes
 
 
 def test_joint_covariance_of_an_integrating_channel_is_the_finite_difference_one():
     """The pure integrator's differenced fit (FIR channel, no denominator parameter)."""
-    import mpmpp.model_identification as mi
 
     df = pi_loop.simulate(pi_loop.TANK, seed=4, setpoint_steps=True, step_size=0.5)
-    dy = mi._differenced(df["PV"].to_numpy() - df["PV"].mean(), Stretches([len(df)]))
+    dy = search.differenced(df["PV"].to_numpy() - df["PV"].mean(), Stretches([len(df)]))
     U = df[["OP"]].to_numpy() - df["OP"].mean()
-    cls = mi.INTEGRATING
-    c = mi._refine(dy, U, mi._fit(dy, U, 2, [2], [2], cls, 60), cls, 60)
-    cov = mi._joint_covariance(dy, U, c)
+    cls = INTEGRATING
+    c = search.refine(dy, U, search.fit_candidate(dy, U, 2, [2], [2], cls, 60), cls, 60)
+    cov = search.joint_covariance(dy, U, c)
     g = c.tf[0]
     expected = ref.pem_ar_noise_covariance(dy, df["OP"].to_numpy(), 2, 2, 2, np.asarray(g.num), np.ones(1),
                                            np.r_[1.0, c.a])
@@ -591,21 +588,21 @@ def test_level_with_transmitter_noise_gets_a_stationary_disturbance_model():
 def test_integrating_disturbance_is_an_inflow_unless_the_output_form_wins_clearly():
     from types import SimpleNamespace
 
-    from mpmpp.model_identification import (INTEGRATING, INTEGRATING_OUTPUT_NOISE, OUTPUT_NOISE_MARGIN,
-                                            SELF_REGULATING, _ClassFit, _choose_class)
+    from mpmpp.class_choice import OUTPUT_NOISE_MARGIN, ClassFit, choose_class
+    from mpmpp.process_class import INTEGRATING_OUTPUT_NOISE
 
     def fit(cls, bic, significant=True):
         c = ChannelSummary("PV", "OP", 1.0, 0.1, 0.0, float("nan"), 10.0, (0.0, 20.0), 2, 1, significant)
-        return _ClassFit(cls, SimpleNamespace(bic=bic), [c])
+        return ClassFit(cls, SimpleNamespace(bic=bic), [c])
 
     first = fit(SELF_REGULATING, 0.0, significant=False)
     close = [first, fit(INTEGRATING, -5.0), fit(INTEGRATING_OUTPUT_NOISE, -5.0 - OUTPUT_NOISE_MARGIN + 1)]
     clear = [first, fit(INTEGRATING, -5.0), fit(INTEGRATING_OUTPUT_NOISE, -5.0 - OUTPUT_NOISE_MARGIN - 1)]
-    assert _choose_class(close, 7500.0, 10.0)[0] is INTEGRATING
-    assert _choose_class(clear, 7500.0, 10.0)[0] is INTEGRATING_OUTPUT_NOISE
+    assert choose_class(close, 7500.0, 10.0)[0] is INTEGRATING
+    assert choose_class(clear, 7500.0, 10.0)[0] is INTEGRATING_OUTPUT_NOISE
     # no identified inflow form: the output form stands on its own
     alone = [first, fit(INTEGRATING, -5.0, significant=False), fit(INTEGRATING_OUTPUT_NOISE, -6.0)]
-    assert _choose_class(alone, 7500.0, 10.0)[0] is INTEGRATING_OUTPUT_NOISE
+    assert choose_class(alone, 7500.0, 10.0)[0] is INTEGRATING_OUTPUT_NOISE
 
 
 def test_an_input_only_its_controller_moves_is_flagged():
@@ -614,7 +611,7 @@ def test_an_input_only_its_controller_moves_is_flagged():
     comes out at about 0.26 +- 0.04), and every channel says so; a setpoint step, or an OP that
     something besides the controller moves, clears the flag."""
     import stiction_benchmark as sb
-    from mpmpp.model_identification import _controller_law_exact
+    from mpmpp.controller_action import controller_law_exact
     from mpmpp.stiction.loop import simulate_pi_loop
 
     flow = next(d for d in sb.TUNING if d.name == "flow")
@@ -623,15 +620,15 @@ def test_an_input_only_its_controller_moves_is_flagged():
     (c,) = model_from_data(frame, ["OP"], ["PV"]).channels
     assert c.unexcited and c.uncertain and "follows the controller exactly" in c.describe()
     assert abs(c.gain - 1.0) > 4 * c.gain_sd        # why: the reported spread is no guide here
-    assert _controller_law_exact(rec["op"], rec["pv"], None)
+    assert controller_law_exact(rec["op"], rec["pv"], None)
     rng = np.random.default_rng(1)
-    assert not _controller_law_exact(rec["op"] + 1e-3 * rng.standard_normal(751), rec["pv"], None)
+    assert not controller_law_exact(rec["op"] + 1e-3 * rng.standard_normal(751), rec["pv"], None)
     sp = np.where(np.arange(751) < 375, 0.0, 0.5)
     stepped = simulate_pi_loop(flow.process, flow.kc, flow.ti, 751, setpoint=sp,
                                disturbance=0.3 * rng.standard_normal(751))
     # the law of the control error is exact, but the setpoint moves the OP from outside
-    assert _controller_law_exact(stepped["op"], stepped["pv"] - stepped["sp"], None)
-    assert not _controller_law_exact(stepped["op"], stepped["pv"], stepped["sp"])
+    assert controller_law_exact(stepped["op"], stepped["pv"] - stepped["sp"], None)
+    assert not controller_law_exact(stepped["op"], stepped["pv"], stepped["sp"])
     frame = pd.DataFrame({"time": 10.0 * np.arange(751), "OP": stepped["op"], "PV": stepped["pv"] + 20.0,
                           "SP": stepped["sp"] + 20.0})
     (c,) = model_from_data(frame, ["OP"], ["PV"], setpoints=["SP"]).channels
@@ -643,7 +640,7 @@ def test_the_controller_action_is_read_within_stretches_not_across_a_gap():
     went from about +5 to -5 while the OP was moved up by hand. Laid end to end, that one
     difference (de -10, du +100) outweighs 798 within the stretches and reverses the sign;
     left out, the action is read right."""
-    from mpmpp.model_identification import _controller_action
+    from mpmpp.controller_action import controller_action
 
     rng = np.random.default_rng(2)
     pieces = []
@@ -652,8 +649,8 @@ def test_the_controller_action_is_read_within_stretches_not_across_a_gap():
         u = bias + np.cumsum(np.r_[0.0, 0.5 * np.diff(e) + 0.01 * e[1:]])
         pieces.append((u + 0.01 * rng.standard_normal(400), -e))   # pv = sp - e with sp = 0
     u, pv = np.concatenate([p[0] for p in pieces]), np.concatenate([p[1] for p in pieces])
-    assert _controller_action(u, pv, np.zeros(800), starts=[400]) == 1
-    assert _controller_action(u, pv, np.zeros(800)) == -1
+    assert controller_action(u, pv, np.zeros(800), starts=[400]) == 1
+    assert controller_action(u, pv, np.zeros(800)) == -1
 
 
 def test_a_wandering_disturbance_gets_a_moving_average_root_and_the_scipy_fit_at_it():

@@ -12,8 +12,10 @@ import pytest
 from scipy.stats import chi2, norm
 
 from mpmpp.identify import model_from_data
-from mpmpp.model_identification import (INTEGRATING_LAG, SELF_REGULATING, ChannelSummary, NotIdentified,
-                                        _ClassFit, _chi2_sf, _choose_class, _has_effect, significance_z)
+from mpmpp.channel_reading import ChannelSummary, _chi2_sf, _has_effect, significance_z
+from mpmpp.class_choice import ClassFit, choose_class
+from mpmpp.model_identification import NotIdentified
+from mpmpp.process_class import INTEGRATING_LAG, SELF_REGULATING
 
 import stiction_benchmark as sb
 
@@ -69,10 +71,10 @@ def test_a_fit_against_the_controllers_action_does_not_replace_first_order():
     known it identifies nothing, so first order stays and the verdict speaks for it."""
     def fit(cls, bic, gain, significant, dead=80.0, action=1):
         c = ChannelSummary("PV", "OP", gain, abs(gain) / 4.5, 60.0, 5.0, dead, (0.0, 90.0), 9, 1, significant)
-        return _ClassFit(cls, SimpleNamespace(bic=bic), [c], action)
+        return ClassFit(cls, SimpleNamespace(bic=bic), [c], action)
 
     default = fit(SELF_REGULATING, 0.0, 2.7, False, dead=5.0)
-    assert _choose_class([default, fit(INTEGRATING_LAG, 219.0, -0.005, True)], 7500.0, 10.0)[0] is SELF_REGULATING
+    assert choose_class([default, fit(INTEGRATING_LAG, 219.0, -0.005, True)], 7500.0, 10.0)[0] is SELF_REGULATING
     # the same fit with no controller action seen: nothing speaks against it
-    assert _choose_class([fit(SELF_REGULATING, 0.0, 2.7, False, dead=5.0, action=0),
-                          fit(INTEGRATING_LAG, 219.0, -0.005, True, action=0)], 7500.0, 10.0)[0] is INTEGRATING_LAG
+    assert choose_class([fit(SELF_REGULATING, 0.0, 2.7, False, dead=5.0, action=0),
+                         fit(INTEGRATING_LAG, 219.0, -0.005, True, action=0)], 7500.0, 10.0)[0] is INTEGRATING_LAG

@@ -10,6 +10,7 @@ import pi_loop
 from mpmpp import model_identification
 from mpmpp.identify import model_from_data
 from mpmpp.model_identification import NotIdentified
+from mpmpp.process_class import SELF_REGULATING
 from mpmpp.periodic_disturbance import dominant_frequency, without_sinusoid
 
 
@@ -70,7 +71,7 @@ def test_an_upstream_oscillation_no_longer_poses_as_dead_time(seed):
     assert result.to_dict()["outputs"][0]["oscillation_period_s"] == o.oscillation_period_s
     # the model file's disturbance model, the AR of y - G u with the cycle in it, is stationary
     # for a self-regulating loop (a first version gave it the integrating classes' unit root)
-    assert o.process_class == model_identification.SELF_REGULATING.name
+    assert o.process_class == SELF_REGULATING.name
     assert np.max(np.abs(np.roots(result.model.noise("PV").den))) < 0.99
 
 

@@ -27,7 +27,8 @@ def run(args) -> int:
     import os
 
     from ._pair import load_loop_data_for, note_repairs
-    from ..model_identification import CLASSES_BY_NAME, loop_columns, model_from_data
+    from ..model_identification import loop_columns, model_from_data
+    from ..process_class import CLASSES_BY_NAME
 
     if os.path.exists(args.output) and not args.force:
         raise ValueError(f"{args.output}: exists (add --force to replace it)")

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model_identification import _controller_action
+from ..controller_action import controller_action
 from ..signals import Signals, complete_runs
 from ..stretches import Stretches
 
@@ -38,5 +38,5 @@ def single_loops(sig: Signals, data) -> list[Loop]:
         # the complete rows laid end to end: a new stretch after a missing row or a segment break
         runs = complete_runs(ok, [a for a, _ in sig.segments[1:]])
         starts = Stretches([b - a for a, b in runs]).starts
-        loops.append(Loop(i, j, _controller_action(u[ok], y[ok], sp, starts)))
+        loops.append(Loop(i, j, controller_action(u[ok], y[ok], sp, starts)))
     return loops

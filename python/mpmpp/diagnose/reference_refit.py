@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model_identification import CLASSES_BY_NAME, NotIdentified, model_from_data
+from ..model_identification import NotIdentified, model_from_data
+from ..process_class import CLASSES_BY_NAME
 from ..timeaxis import seconds_of
 from .result import Finding, ModelChange
 

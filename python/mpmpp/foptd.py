@@ -149,6 +149,14 @@ def integrating_parameters(g, sample_time_s: float) -> Integrating | None:
     return None if reading is None else Integrating(*reading)
 
 
+def dead_time_s(g, sample_time_s: float) -> float | None:
+    """The dead time in seconds of ``g`` read as first order plus dead time (``foptd_parameters``)
+    or as an integrator (``integrating_parameters``): the FOPTD form's ``dead_time_s``, one sample
+    less than the discrete form's first lag under the zero-order hold. None when neither reads."""
+    reading = foptd_parameters(g, sample_time_s) or integrating_parameters(g, sample_time_s)
+    return None if reading is None else reading.dead_time_s
+
+
 def foptd_parameters(g, sample_time_s: float) -> Foptd | None:
     """``g`` (a discrete TransferFunction at ``sample_time_s``) as gain, time constant and dead
     time; None where no such reading exists (unstable or integrating channels, zero gain)."""

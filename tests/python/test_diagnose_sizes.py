@@ -105,6 +105,11 @@ def test_dead_time(seed):
     assert top.estimate["model_delay_samples"] == model_delay
     assert abs(top.estimate["delay_samples"] - (model_delay + 7)) <= 1
     assert top.estimate["delay_s"] == top.estimate["delay_samples"] * suite.BASE["sample_time_s"]
+    # the dead time as the FOPTD form and `check` state it: one sample less than the first lag
+    ts = suite.BASE["sample_time_s"]
+    assert top.estimate["model_dead_time_s"] == pytest.approx((model_delay - 1) * ts)
+    assert top.estimate["dead_time_s"] == pytest.approx((top.estimate["delay_samples"] - 1) * ts)
+    assert f"instead of {(model_delay - 1) * ts:.3g} s (delay {top.estimate['delay_samples']} samples" in top.explanation
 
 
 @pytest.mark.parametrize("seed", SEEDS)

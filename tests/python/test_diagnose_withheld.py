@@ -142,7 +142,9 @@ def test_a_later_change_the_rows_before_it_do_not_reject_is_withheld():
     res = diagnose(nominal_model(spec), simulate(spec))
     assert not [f for f in res.findings if f.effect in CHANNEL_EFFECTS]
     [later] = [n for n in res.notes if "the rows before its onset do not reject it" in n]
-    assert later.startswith("dead time of y1 <- u1")
+    # the model file's FOPTD dead time (5 s) is the one quoted, not its first lag times Ts (10 s)
+    assert spec["process"]["y1"]["u1"]["dead_time_s"] == 5
+    assert later.startswith("dead time of y1 <- u1 about 10 s instead of 5 s (delay 3 samples instead of 2)")
 
 
 def test_a_change_later_in_the_record_is_searched_once_a_dropped_change_throughout_is_refused():

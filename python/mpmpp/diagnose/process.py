@@ -31,6 +31,7 @@ import numpy as np
 
 from .. import _core
 from .._core import TransferFunction
+from ..foptd import dead_time_s
 from ..signals import per_segment
 from ..step_response import step_response_deviation, step_response_error
 from ..timeaxis import format_duration
@@ -604,11 +605,22 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
         text = (f"time constant of {name} about {s.label:g}x the model's "
                 f"({t_old * s.label:.0f} s instead of {t_old:.0f} s) {when}")
     elif s.effect == "delay":
-        estimate = {"delay_samples": int(s.label), "delay_s": s.label * sig.sample_time_s,
-                    "model_delay_samples": first_lag(s.nominal), "gain_ratio": theta,
-                    "ci95": ci_from_profile(fit.profile, fit.statistic)}
-        text = (f"dead time of {name} about {s.label * sig.sample_time_s:.0f} s instead of "
-                f"{first_lag(s.nominal) * sig.sample_time_s:.0f} s {when}")
+        lag, model_lag = int(s.label), first_lag(s.nominal)
+        estimate = {"delay_samples": lag, "delay_s": lag * sig.sample_time_s, "model_delay_samples": model_lag,
+                    "gain_ratio": theta, "ci95": ci_from_profile(fit.profile, fit.statistic)}
+        # The dead time a user writes (the FOPTD form's dead_time_s, what `check` reads) is one
+        # sample less than the first lag under the zero-order hold; lag * Ts quoted as the dead
+        # time told a user who wrote 5 s that the model said 10 s. The new channel is the model's
+        # shifted by whole samples, so its dead time moves by the same lags.
+        model_dead = dead_time_s(s.nominal, sig.sample_time_s)
+        samples = f"delay {lag} sample{'s' if lag != 1 else ''} instead of {model_lag}"
+        if model_dead is None:
+            text = f"{samples} in {name} {when}"
+        else:
+            estimate["dead_time_s"] = max(model_dead + (lag - model_lag) * sig.sample_time_s, 0.0)
+            estimate["model_dead_time_s"] = model_dead
+            text = (f"dead time of {name} about {estimate['dead_time_s']:.3g} s instead of {model_dead:.3g} s "
+                    f"({samples}) {when}")
     else:
         pole = 1.0 - float(s.shape.num[0])
         estimate = {"gain": theta, "ci95": theta_ci_from_profile(fit.profile, fit.statistic) if fit.profile else ci,

@@ -86,8 +86,9 @@ def _from_step(g, delay: int, ts: float) -> Foptd | None:
 def foptd_reading(b, f, delay, ts):
     """(K, tau, theta) of G = q^-delay (b0 + b1 q^-1) / (1 + f1 q^-1), the inverse of the ZOH
     discretisation (docs/formats.md), for the parameters ``identify``'s first-order class fits
-    (looser than ``_exact``, which reads a model file's channel); None when G is not of that form (pole outside (0, 1) is allowed
-    down to 0: tau below the sample resolution; b1 / (b0 + b1) outside [0, 1) is not a dead time)."""
+    (looser than ``_exact``, which reads a model file's channel); None when G is not of that form
+    (pole outside (0, 1) is allowed down to 0: tau below the sample resolution; b1 / (b0 + b1)
+    outside [0, 1) is not a dead time)."""
     a = -f[1]
     if not (a < 1.0) or b.sum() == 0.0:
         return None

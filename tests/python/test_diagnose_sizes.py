@@ -109,7 +109,8 @@ def test_dead_time(seed):
     ts = suite.BASE["sample_time_s"]
     assert top.estimate["model_dead_time_s"] == pytest.approx((model_delay - 1) * ts)
     assert top.estimate["dead_time_s"] == pytest.approx((top.estimate["delay_samples"] - 1) * ts)
-    assert f"instead of {(model_delay - 1) * ts:.3g} s (delay {top.estimate['delay_samples']} samples" in top.explanation
+    lag = top.estimate["delay_samples"]
+    assert f"instead of {(model_delay - 1) * ts:.3g} s (delay {lag} samples" in top.explanation
 
 
 @pytest.mark.parametrize("seed", SEEDS)

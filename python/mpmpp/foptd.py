@@ -75,6 +75,8 @@ def _from_step(g, delay: int, ts: float) -> Foptd | None:
     if gain == 0 or not np.isfinite(gain):
         return None
     moved = np.flatnonzero(np.abs(step) > 1e-9 * abs(gain))
+    if moved.size == 0:   # no visible response within the window (a gain far beyond its transient)
+        return None
     # A ZOH lag first moves one sample after its dead time.
     dead = max(int(moved[0]) - 1, 0) * ts
     frac = step / gain

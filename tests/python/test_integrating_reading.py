@@ -34,3 +34,21 @@ def test_fractional_dead_time_and_non_integrating_channels():
     assert (r.rate_gain, r.dead_time_s) == pytest.approx((0.1, 2.5))
     assert integrating_parameters(mpmpp.TransferFunction([0.1], [1.0, -0.9], 2), 1.0) is None
     assert integrating_parameters(mpmpp.TransferFunction([0.1], [1.0, -2.0, 1.0], 1), 1.0) is None
+
+
+def test_an_integrator_whose_pole_rounds_below_one_is_no_crash():
+    """The level of tuning family pi_level seed 4: den (1 - q^-1)(1 - 0.482 q^-1) written out,
+    whose unit root comes out a rounding below 1, so the channel counts as stable with a DC gain
+    of 6e14. The step-response reading found no sample that moved by 1e-9 of that gain within
+    its window and raised IndexError (from `mpmpp check`, and from diagnose's dead-time text).
+    It has no first-order reading, nor an integrating one (a lag behind a single numerator tap
+    at lag 1 has a mean delay shorter than any dead time allows), so no dead time is stated: a
+    delay finding on it speaks in samples."""
+    from mpmpp.foptd import dead_time_s, foptd_parameters
+
+    g = mpmpp.TransferFunction([0.03462617104458364], [1.0, -1.4820961093655292, 0.4820961093655292], 1)
+    assert g.is_stable() and abs(g.dc_gain()) > 1e14
+    assert foptd_parameters(g, 5.0) is None and integrating_parameters(g, 5.0) is None
+    assert dead_time_s(g, 5.0) is None
+    # the same level with the lag a ZOH gives it (two numerator taps) is read
+    assert dead_time_s(mpmpp.TransferFunction(*zoh_integrator(0.2, 25.0, 10.0, 5.0)), 5.0) == pytest.approx(10.0)

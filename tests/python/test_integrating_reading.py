@@ -52,3 +52,19 @@ def test_an_integrator_whose_pole_rounds_below_one_is_no_crash():
     assert dead_time_s(g, 5.0) is None
     # the same level with the lag a ZOH gives it (two numerator taps) is read
     assert dead_time_s(mpmpp.TransferFunction(*zoh_integrator(0.2, 25.0, 10.0, 5.0)), 5.0) == pytest.approx(10.0)
+
+
+def test_check_names_what_such_a_channel_may_be(tmp_path, capsys):
+    """`mpmpp check` on that level: one line, the possible causes named (it raised IndexError)."""
+    import json
+
+    from mpmpp.cli import main
+
+    path = tmp_path / "level.json"
+    path.write_text(json.dumps({"name": "level", "sample_time_s": 5.0, "inputs": ["u1"], "outputs": ["y1"],
+                                "process": {"y1": {"u1": {"num": [0.03462617104458364],
+                                                          "den": [1.0, -1.4820961093655292, 0.4820961093655292],
+                                                          "delay": 1}}}}))
+    assert main(["check", str(path)]) == 0
+    assert "no first-order or integrating reading (unstable, zero gain, or a pole at 1 within rounding)" in \
+        capsys.readouterr().out

@@ -111,7 +111,8 @@ def _channel_line(ch: dict) -> str:
         return ch["foptd_text"]
     if ch["dc_gain"] is None:
         return "integrating (infinite dc gain), no first-order reading"
-    return f"dc gain {ch['dc_gain']:.6g}, no first-order reading (unstable or zero gain)"
+    return (f"dc gain {ch['dc_gain']:.6g}, no first-order or integrating reading (unstable, zero gain, or a "
+            "pole at 1 within rounding)")
 
 
 def _print_summary(report: dict, detail: bool) -> None:

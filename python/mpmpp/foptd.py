@@ -39,7 +39,9 @@ def _taps(g) -> tuple[np.ndarray, int]:
 
 
 def _exact(num: np.ndarray, den: np.ndarray, delay: int, ts: float) -> Foptd | None:
-    """Inverse of the zero-order-hold discretisation of K e^(-theta s) / (tau s + 1)."""
+    """Inverse of the zero-order-hold discretisation of K e^(-theta s) / (tau s + 1): the channel
+    read by ``foptd_reading`` within the stricter form a model file's FOPTD channel has (a pole in
+    (0, 1), a delay of a sample or more, the dead time's fraction strictly inside a sample)."""
     if len(den) == 1 and len(num) == 1:
         return Foptd(num[0] / den[0], 0.0, delay * ts, True)
     if len(den) != 2 or delay < 1 or len(num) > 2:
@@ -48,18 +50,14 @@ def _exact(num: np.ndarray, den: np.ndarray, delay: int, ts: float) -> Foptd | N
     if not 0.0 < a < 1.0:
         return None
     b = num / den[0]
-    gain = b.sum() / (1.0 - a)
-    tau = -ts / math.log(a)
-    if len(b) == 1:
-        return Foptd(gain, tau, (delay - 1) * ts, True)
-    if gain == 0.0:   # a zero-gain (washout) channel is no delayed first order
-        return None
-    # Fractional dead time f*Ts: b0 = K (1 - a^(1-f)), b1 = K (a^(1-f) - a) (modified z-transform).
-    af = 1.0 - b[0] / gain
-    if not a < af < 1.0:
-        return None
-    frac = 1.0 - math.log(af) / math.log(a)
-    return Foptd(gain, tau, (delay - 1 + frac) * ts, True)
+    if len(b) == 2:
+        gain = b.sum() / (1.0 - a)
+        if gain == 0.0:   # a zero-gain (washout) channel is no delayed first order
+            return None
+        # b0 = K (1 - a^(1-f)), b1 = K (a^(1-f) - a) (modified z-transform): a^(1-f) in (a, 1)
+        if not a < 1.0 - b[0] / gain < 1.0:
+            return None
+    return Foptd(*foptd_reading(b, np.array([1.0, -a]), delay, ts), True)
 
 
 def _from_step(g, delay: int, ts: float) -> Foptd | None:

@@ -116,6 +116,20 @@ def test_a_change_throughout_must_hold_with_the_noise_model_fitted_without_the_i
     assert note.startswith("gain of y1 <- u1") and "either estimate of its noise model" in note
 
 
+def test_a_dated_change_the_data_fit_as_well_from_the_start_is_judged_as_present_throughout():
+    """Tuning family mpc_level, seed 1, a noise-change control (the process unchanged): the
+    search dates a gain at 3.4 h whose onset set reaches back to the record's start, so the
+    data cannot tell it from a model error present throughout. Judged as one, its update does
+    not lower the process part in both halves; withheld with a note, the output's finding is
+    the noise change, which is the truth."""
+    spec, _ = families.family("mpc_level").draw(1, effect="noise_change")
+    res = diagnose(nominal_model(spec), simulate(spec))
+    assert not [f for f in res.findings if f.effect in CHANNEL_EFFECTS]
+    [note] = [n for n in res.notes if "judged as present throughout" in n]
+    assert note.startswith("gain of y1 <- u1") and "any onset from" in note
+    assert [f.effect for f in res.findings] == ["noise_change"]
+
+
 def test_a_change_later_in_the_record_is_searched_once_the_change_throughout_is_withheld():
     """Tuning family mpc_siso_1s, seed 1: the plant's gain doubles at 36,200 s under an MPC at
     2 s. The first search reads a time constant 0.46x throughout (its step + ramp disturbances

@@ -22,9 +22,9 @@ from .process import DEAD_CHANNEL, SCALED_CHANNEL_EFFECTS, process_findings
 from .process_error import held_out_rms, process_parts
 from .reference_refit import refitted_before
 from .refitted_noise import RefittedNoise
-from .result import DiagnoseResult, Finding, InsufficientData
+from .result import LINEAR_CHANNEL_EFFECTS, PROCESS_EFFECTS, DiagnoseResult, Finding, InsufficientData
 from .spikes import SPIKE_SIGMAS, output_spikes
-from .split_rivals import changes_the_split_absorbed
+from .split_rivals import changes_dwarfed_by_the_split, changes_the_split_absorbed
 from .valve import valve_findings
 from .whitening import AR_ORDER, estimated_noise_model, estimated_noise_models, estimated_noise_note, output_residual
 
@@ -219,6 +219,11 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
             found += later
             notes += withheld
             withheld_later += dated
+    dwarfed_notes = {}   # output -> why its findings went to the disturbance verdict
+    for out in outputs:
+        dwarfed, dwarfed_notes[out.name] = changes_dwarfed_by_the_split(out, found, first_onset, min_segment, logn,
+                                                                        min_effect)
+        found = [f for f in found if all(f is not d for d in dwarfed)]
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:
         if out.name not in with_process:
@@ -232,6 +237,8 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
             if redo:
                 found += redo
                 continue
+            if dwarfed_notes[out.name] is not None:
+                notes.append(dwarfed_notes[out.name])
             if verdict.note is not None:
                 notes.append(verdict.note)
             if verdict.finding is not None:
@@ -330,8 +337,7 @@ def _with_later_changes(first: DiagnoseResult, withheld: list[Finding], model, d
         process_parts={f.id: process_parts[id(f)] for f in found if process_parts[id(f)] is not None})
 
 
-LINEAR_CHANNEL_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input")
-CHANNEL_EFFECTS = LINEAR_CHANNEL_EFFECTS + ("input_nonlinearity",)
+CHANNEL_EFFECTS = PROCESS_EFFECTS
 DISTURBANCE_EFFECTS = ("noise_change", "output_drift")   # "the process model still fits"
 
 

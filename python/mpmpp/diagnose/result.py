@@ -11,8 +11,8 @@ from .._core import TransferFunction
 
 EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input",
            "noise_change", "output_drift", "input_nonlinearity")
-PROCESS_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input",
-                   "input_nonlinearity")
+LINEAR_CHANNEL_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input")
+PROCESS_EFFECTS = LINEAR_CHANNEL_EFFECTS + ("input_nonlinearity",)
 
 METRIC = ("RMS of the one-step prediction error of the output (deviation units) on "
           "held-out blocks after onset_s")

@@ -86,10 +86,17 @@ def test_a_noise_change_stays_significant_beside_the_best_process_candidate(name
     # Tuning controls where the candidates with one correction throughout were weighed against
     # the noise change: the split stays significant with them applied (1594 -> 1429 and
     # 7253 -> 3732 against a threshold near 65), so the noise change is kept.
+    _noise_change_named_alone(name, seed)
+
+
+def _noise_change_named_alone(name: str, seed: int):
+    """diagnose on family ``name``'s noise-change control at ``seed``: no channel finding, and the
+    noise change named within an hour of its onset; the result."""
     spec, expect = fam.family(name).draw(seed, None, "noise_change")
     res = diagnose(nominal_model(spec), simulate(spec))
     assert not any(f.effect in ("gain", "time_constant", "delay", "missing_coupling") for f in res.findings)
     assert any(f.effect == "noise_change" and abs(f.onset_s - expect["onset_s"]) < 3600.0 for f in res.findings)
+    return res
 
 
 @pytest.mark.parametrize("name, seed", [("mpc_level", 2), ("mpc_siso_wander_5s", 2)])
@@ -98,10 +105,7 @@ def test_a_channel_change_a_noise_change_dwarfs_is_withheld(name, seed):
     # a gain (34) were left, against the split's noise change of 8117 and 399, which stays
     # significant with them applied (split_rivals.changes_dwarfed_by_the_split). Before, each was
     # the top finding; now the output gets the disturbance verdict and a note names it.
-    spec, expect = fam.family(name).draw(seed, None, "noise_change")
-    res = diagnose(nominal_model(spec), simulate(spec))
-    assert not any(f.effect in ("gain", "time_constant", "delay", "missing_coupling") for f in res.findings)
-    assert any(f.effect == "noise_change" and abs(f.onset_s - expect["onset_s"]) < 3600.0 for f in res.findings)
+    res = _noise_change_named_alone(name, seed)
     assert any("withheld: the disturbance on" in n and "does not account for it" in n for n in res.notes)
 
 

@@ -12,8 +12,8 @@ from .process import process_findings
 from .result import LINEAR_CHANNEL_EFFECTS, Finding, InsufficientData
 from .whitening import disturbance_split, split_is_significant, without_split
 
-# A noise change this many times the score of the dated linear channel findings on its output,
-# which leave its split significant, takes their place (``changes_dwarfed_by_the_split``).
+# A noise change this many times the score of the dated findings of channels from the inputs on
+# its output, which leave its split significant, takes their place (``changes_dwarfed_by_the_split``).
 # Chosen on the tuning families, seeds 0-7: at 10, 5 of the 10 controls with a false process
 # finding lose it and 1 right finding is at risk (a gain of 502 beside a noise change of 8,904,
 # which returns when scored without the split); at 5, 6 and 4 (docs/diagnose.md "Channel
@@ -65,9 +65,9 @@ def changes_dwarfed_by_the_split(out, found: list[Finding], first_onset: int, mi
                                   min_effect: float) -> tuple[list[Finding], str | None]:
     """The converse of ``changes_the_split_absorbed``: output ``out``'s findings, when they are
     dated changes of channels from the inputs (FEEDBACK_CHANNEL_EFFECTS) beside a significant
-    disturbance split, and the note that
-    withholds them when the split's ``noise_change`` scores NOISE_CHANGE_DWARFS times the best
-    of them and stays significant with them applied (``_split_remains``). The candidates are
+    disturbance split, and the note that withholds them when the split's ``noise_change``
+    scores NOISE_CHANGE_DWARFS times the best of them and stays significant with them applied
+    (``_split_remains``); else no findings and no note. The candidates are
     fitted beside the split's own corrections, so a channel change scored there is what is
     left after a new disturbance colour; in closed loop the controller's answer to that colour
     still leaves a few tens of chi-square units for a gain or dead time dated near it (tuning

@@ -637,4 +637,4 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
     return Finding(id="", effect=s.effect, output=out.name, input=s.column, onset_s=onset_s,
                    confidence=confidence(fit.heldout, params), estimate=estimate,
                    error_before=err.before, error_after=err.after, explanation=text, score=fit.score,
-                   change=change, onset_earliest_s=earliest_s, onset_latest_s=latest_s)
+                   change=change, onset_earliest_s=earliest_s, onset_latest_s=latest_s, level_step=s.level_step)

@@ -91,6 +91,9 @@ class Finding:
     # the chi-square 95 % point of the best; None where the search gives no such set.
     onset_earliest_s: float | None = None
     onset_latest_s: float | None = None
+    # a gain fitted with a step of the output's level at its onset (shapes.Shape.level_step),
+    # which no model update carries
+    level_step: bool = field(repr=False, default=False)
 
     def model_changes(self) -> list[ModelChange]:
         """Every change ``update`` applies for this finding."""

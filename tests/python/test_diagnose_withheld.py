@@ -12,10 +12,10 @@ import pytest
 from mpmpp import TransferFunction, families
 from mpmpp.diagnose import diagnose
 from mpmpp.diagnose.errors import one_step_errors
-from mpmpp.diagnose.pipeline import (CHANNEL_EFFECTS, HALF_BLOCKS, _refitted_gains_per_half,
+from mpmpp.diagnose.pipeline import (HALF_BLOCKS, _refitted_gains_per_half,
                                     _without_unconfirmed_standing_changes, diagnosis_signals)
 from mpmpp.diagnose.process_error import held_out_rms, process_parts
-from mpmpp.diagnose.result import Finding, ModelChange
+from mpmpp.diagnose.result import PROCESS_EFFECTS, Finding, ModelChange
 from mpmpp.diagnose.whitening import output_residual
 from mpmpp.evaluate import nominal_model
 from mpmpp.simulate import simulate
@@ -28,7 +28,7 @@ def test_a_missing_coupling_is_not_also_read_as_an_actuator_of_the_output_own_in
     coupling = next(ev for ev in spec["events"] if ev["type"] == "process")
     output, new_input = coupling["output"], coupling["input"]
     res = diagnose(nominal_model(spec), simulate(spec))
-    channel = [f for f in res.findings if f.effect in CHANNEL_EFFECTS and f.output == output]
+    channel = [f for f in res.findings if f.effect in PROCESS_EFFECTS and f.output == output]
     assert [(f.effect, f.input) for f in channel] == [("missing_coupling", new_input)]
     assert not any(f.effect == "input_nonlinearity" for f in res.findings)
     # the actuator of the output's own input, when its search proposes one, is withheld in
@@ -111,7 +111,7 @@ def test_a_change_throughout_must_hold_with_the_noise_model_fitted_without_the_i
     with_file_noise = diagnosis_signals(loop.model(), loop.simulate(n=3000, seed=1))
     assert with_file_noise.without_input_basis("y") is None   # the file's noise model is not re-estimated
     res = diagnose(model, data)
-    assert not [f for f in res.findings if f.effect in CHANNEL_EFFECTS]
+    assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS]
     [note] = [n for n in res.notes if "withheld" in n]
     assert note.startswith("gain of y1 <- u1") and "either estimate of its noise model" in note
 
@@ -124,7 +124,7 @@ def test_a_dated_change_the_data_fit_as_well_from_the_start_is_judged_as_present
     the noise change, which is the truth."""
     spec, _ = families.family("mpc_level").draw(1, effect="noise_change")
     res = diagnose(nominal_model(spec), simulate(spec))
-    assert not [f for f in res.findings if f.effect in CHANNEL_EFFECTS]
+    assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS]
     [note] = [n for n in res.notes if "judged as present throughout" in n]
     assert note.startswith("gain of y1 <- u1") and "any onset from" in note
     assert [f.effect for f in res.findings] == ["noise_change"]
@@ -140,7 +140,7 @@ def test_a_change_later_in_the_record_is_searched_once_the_change_throughout_is_
     assert expect["size"] == 2.0
     res = diagnose(nominal_model(spec), simulate(spec))
     assert any(n.startswith("time constant of y1 <- u1") and "withheld" in n for n in res.notes)
-    top = next(f for f in res.findings if f.effect in CHANNEL_EFFECTS)
+    top = next(f for f in res.findings if f.effect in PROCESS_EFFECTS)
     assert (top.effect, top.output, top.input) == ("gain", "y1", "u1")
     assert abs(top.onset_s - expect["onset_s"]) <= 600.0
     assert 1.6 <= top.estimate["gain_ratio"] <= 2.6
@@ -154,7 +154,7 @@ def test_a_later_change_the_rows_before_it_do_not_reject_is_withheld():
     error again, not a change: withheld with a note, and the noise change is reported."""
     spec, _ = families.family("pi_siso_brief").draw(15, effect="noise_change")
     res = diagnose(nominal_model(spec), simulate(spec))
-    assert not [f for f in res.findings if f.effect in CHANNEL_EFFECTS]
+    assert not [f for f in res.findings if f.effect in PROCESS_EFFECTS]
     [later] = [n for n in res.notes if "the rows before its onset do not reject it" in n]
     # the model file's FOPTD dead time (5 s) is the one quoted, not its first lag times Ts (10 s)
     assert spec["process"]["y1"]["u1"]["dead_time_s"] == 5
@@ -170,7 +170,7 @@ def test_a_change_later_in_the_record_is_searched_once_a_dropped_change_througho
     spec, expect = families.family("pi_level").draw(0, effect="gain")
     assert expect["size"] == 0.625
     res = diagnose(nominal_model(spec), simulate(spec))
-    top = next(f for f in res.findings if f.effect in CHANNEL_EFFECTS)
+    top = next(f for f in res.findings if f.effect in PROCESS_EFFECTS)
     assert (top.effect, top.output, top.input) == ("gain", "y1", "u1")
     assert abs(top.onset_s - expect["onset_s"]) <= 600.0
     assert 0.5 <= top.estimate["gain_ratio"] <= 0.75

@@ -219,26 +219,30 @@ def _one_pass(model, data, train_end_s: float | None, lengths: RecordLengths, mi
             found += later
             notes += withheld
             withheld_later += dated
-    dwarfed_notes = {}   # output -> why its findings went to the disturbance verdict
+    dwarfed = {}   # output -> (why its findings went to the disturbance verdict, that verdict)
     for out in outputs:
-        dwarfed, dwarfed_notes[out.name] = changes_dwarfed_by_the_split(out, found, first_onset, min_segment, logn,
-                                                                        min_effect)
-        found = [f for f in found if all(f is not d for d in dwarfed)]
+        withheld_here, note, verdict = changes_dwarfed_by_the_split(out, found, first_onset, min_segment, logn,
+                                                                    min_effect)
+        if note is not None:
+            found = [f for f in found if all(f is not w for w in withheld_here)]
+            dwarfed[out.name] = (note, verdict)
     with_process = {f.output for f in found} | {o for f in found for o in f.outputs_driven}
     for out in outputs:
         if out.name not in with_process:
-            try:
-                verdict = noise_finding(out, first_onset, logn, min_effect)
-            except InsufficientData as exc:
-                notes.append(str(exc))
-                continue
+            note, verdict = dwarfed.get(out.name, (None, None))
+            if verdict is None:
+                try:
+                    verdict = noise_finding(out, first_onset, logn, min_effect)
+                except InsufficientData as exc:
+                    notes.append(str(exc))
+                    continue
             redo = changes_the_split_absorbed(out, verdict, first_onset, min_segment, step, logn, min_effect,
                                               actions_of(out))
             if redo:
                 found += redo
                 continue
-            if dwarfed_notes[out.name] is not None:
-                notes.append(dwarfed_notes[out.name])
+            if note is not None:
+                notes.append(note)
             if verdict.note is not None:
                 notes.append(verdict.note)
             if verdict.finding is not None:
@@ -287,7 +291,7 @@ def _with_later_changes(first: DiagnoseResult, withheld: list[Finding], model, d
     standing = [f for f in first.findings if f.effect in LINEAR_CHANNEL_EFFECTS and f.onset_s <= start]
     set_aside = not standing
     if set_aside:   # only for outputs the first pass left without a channel finding
-        named = {f.output for f in first.findings if f.effect in CHANNEL_EFFECTS}
+        named = {f.output for f in first.findings if f.effect in PROCESS_EFFECTS}
         withheld = [f for f in withheld if f.output not in named]
         standing = [f for f in withheld if f.onset_s <= start]
     if not standing:
@@ -337,7 +341,6 @@ def _with_later_changes(first: DiagnoseResult, withheld: list[Finding], model, d
         process_parts={f.id: process_parts[id(f)] for f in found if process_parts[id(f)] is not None})
 
 
-CHANNEL_EFFECTS = PROCESS_EFFECTS
 DISTURBANCE_EFFECTS = ("noise_change", "output_drift")   # "the process model still fits"
 
 
@@ -350,12 +353,12 @@ def _strongest_input_per_output(found: list[Finding]) -> tuple[list[Finding], li
     and diagnose again to see whether it remains."""
     top: dict[str, Finding] = {}
     for f in found:
-        if f.effect in CHANNEL_EFFECTS and (f.output not in top or f.score > top[f.output].score):
+        if f.effect in PROCESS_EFFECTS and (f.output not in top or f.score > top[f.output].score):
             top[f.output] = f
     kept, notes = [], []
     for f in found:
         best = top.get(f.output)
-        if f.effect in CHANNEL_EFFECTS and best is not None and f.input != best.input:
+        if f.effect in PROCESS_EFFECTS and best is not None and f.input != best.input:
             notes.append(f"{f.effect} of {f.input} -> {f.output} (score {f.score:.0f}) withheld: the {best.effect} "
                          f"of {best.input} -> {f.output} explains more (score {best.score:.0f}); apply it and diagnose again")
         else:
@@ -469,7 +472,7 @@ def _later_changes_than_refused(out, found: list[Finding], refused: frozenset, p
     Left to the scan, that control's model error came back as a dead time from 1.0 h, which its
     first hour does not reject (gain -4.9 there; the doubled gain of mpc_siso_1s seed 1: -2126)."""
     n = len(out.e)
-    if any(f.output == out.name and f.effect in CHANNEL_EFFECTS for f in found) or n - first_onset < 2 * min_segment:
+    if any(f.output == out.name and f.effect in PROCESS_EFFECTS for f in found) or n - first_onset < 2 * min_segment:
         return [], [], []
     later, notes = _strongest_input_per_output(process_findings(out, first_onset, min_segment, step, logn, *search,
                                                                 later_only=True, refused=refused))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import one_step_errors
-from .noise import noise_finding
+from .noise import DisturbanceVerdict, noise_finding
 from .process import process_findings
 from .result import LINEAR_CHANNEL_EFFECTS, Finding, InsufficientData
 from .whitening import disturbance_split, split_is_significant, without_split
@@ -15,9 +15,9 @@ from .whitening import disturbance_split, split_is_significant, without_split
 # A noise change this many times the score of the dated findings of channels from the inputs on
 # its output, which leave its split significant, takes their place (``changes_dwarfed_by_the_split``).
 # Chosen on the tuning families, seeds 0-7: at 10, 5 of the 10 controls with a false process
-# finding lost it (4 once gains with a level step were left out) and 1 right finding is at risk (a gain of 502 beside a noise change of 8,904,
-# which returns when scored without the split); at 5, 6 and 4 (docs/diagnose.md "Channel
-# findings a noise change dwarfs").
+# finding lost it (4 once gains with a level step were left out) and 1 right finding was at
+# risk (a gain of 502 beside a noise change of 8,904, which returns when scored without the
+# split); at 5, 6 and 4 (docs/diagnose.md "Channel findings a noise change dwarfs").
 NOISE_CHANGE_DWARFS = 10.0
 # The channels from the inputs, which the controllers move in answer to the disturbance. Not an
 # unmodelled measured variable: held-out mpc_siso_fast seed 698, an extra column entering y1
@@ -62,12 +62,13 @@ def changes_the_split_absorbed(out, verdict, *search) -> list[Finding]:
 
 
 def changes_dwarfed_by_the_split(out, found: list[Finding], first_onset: int, min_segment: int, logn: float,
-                                  min_effect: float) -> tuple[list[Finding], str | None]:
+                                  min_effect: float) -> tuple[list[Finding], str | None, DisturbanceVerdict | None]:
     """The converse of ``changes_the_split_absorbed``: output ``out``'s findings, when they are
     dated changes of channels from the inputs (FEEDBACK_CHANNEL_EFFECTS) beside a significant
     disturbance split, and the note that withholds them when the split's ``noise_change``
     scores NOISE_CHANGE_DWARFS times the best of them and stays significant with them applied
-    (``_split_remains``); else no findings and no note. The candidates are
+    (``_split_remains``), with that verdict (for the disturbance step, not computed twice); else
+    no findings, no note and no verdict. The candidates are
     fitted beside the split's own corrections, so a channel change scored there is what is
     left after a new disturbance colour; in closed loop the controller's answer to that colour
     still leaves a few tens of chi-square units for a gain or dead time dated near it (tuning
@@ -83,22 +84,22 @@ def changes_dwarfed_by_the_split(out, found: list[Finding], first_onset: int, mi
     if (not out.split_significant or not mine or any(out.name in f.outputs_driven for f in found)
             or not all(f.effect in FEEDBACK_CHANNEL_EFFECTS and not f.level_step
                        and out.sig.seconds_to_index(f.onset_s) > first_onset for f in mine)):
-        return [], None
+        return [], None, None
     try:
         verdict = noise_finding(out, first_onset, logn, min_effect)
     except InsufficientData:
-        return [], None
+        return [], None, None
     noise = verdict.finding
     best = max(f.score for f in mine)
     if (noise is None or noise.effect != "noise_change" or not noise.score >= NOISE_CHANGE_DWARFS * best
             or not _split_remains(out, mine, first_onset, min_segment)):
-        return [], None
+        return [], None, None
     named = ", ".join(f"{f.effect} of {f.input} -> {f.output} (score {f.score:.0f})" for f in mine)
     return mine, (f"{named} withheld: the disturbance on {out.name} changed at "
                   f"t={out.sig.time_s[out.split_onset] / 3600:.1f} h (noise change score {noise.score:.0f}, "
                   f"{noise.score / max(best, 1e-9):.0f}x the finding's) and the finding does not account for "
                   f"it; a channel change this small beside a new disturbance colour is not told from the "
-                  f"controller's answer to that colour")
+                  f"controller's answer to that colour"), verdict
 
 
 def _split_remains(out, redo: list[Finding], first_onset: int, min_segment: int) -> bool:

@@ -23,6 +23,8 @@ def test_a_tripled_time_constant_hidden_by_the_split_is_found(seed):
     top = next(f for f in res.findings if f.effect in ("gain", "time_constant", "delay"))
     assert top.effect == "time_constant"
     assert top.estimate["time_constant_ratio"] == pytest.approx(expect["size"], rel=0.35)
+    # the ratio printed as a gain ratio is, to two decimals
+    assert f"about {top.estimate['time_constant_ratio']:.2f}x the model's" in top.explanation
     assert abs(top.onset_s - expect["onset_s"]) < 3600.0
     # the split alone hides it: it lands at the change (within a few minutes)
     sig = pipeline.diagnosis_signals(model, data, None).sig

@@ -602,7 +602,7 @@ def _process_finding(out: OutputResidual, fit: Fit) -> Finding:
         t_old = _time_constant_s(s.nominal, sig.sample_time_s)
         estimate = {"time_constant_ratio": s.label, "time_constant_s": t_old * s.label,
                     "gain_ratio": theta, "ci95": ci_from_profile(fit.profile, fit.statistic)}
-        text = (f"time constant of {name} about {s.label:g}x the model's "
+        text = (f"time constant of {name} about {ratio_text(s.label)}x the model's "
                 f"({t_old * s.label:.0f} s instead of {t_old:.0f} s) {when}")
     elif s.effect == "delay":
         lag, model_lag = int(s.label), first_lag(s.nominal)

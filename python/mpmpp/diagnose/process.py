@@ -561,8 +561,8 @@ def _time_constant_s(g: TransferFunction, ts: float) -> float:
 
 
 def ratio_text(theta: float) -> str:
-    """A gain ratio as a user reads it: two decimals near 1, three significant digits beyond
-    (a model 1000x off printed as 0.00x said nothing)."""
+    """A ratio to the model's (a gain's, a time constant's) as a user reads it: two decimals
+    near 1, three significant digits beyond (a model 1000x off printed as 0.00x said nothing)."""
     return f"{theta:.2f}" if 0.01 <= abs(theta) < 100.0 else f"{theta:.3g}"
 
 

@@ -68,10 +68,10 @@ def changes_dwarfed_by_the_split(out, found: list[Finding], first_onset: int, mi
     disturbance split, and the note that withholds them when the split's ``noise_change``
     scores NOISE_CHANGE_DWARFS times the best of them and stays significant with them applied
     (``_split_remains``), with that verdict (for the disturbance step, not computed twice); else
-    no findings, no note and no verdict. The candidates are
-    fitted beside the split's own corrections, so a channel change scored there is what is
-    left after a new disturbance colour; in closed loop the controller's answer to that colour
-    still leaves a few tens of chi-square units for a gain or dead time dated near it (tuning
+    no findings, no note and no verdict. The candidates are fitted beside the split's own
+    corrections, so a channel change scored there is what is left after a new disturbance
+    colour; in closed loop the controller's answer to that colour still leaves a few tens of
+    chi-square units for a gain or dead time dated near it (tuning
     seeds 0-7: 7 of the 10 controls with a false process finding, noise changes of 57-8,117
     against findings of 1-50). Withheld, the output goes to the disturbance verdict, where
     ``changes_the_split_absorbed`` weighs the process candidates again without the split.

@@ -11,6 +11,11 @@ Cases:
                     alternating refinement) against SciPy's least_squares on the same criterion
                     from its own ARX-OE (tests/python/identification_reference.pem_ar_noise),
                     CPU time
+  refit range       diagnose's reference refit (diagnose/reference_refit.py) of a 1 s PI flow loop
+                    (10,000 rows) under a hand-written model (gain 1.3x, time constant 0.7x, dead
+                    time 8 s for the plant's 12 s): dead times up to the model channel's settling
+                    time against identify's default 600 s (peer), one thread, CPU; the same
+                    channel asserted
 Records: a 751-row PI pressure loop with setpoint steps (tests/python/pi_loop.py, 2 h at 10 s)
 and the example siso_gain_change (5 s, 16 h).
 Run: PYTHONPATH=python python bench/bench_identify.py [--repeat R] [--workers W]
@@ -18,6 +23,7 @@ Run: PYTHONPATH=python python bench/bench_identify.py [--repeat R] [--workers W]
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import pathlib
 import sys
@@ -36,6 +42,7 @@ import identification_reference as ref  # noqa: E402
 import pi_loop  # noqa: E402
 from timing import best_of  # noqa: E402
 
+import mpmpp  # noqa: E402
 import mpmpp.model_identification as mi  # noqa: E402
 from mpmpp import structure_search  # noqa: E402
 from mpmpp.process_class import SELF_REGULATING  # noqa: E402
@@ -46,6 +53,29 @@ def records():
     yield "PI loop, 751 rows", pi_loop.simulate(pi_loop.PRESSURE, 4, setpoint_steps=True), "OP", "PV"
     example = ROOT / "examples" / "siso_gain_change"
     yield "siso_gain_change", load_data(example / "data.csv"), "stock_flow", "dry_weight"
+
+
+def refit_range(repeat: int) -> None:
+    from mpmpp.diagnose.reference_refit import _longest_dead_time_s
+
+    loop = pi_loop.FLOW
+    df = pi_loop.simulate(loop, 1, rows=10_000, ts=1.0, setpoint_steps=True)
+    model = mpmpp.Model.from_json(json.dumps({
+        "name": "flow", "sample_time_s": 1.0, "inputs": ["OP"], "outputs": ["PV"],
+        "process": {"PV": {"OP": {"gain": 1.3 * loop.gain, "time_constant_s": 0.7 * loop.time_constant_s,
+                                  "dead_time_s": 8.0}}}}), "hand-written flow model")
+    longest = _longest_dead_time_s(model, model.process("PV", "OP"), False)
+
+    def refit(max_dead_time_s):
+        return mi.model_from_data(df, ["OP"], ["PV"], workers=1, max_dead_time_s=max_dead_time_s,
+                                  classes=(SELF_REGULATING,))
+
+    t_ours, ours = best_of(lambda: refit(longest), repeat, clock=time.process_time)
+    t_peer, peer = best_of(lambda: refit(mi.DEFAULT_MAX_DEAD_TIME_S), repeat, clock=time.process_time)
+    g, h = ours.model.process("PV", "OP"), peer.model.process("PV", "OP")
+    assert g.delay == h.delay and np.allclose(g.num, h.num) and np.allclose(g.den, h.den)
+    print(f"refit range      PI flow loop at 1 s: dead times to {longest:.0f} s {t_ours:.2f} s, to "
+          f"{mi.DEFAULT_MAX_DEAD_TIME_S:.0f} s {t_peer:.2f} s CPU, ratio {t_peer / t_ours:.1f}")
 
 
 def main(argv=None):
@@ -83,6 +113,7 @@ def main(argv=None):
         assert np.allclose(np.asarray(fit.tf[0].num), b, rtol=1e-4, atol=1e-8)
         print(f"one candidate    {label}: mpmpp {t_ours * 1e3:.1f} ms, SciPy {t_ref * 1e3:.1f} ms CPU, "
               f"ratio {t_ref / t_ours:.1f}")
+    refit_range(args.repeat)
 
 
 if __name__ == "__main__":

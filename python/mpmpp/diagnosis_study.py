@@ -36,7 +36,7 @@ from .diagnose import PROCESS_EFFECTS, diagnose
 from .diagnose.changes import apply_changes
 from .diagnose.errors import one_step_errors
 from .diagnose.pipeline import diagnosis_signals
-from .diagnose.result import ModelChange
+from .diagnose.result import DISTURBANCE_EFFECTS, ModelChange
 from .evaluate import nominal_model
 from .parallel import run_tasks
 from .scenario import parse_scenario
@@ -93,7 +93,7 @@ def finding_right(f: dict, effect: str, change: dict | None) -> bool:
         return False
     if effect == "input_nonlinearity":
         return f.get("input") == change["input"]
-    if effect in ("noise_change", "output_drift"):
+    if effect in DISTURBANCE_EFFECTS:
         return f.get("output") == change["output"]
     return f.get("output") == change["output"] and f.get("input") == change["input"]
 

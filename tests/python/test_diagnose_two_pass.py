@@ -114,6 +114,35 @@ def test_the_reference_refit_is_the_plant_before_the_change(rough_time_constant)
     assert refitted_before(model, data, standing, 0.2 * HOUR) is None   # 144 rows: too few to identify
 
 
+def test_the_reference_refit_searches_dead_times_up_to_the_model_channels_settling(tmp_path):
+    """At 1 s identify's default searches 601 dead times; the refit ends at the model channel's
+    settling time (dead time + 5 time constants + 10 samples) and still finds the plant's dead
+    time when the hand-written model's is off (the NumPy flow loop: 12 s, the model 8 s)."""
+    from mpmpp.diagnose.reference_refit import _longest_dead_time_s, refitted_before
+    from mpmpp.diagnose.result import Finding
+    from mpmpp.foptd import foptd_parameters
+    from mpmpp.model_identification import DEFAULT_MAX_DEAD_TIME_S
+
+    loop = pi_loop.FLOW
+    path = tmp_path / "flow.json"
+    path.write_text(json.dumps({
+        "name": "flow", "sample_time_s": 1.0, "inputs": ["OP"], "outputs": ["PV"],
+        "process": {"PV": {"OP": {"gain": 1.3 * loop.gain, "time_constant_s": 0.7 * loop.time_constant_s,
+                                  "dead_time_s": 8.0}}}}))
+    model = mpmpp.load_model(path)
+    nominal = model.process("PV", "OP")
+    assert _longest_dead_time_s(model, nominal, False) == pytest.approx(8 + 5 * 0.7 * loop.time_constant_s + 10,
+                                                                       abs=1.5)
+    assert _longest_dead_time_s(model, nominal, True) == DEFAULT_MAX_DEAD_TIME_S
+    data = pi_loop.simulate(loop, 3, rows=3600, ts=1.0, setpoint_steps=True)
+    standing = [Finding(id="F1", effect="gain", output="PV", input="OP", onset_s=0.0, confidence=1.0,
+                        estimate={}, error_before=1.0, error_after=1.0, explanation="", score=1.0)]
+    (change,) = refitted_before(model, data, standing, 3600.0)
+    refit = foptd_parameters(change.channel, 1.0)
+    assert refit.dead_time_s == pytest.approx(loop.dead_time_s, abs=1.0)
+    assert refit.gain == pytest.approx(loop.gain, rel=0.1)
+
+
 def test_no_reference_refit_for_an_output_with_two_input_channels():
     """A refit of one channel where the output has two would have to replace both (identify fits
     the output's row): no reference, the second pass stands as it is."""

@@ -22,7 +22,7 @@ from .process import DEAD_CHANNEL, SCALED_CHANNEL_EFFECTS, process_findings
 from .process_error import held_out_rms, process_parts
 from .reference_refit import refitted_before
 from .refitted_noise import RefittedNoise
-from .result import LINEAR_CHANNEL_EFFECTS, PROCESS_EFFECTS, DiagnoseResult, Finding, InsufficientData
+from .result import DISTURBANCE_EFFECTS, LINEAR_CHANNEL_EFFECTS, PROCESS_EFFECTS, DiagnoseResult, Finding, InsufficientData
 from .spikes import SPIKE_SIGMAS, output_spikes
 from .split_rivals import changes_dwarfed_by_the_split, changes_the_split_absorbed
 from .valve import valve_findings
@@ -340,8 +340,6 @@ def _with_later_changes(first: DiagnoseResult, withheld: list[Finding], model, d
         residuals_after={f.id: residuals_after[id(f)] for f in found if residuals_after[id(f)] is not None},
         process_parts={f.id: process_parts[id(f)] for f in found if process_parts[id(f)] is not None})
 
-
-DISTURBANCE_EFFECTS = ("noise_change", "output_drift")   # "the process model still fits"
 
 
 def _strongest_input_per_output(found: list[Finding]) -> tuple[list[Finding], list[str]]:

@@ -13,6 +13,7 @@ EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_inpu
            "noise_change", "output_drift", "input_nonlinearity")
 LINEAR_CHANNEL_EFFECTS = ("gain", "time_constant", "delay", "missing_coupling", "unmodeled_input")
 PROCESS_EFFECTS = LINEAR_CHANNEL_EFFECTS + ("input_nonlinearity",)
+DISTURBANCE_EFFECTS = ("noise_change", "output_drift")   # "the process model still fits"
 
 METRIC = ("RMS of the one-step prediction error of the output (deviation units) on "
           "held-out blocks after onset_s")

@@ -341,7 +341,6 @@ def _with_later_changes(first: DiagnoseResult, withheld: list[Finding], model, d
         process_parts={f.id: process_parts[id(f)] for f in found if process_parts[id(f)] is not None})
 
 
-
 def _strongest_input_per_output(found: list[Finding]) -> tuple[list[Finding], list[str]]:
     """Per output, the channel findings of the input whose finding scores highest, and notes on
     those of other inputs withheld. Every candidate is fitted to the output's residual under the

@@ -13,8 +13,7 @@ it (pi_siso_rough seeds 0-15: three of forty changes lost).
 """
 from __future__ import annotations
 
-import numpy as np
-
+from ..integrating import integrates
 from ..model_identification import DEFAULT_MAX_DEAD_TIME_S, NotIdentified, model_from_data
 from ..process_class import CLASSES_BY_NAME
 from ..step_response import settling_samples
@@ -41,7 +40,7 @@ def refitted_before(model, data, standing: list[Finding], end_s: float) -> list[
         if [j for j in model.inputs if model.process(f.output, j) is not None] != [f.input]:
             return None
         nominal = model.process(f.output, f.input)
-        integrating = np.any(np.abs(np.asarray(nominal.poles()) - 1.0) < 1e-9)
+        integrating = integrates(nominal)
         longest = _longest_dead_time_s(model, nominal, integrating)
         try:
             ident = model_from_data(before, [f.input], [f.output], workers=1, max_dead_time_s=longest,
